@@ -1,0 +1,29 @@
+// tilevis: one binary, one subcommand per job (DESIGN.md "CLI").
+#include <cstdio>
+#include <exception>
+
+#include <fmt/format.h>
+
+#include "commands.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"TileVis: a tile-based deferred renderer with an analytic early-visibility unit"};
+  app.require_subcommand(1);
+  const tilevis::app::Command commands[] = {
+      tilevis::app::add_trace_command(app),
+      tilevis::app::add_info_command(app),
+  };
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  try {
+    for (const auto& c : commands)
+      if (c.sub->parsed()) return c.run();
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "tilevis: error: {}\n", e.what());
+    return 1;
+  }
+  return 1;
+}
