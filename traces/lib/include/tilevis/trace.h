@@ -17,6 +17,7 @@ inline constexpr uint32_t kMaxViewport = 16384;      // pixels, per axis
 inline constexpr uint32_t kMaxSubpixelBits = 8;      // 16.8 fixed point (D3D11 §15.16)
 inline constexpr uint32_t kMaxSamples = 16;          // 1, 2, 4, 8 or 16
 inline constexpr uint32_t kMaxNameBytes = 4096;
+inline constexpr uint32_t kMaxSourceBytes = 65536;
 
 // Per-draw flags. A draw with none of AlphaTested/Blended is opaque.
 enum DrawFlag : uint32_t {
