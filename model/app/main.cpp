@@ -12,6 +12,7 @@ int main(int argc, char** argv) {
   const tilevis::app::Command commands[] = {
       tilevis::app::add_trace_command(app),
       tilevis::app::add_info_command(app),
+      tilevis::app::add_golden_command(app),
       tilevis::app::add_compare_command(app),
   };
   try {

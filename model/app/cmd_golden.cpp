@@ -1,0 +1,163 @@
+// tilevis golden T -o DIR: the untimed SVGPU visibility pipeline's canonical outputs;
+// with --truth, the z-buffer truth of the same snapped scene in the same layout.
+#include <chrono>
+
+#include <fmt/format.h>
+
+#include "commands.h"
+#include "tilevis/outputs.h"
+#include "tilevis/trace.h"
+#include "visibility/golden.h"
+#include "visibility/setup.h"
+#include "visibility/svg.h"
+#include "visibility/truth.h"
+
+namespace tilevis::app {
+namespace {
+
+struct GoldenArgs {
+  std::string trace, out, tile = "32", svg;
+  uint32_t samples = 0, frame = 0, depth_bits = 24, quantized_depth_bits = 0;
+  bool truth = false;
+};
+
+nlohmann::json setup_totals(const vis::Setup& s) {
+  return {{"triangles_in", s.stats.triangles_in},
+          {"triangles_front", s.stats.front_facing},
+          {"triangles_back", s.stats.back_facing},
+          {"triangles_degenerate", s.stats.degenerate},
+          {"triangles_clipped", s.stats.clipped},
+          {"triangles_frustum_culled", s.stats.frustum_culled},
+          {"silhouette_edges", s.stats.silhouette_edges}};
+}
+
+int run_truth(const GoldenArgs& a, const trace::Frame& frame, uint32_t tw, uint32_t th) {
+  auto t0 = std::chrono::steady_clock::now();
+  vis::Setup s = vis::primitive_setup(frame, {a.depth_bits});
+  vis::TruthConfig cfg;
+  cfg.tile_w = tw;
+  cfg.tile_h = th;
+  cfg.quantized_depth_bits = a.quantized_depth_bits;
+  vis::TruthResult r = vis::zbuffer_truth(s, cfg);
+  double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  outputs::Result out;
+  out.width = r.width;
+  out.height = r.height;
+  out.samples = r.samples;
+  out.ids = std::move(r.ids);
+  out.overdraw = std::move(r.overdraw);
+  out.tiles = std::move(r.tiles);
+  nlohmann::json totals = setup_totals(s);
+  totals["samples_covered"] = r.samples_covered;
+  totals["fragments_generated"] = r.fragments_generated;
+  totals["fragments_shaded"] = r.modes.hsr;
+  out.stats = {{"tool", a.quantized_depth_bits ? "truth_quantized" : "truth"},
+               {"trace", a.trace},
+               {"frame", a.frame},
+               {"config",
+                {{"tile_w", tw}, {"tile_h", th}, {"samples", r.samples}, {"depth_bits", a.depth_bits},
+                 {"quantized_depth_bits", a.quantized_depth_bits}}},
+               {"totals", totals},
+               {"modes",
+                {{"none", r.modes.none},
+                 {"early_z", r.modes.early_z},
+                 {"early_z_sorted", r.modes.early_z_sorted},
+                 {"prepass", r.modes.prepass},
+                 {"hsr", r.modes.hsr},
+                 {"hsr_depth_tests", r.modes.hsr_depth_tests}}},
+               {"host_seconds", secs}};
+  outputs::write_result(out, a.out);
+  fmt::print("truth {} frame {}: {}x{}x{} samples, {} fragments generated, {} samples covered, "
+             "early-Z shades {}, {:.3f} s -> {}\n",
+             a.trace, a.frame, out.width, out.height, out.samples, r.fragments_generated, r.samples_covered,
+             r.modes.early_z, secs, a.out);
+  return 0;
+}
+
+int run_golden(const GoldenArgs& a, const trace::Frame& frame, uint32_t tw, uint32_t th) {
+  auto t0 = std::chrono::steady_clock::now();
+  vis::Setup s = vis::primitive_setup(frame, {a.depth_bits});
+  auto t1 = std::chrono::steady_clock::now();
+  vis::GoldenConfig cfg;
+  cfg.tile_w = tw;
+  cfg.tile_h = th;
+  cfg.keep_pieces = !a.svg.empty();
+  vis::GoldenResult r = vis::golden_visibility(s, cfg);
+  auto t2 = std::chrono::steady_clock::now();
+  double setup_s = std::chrono::duration<double>(t1 - t0).count(), tiles_s = std::chrono::duration<double>(t2 - t1).count();
+
+  outputs::Result out;
+  out.width = r.width;
+  out.height = r.height;
+  out.samples = r.samples;
+  out.ids = std::move(r.ids);
+  out.visible_area = std::move(r.visible_area);
+  out.tiles = std::move(r.tiles);
+  nlohmann::json totals = setup_totals(s);
+  totals["pair_tests"] = r.pair_tests;
+  totals["candidate_pairs"] = r.candidate_pairs;
+  totals["clip_polygons"] = r.clip_polygons;
+  totals["pieces"] = r.pieces_total;
+  totals["visible_pieces"] = r.visible_pieces;
+  totals["occlusion_tests"] = r.occlusion_tests;
+  totals["samples_covered"] = r.samples_covered;
+  totals["fragments_generated"] = r.fragments_generated;
+  totals["fragments_shaded"] = r.samples_covered;
+  totals["max_tile_triangles"] = r.max_tile_triangles;
+  totals["max_tile_edges"] = r.max_tile_edges;
+  totals["max_tile_pieces"] = r.max_tile_pieces;
+  out.stats = {{"tool", "golden"},
+               {"trace", a.trace},
+               {"frame", a.frame},
+               {"config", {{"tile_w", tw}, {"tile_h", th}, {"samples", r.samples}, {"depth_bits", a.depth_bits}}},
+               {"totals", totals},
+               {"stage_seconds", {{"setup", setup_s}, {"tiles", tiles_s}}},
+               {"host_seconds", setup_s + tiles_s}};
+  outputs::write_result(out, a.out);
+  if (!a.svg.empty()) vis::write_svg(a.svg, r.width, r.height, r.pieces);
+  fmt::print("golden {} frame {} at {}x{} tiles: {} triangles, {} silhouette edges, {} candidate pairs, {} clips, "
+             "{} pieces ({} visible), {:.3f} s -> {}\n",
+             a.trace, a.frame, tw, th, s.stats.triangles_in, s.stats.silhouette_edges, r.candidate_pairs,
+             r.clip_polygons, r.pieces_total, r.visible_pieces, setup_s + tiles_s, a.out);
+  return 0;
+}
+
+}  // namespace
+
+Command add_golden_command(CLI::App& app) {
+  auto a = std::make_shared<GoldenArgs>();
+  auto* cmd = app.add_subcommand("golden", "Run the golden visibility pipeline (or, with --truth, the z-buffer truth)");
+  cmd->add_option("trace", a->trace, "Trace file")->required()->check(CLI::ExistingFile);
+  cmd->add_option("-o,--output", a->out, "Result directory")->required();
+  cmd->add_option("--tile", a->tile, "Tile size, N or WxH (4..256)")->capture_default_str();
+  cmd->add_option("--samples", a->samples, "Samples per pixel (1, 2, 4, 8, 16); default: the trace's");
+  cmd->add_option("--frame", a->frame, "Frame of the trace")->capture_default_str();
+  cmd->add_option("--depth-bits", a->depth_bits, "Bits of snapped depth")->check(CLI::Range(1, 24))->capture_default_str();
+  cmd->add_flag("--truth", a->truth, "Write the z-buffer truth instead");
+  cmd->add_option("--quantized-depth", a->quantized_depth_bits,
+                  "With --truth: compare depth rounded to N bits, as hardware does (shows z-fighting)")
+      ->check(CLI::Range(1, 24));
+  cmd->add_option("--svg", a->svg, "Also write the visible planar map as SVG");
+  return {cmd, [a]() {
+            uint32_t tw = 0, th = 0;
+            if (!parse_size(a->tile, tw, th) || tw < 4 || th < 4 || tw > 256 || th > 256)
+              throw std::runtime_error(fmt::format("--tile {}: expected N or WxH with 4 <= N <= 256", a->tile));
+            trace::Trace t = trace::read(a->trace);
+            if (a->frame >= t.frames.size())
+              throw std::runtime_error(
+                  fmt::format("--frame {}: {} has {} frame(s)", a->frame, a->trace, t.frames.size()));
+            trace::Frame frame = std::move(t.frames[a->frame]);
+            if (a->samples) {
+              try {
+                frame.samples = trace::standard_samples(a->samples, frame.subpixel_bits);
+              } catch (const std::invalid_argument&) {
+                throw std::runtime_error(fmt::format("--samples {}: expected 1, 2, 4, 8 or 16", a->samples));
+              }
+            }
+            if (a->truth) return run_truth(*a, frame, tw, th);
+            return run_golden(*a, frame, tw, th);
+          }};
+}
+
+}  // namespace tilevis::app

@@ -1,0 +1,311 @@
+#include "visibility/golden.h"
+
+#include <algorithm>
+#include <numeric>
+
+#include "geom/clip.h"
+#include "geom/depth.h"
+#include "geom/overlap.h"
+#include "geom/polygon.h"
+#include "geom/predicates.h"
+
+namespace tilevis::vis {
+namespace {
+
+using geom::ConvexPolygon;
+using geom::ImplicitPoint;
+using geom::Int128;
+using geom::Line;
+using geom::Point;
+using geom::Rect;
+
+// A front-facing setup triangle with what the tile stage needs of it.
+struct TileTriangle {
+  const SetupTriangle* t;
+  geom::Triangle tri;
+  geom::TriangleEdges edges;
+  geom::DepthPlane plane;
+  Rect bbox;               // closed, sub-pixel units
+  uint32_t z_min, z_max;
+};
+
+struct Edge {
+  geom::Vertex a, b;
+  Line line;
+  uint32_t z_min, z_max;
+  Rect bbox;
+};
+
+Rect bbox_of(const geom::Vertex& a, const geom::Vertex& b, const geom::Vertex& c) {
+  return {std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}), std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y})};
+}
+
+bool same_edge(const Edge& e, const geom::Triangle& t) {
+  // SVGPU §3.2.1 test 4: the silhouette edge is an edge of the triangle.
+  for (int i = 0; i < 3; ++i) {
+    const geom::Vertex &p = t.v[i], &q = t.v[(i + 1) % 3];
+    if ((p == e.a && q == e.b) || (p == e.b && q == e.a)) return true;
+  }
+  return false;
+}
+
+// sign((c - a) · d) for an implicit point c on the line through a with direction d:
+// |x - a.x w| <= 2^72 + 2^23 · 2^49 = 2^73, times |d| <= 2^24, two terms: < 2^98 (Int128).
+int along(const ImplicitPoint& c, const geom::Vertex& a, int64_t dx, int64_t dy) {
+  const Int128 v = (c.x - Int128{a.x} * c.w) * dx + (c.y - Int128{a.y} * c.w) * dy;
+  return (v > 0) - (v < 0);
+}
+
+// SVGPU §3.2.1 tests 1–3 of a silhouette edge against a (piece of a) triangle, exactly.
+// true = the pair survives (the piece must be split by the edge's line).
+bool survives(const ConvexPolygon& poly, const TileTriangle& tt, const Edge& e) {
+  // Test 1: the polygon lies on one side of the line (touching counts as one side).
+  if (geom::classify(poly, e.line) != geom::LineRelation::crosses) return false;
+  // Test 2 (exact form): the segment AB misses the polygon's interior.
+  if (!geom::segment_overlaps(poly, e.a.xy(), e.b.xy())) return false;
+  // Test 3: over the part of AB inside the polygon the edge is behind (or level with)
+  // the triangle's plane; depth is affine along it, so its two ends decide.
+  ImplicitPoint first, second;
+  if (!geom::chord(poly, e.line, first, second)) return false;
+  const int64_t dx = int64_t{e.b.x} - e.a.x, dy = int64_t{e.b.y} - e.a.y;
+  // sign(z_triangle - z_edge) at each end of the overlap; > 0: the edge is nearer there.
+  const int s1 = along(first, e.a, dx, dy) < 0 ? geom::depth_order(tt.plane, e.a.xy(), e.a.z)
+                                               : geom::depth_order_edge(tt.plane, e.a, e.b, first);
+  if (s1 > 0) return true;
+  const int s2 = along(second, e.b, dx, dy) > 0 ? geom::depth_order(tt.plane, e.b.xy(), e.b.z)
+                                                : geom::depth_order_edge(tt.plane, e.a, e.b, second);
+  return s2 > 0;
+}
+
+class TileStage {
+ public:
+  TileStage(const Setup& s, const GoldenConfig& cfg, GoldenResult& r) : m_s(s), m_cfg(cfg), m_r(r) {}
+
+  void run() {
+    prepare();
+    bin();
+    const size_t n_samples = size_t(m_s.width) * m_s.height * m_s.samples.size();
+    m_r.ids.assign(n_samples, -1);
+    m_r.visible_area.assign(m_s.triangle_draw.size(), 0.0);
+    m_r.tiles.resize(m_cfg.tile_w, m_cfg.tile_h, m_s.width, m_s.height, golden_tile_columns());
+    for (uint32_t tile = 0; tile < m_tile_tris.size(); ++tile) process_tile(tile);
+  }
+
+ private:
+  void prepare() {
+    for (const SetupTriangle& t : m_s.triangles) {
+      if (!t.front) continue;
+      TileTriangle tt;
+      tt.t = &t;
+      tt.tri = geom::Triangle{{t.v[0], t.v[1], t.v[2]}};
+      tt.edges = geom::TriangleEdges::from(tt.tri);
+      tt.plane = geom::DepthPlane::from(tt.tri);
+      tt.bbox = bbox_of(t.v[0], t.v[1], t.v[2]);
+      tt.z_min = std::min({t.v[0].z, t.v[1].z, t.v[2].z});
+      tt.z_max = std::max({t.v[0].z, t.v[1].z, t.v[2].z});
+      m_tris.push_back(tt);
+    }
+    for (const SilhouetteEdge& se : m_s.silhouettes) {
+      Edge e{se.a, se.b, Line::through(se.a.xy(), se.b.xy()), std::min(se.a.z, se.b.z), std::max(se.a.z, se.b.z),
+             {std::min(se.a.x, se.b.x), std::min(se.a.y, se.b.y), std::max(se.a.x, se.b.x), std::max(se.a.y, se.b.y)}};
+      m_edges.push_back(e);
+    }
+    m_tiles_x = (m_s.width + m_cfg.tile_w - 1) / m_cfg.tile_w;
+    m_tiles_y = (m_s.height + m_cfg.tile_h - 1) / m_cfg.tile_h;
+  }
+
+  // Tiles whose closed sub-pixel rectangle the bounding box touches, clamped to the screen.
+  template <typename Fn>
+  void for_tiles(const Rect& b, Fn&& fn) const {
+    const int64_t tw = int64_t(m_cfg.tile_w) << m_s.subpixel_bits, th = int64_t(m_cfg.tile_h) << m_s.subpixel_bits;
+    auto floor_div = [](int64_t a, int64_t d) { return a >= 0 ? a / d : -((-a + d - 1) / d); };
+    const int64_t tx0 = std::max<int64_t>(0, floor_div(b.x0, tw)), tx1 = std::min<int64_t>(m_tiles_x - 1, floor_div(b.x1, tw));
+    const int64_t ty0 = std::max<int64_t>(0, floor_div(b.y0, th)), ty1 = std::min<int64_t>(m_tiles_y - 1, floor_div(b.y1, th));
+    for (int64_t ty = ty0; ty <= ty1; ++ty)
+      for (int64_t tx = tx0; tx <= tx1; ++tx) fn(uint32_t(ty * m_tiles_x + tx), tile_rect(uint32_t(tx), uint32_t(ty)));
+  }
+
+  Rect tile_rect(uint32_t tx, uint32_t ty) const {
+    const int32_t sb = int32_t(m_s.subpixel_bits);
+    return {int32_t(tx * m_cfg.tile_w) << sb, int32_t(ty * m_cfg.tile_h) << sb,
+            int32_t((tx + 1) * m_cfg.tile_w) << sb, int32_t((ty + 1) * m_cfg.tile_h) << sb};
+  }
+
+  void bin() {
+    m_tile_tris.assign(size_t(m_tiles_x) * m_tiles_y, {});
+    m_tile_edges.assign(m_tile_tris.size(), {});
+    for (uint32_t i = 0; i < m_tris.size(); ++i) {
+      const TileTriangle& tt = m_tris[i];
+      for_tiles(tt.bbox, [&](uint32_t tile, const Rect& r) {
+        if (geom::triangle_overlaps_rect(tt.tri, r)) m_tile_tris[tile].push_back(i);
+      });
+    }
+    for (uint32_t i = 0; i < m_edges.size(); ++i) {
+      const Edge& e = m_edges[i];
+      for_tiles(e.bbox, [&](uint32_t tile, const Rect& r) {
+        if (geom::segment_overlaps_rect(e.a.xy(), e.b.xy(), r)) m_tile_edges[tile].push_back(i);
+      });
+    }
+  }
+
+  void process_tile(uint32_t tile) {
+    const auto& tris = m_tile_tris[tile];
+    const auto& edge_ids = m_tile_edges[tile];
+    auto& row = m_r.tiles.rows[tile];
+    row[0] = int64_t(tris.size());
+    row[1] = int64_t(edge_ids.size());
+    m_r.max_tile_triangles = std::max<uint64_t>(m_r.max_tile_triangles, tris.size());
+    m_r.max_tile_edges = std::max<uint64_t>(m_r.max_tile_edges, edge_ids.size());
+    if (tris.empty()) return;
+    const uint32_t tx = tile % m_tiles_x, ty = tile / m_tiles_x;
+    const Rect rect = tile_rect(tx, ty);
+
+    // Edges by nearest depth: a triangle whose farthest point is nearer than an edge's
+    // nearest (test 6) can skip that edge and every later one.
+    m_sorted_edges.assign(edge_ids.begin(), edge_ids.end());
+    std::stable_sort(m_sorted_edges.begin(), m_sorted_edges.end(),
+                     [&](uint32_t a, uint32_t b) { return m_edges[a].z_min < m_edges[b].z_min; });
+    // Occluders: opaque triangles of the tile, nearest first (the first hit ends the search).
+    m_occluders.clear();
+    for (uint32_t i : tris)
+      if (m_tris[i].t->opaque) m_occluders.push_back(i);
+    std::stable_sort(m_occluders.begin(), m_occluders.end(),
+                     [&](uint32_t a, uint32_t b) { return m_tris[a].z_min < m_tris[b].z_min; });
+
+    for (uint32_t i : tris) process_triangle(m_tris[i], rect, tx, ty, row);
+  }
+
+  void process_triangle(const TileTriangle& tt, const Rect& rect, uint32_t tx, uint32_t ty, std::vector<int64_t>& row) {
+    ConvexPolygon poly = geom::clip_to_rect(ConvexPolygon::from_triangle(tt.tri), rect);
+    if (poly.empty()) return;
+    // Candidate edges (tests 1–6 against the triangle's tile polygon), in ascending id.
+    m_candidates.clear();
+    for (uint32_t ei : m_sorted_edges) {
+      const Edge& e = m_edges[ei];
+      if (e.z_min > tt.z_max) break;  // test 6: the triangle is in front of this edge and all later ones
+      ++row[2];
+      // Bounding boxes that at most touch: the segment cannot meet the interior (test 2).
+      if (e.bbox.x1 <= tt.bbox.x0 || e.bbox.x0 >= tt.bbox.x1 || e.bbox.y1 <= tt.bbox.y0 || e.bbox.y0 >= tt.bbox.y1)
+        continue;
+      if (same_edge(e, tt.tri)) continue;  // test 4
+      if (survives(poly, tt, e)) m_candidates.push_back(ei);
+    }
+    std::sort(m_candidates.begin(), m_candidates.end());
+    row[3] += int64_t(m_candidates.size());
+
+    // Clipping (SVGPU §3.2.2): every piece re-checked against every candidate edge.
+    m_pieces.clear();
+    m_pieces.push_back(std::move(poly));
+    for (uint32_t ei : m_candidates) {
+      const Edge& e = m_edges[ei];
+      const size_t n = m_pieces.size();
+      for (size_t k = 0; k < n; ++k) {
+        if (!survives(m_pieces[k], tt, e)) continue;
+        geom::SplitResult sr = geom::split(m_pieces[k], e.line);
+        ++row[4];
+        m_pieces[k] = std::move(sr.inside);
+        if (!sr.outside.empty()) m_pieces.push_back(std::move(sr.outside));
+      }
+    }
+    // Canonical order of pieces: a split puts the inside part in place of its parent and
+    // appends the outside part (the order the CUDA reference reproduces).
+    row[5] += int64_t(m_pieces.size());
+    m_r.max_tile_pieces = std::max<uint64_t>(m_r.max_tile_pieces, m_pieces.size());
+
+    const int32_t sb = int32_t(m_s.subpixel_bits);
+    const uint32_t n_samples = uint32_t(m_s.samples.size());
+    for (const ConvexPolygon& piece : m_pieces) {
+      if (piece.empty()) continue;
+      const bool visible = !occluded(piece, tt, row);
+      // Samples of the piece: a pixel's samples lie in [px·2^sb, (px+1)·2^sb).
+      const Rect b = geom::bounding_box(piece);
+      const int64_t px0 = std::max<int64_t>(int64_t(tx) * m_cfg.tile_w, (int64_t(b.x0) >> sb));
+      const int64_t px1 = std::min<int64_t>(int64_t(tx + 1) * m_cfg.tile_w - 1, int64_t(b.x1) >> sb);
+      const int64_t py0 = std::max<int64_t>(int64_t(ty) * m_cfg.tile_h, (int64_t(b.y0) >> sb));
+      const int64_t py1 = std::min<int64_t>(int64_t(ty + 1) * m_cfg.tile_h - 1, int64_t(b.y1) >> sb);
+      int64_t covered = 0;
+      for (int64_t py = py0; py <= py1 && py < m_s.height; ++py)
+        for (int64_t px = px0; px <= px1 && px < m_s.width; ++px)
+          for (uint32_t k = 0; k < n_samples; ++k) {
+            const Point p{int32_t((px << sb) + m_s.samples[k].x), int32_t((py << sb) + m_s.samples[k].y)};
+            if (!geom::covers(piece, p)) continue;
+            ++covered;
+            if (visible) m_r.ids[(size_t(py) * m_s.width + size_t(px)) * n_samples + k] = int32_t(tt.t->id);
+          }
+      row[9] += covered;
+      if (!visible) continue;
+      ++row[6];
+      row[8] += covered;
+      m_r.visible_area[tt.t->id] += geom::doubled_area(piece) / (2.0 * double(1 << sb) * double(1 << sb));
+      if (m_cfg.keep_pieces) keep(piece, tt);
+    }
+  }
+
+  // SVGPU §3.3: the piece is hidden if an original opaque triangle nearer at its interior
+  // point contains that point. Equal depth: the earlier-submitted triangle stays in front,
+  // as under a less-than depth test.
+  bool occluded(const ConvexPolygon& piece, const TileTriangle& tt, std::vector<int64_t>& row) {
+    const geom::RationalPoint q = geom::interior_point(piece);
+    const double qx = q.fx / q.fw, qy = q.fy / q.fw;
+    for (uint32_t oi : m_occluders) {
+      const TileTriangle& u = m_tris[oi];
+      if (u.z_min > tt.z_max) break;  // u is behind everywhere: so are all later occluders
+      if (u.t->id == tt.t->id) continue;
+      // The bounding box rejects with a margin far above the error of qx, qy.
+      if (qx < u.bbox.x0 - 1.0 || qx > u.bbox.x1 + 1.0 || qy < u.bbox.y0 - 1.0 || qy > u.bbox.y1 + 1.0) continue;
+      ++row[7];
+      if (!u.edges.contains(q)) continue;
+      const int order = geom::depth_order(u.plane, tt.plane, q);
+      if (order < 0 || (order == 0 && u.t->id < tt.t->id)) return true;
+    }
+    return false;
+  }
+
+  void keep(const ConvexPolygon& piece, const TileTriangle& tt) {
+    PlanarPiece pp;
+    pp.id = tt.t->id;
+    pp.draw = tt.t->draw;
+    const double scale = 1.0 / double(1u << m_s.subpixel_bits);
+    // Shade by the plane's depth gradient: a cheap, stable stand-in for lighting.
+    const double g = std::hypot(double(tt.plane.alpha), double(tt.plane.beta)) / double(tt.plane.area);
+    pp.shade = float(1.0 / (1.0 + g * 1e-3));
+    for (const auto& e : piece.edges()) {
+      pp.xy.push_back(double(e.start.x) / double(e.start.w) * scale);
+      pp.xy.push_back(double(e.start.y) / double(e.start.w) * scale);
+    }
+    m_r.pieces.push_back(std::move(pp));
+  }
+
+  const Setup& m_s;
+  const GoldenConfig& m_cfg;
+  GoldenResult& m_r;
+  std::vector<TileTriangle> m_tris;
+  std::vector<Edge> m_edges;
+  uint32_t m_tiles_x = 0, m_tiles_y = 0;
+  std::vector<std::vector<uint32_t>> m_tile_tris, m_tile_edges;
+  std::vector<uint32_t> m_sorted_edges, m_occluders, m_candidates;
+  std::vector<ConvexPolygon> m_pieces;
+};
+
+}  // namespace
+
+GoldenResult golden_visibility(const Setup& s, const GoldenConfig& cfg) {
+  GoldenResult r;
+  r.width = s.width;
+  r.height = s.height;
+  r.samples = uint32_t(s.samples.size());
+  TileStage(s, cfg, r).run();
+  for (const auto& row : r.tiles.rows) {
+    r.pair_tests += uint64_t(row[2]);
+    r.candidate_pairs += uint64_t(row[3]);
+    r.clip_polygons += uint64_t(row[4]);
+    r.pieces_total += uint64_t(row[5]);
+    r.visible_pieces += uint64_t(row[6]);
+    r.occlusion_tests += uint64_t(row[7]);
+    r.samples_covered += uint64_t(row[8]);
+    r.fragments_generated += uint64_t(row[9]);
+  }
+  return r;
+}
+
+}  // namespace tilevis::vis

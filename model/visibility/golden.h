@@ -1,0 +1,55 @@
+// The golden, untimed SVGPU visibility pipeline (SVGPU §3.2–3.3) over a snapped scene:
+// binning of front-facing triangles and silhouette edges into tiles, per-tile culling
+// tests 1–6, clipping with both sides kept and the re-check of child polygons, occlusion
+// of pieces by original opaque triangles, visible pieces rasterised into the id buffer.
+//
+// Canonical order (reproduced by every other producer): tiles in row-major order; in a
+// tile, triangles in ascending setup order; a triangle's candidate edges in ascending
+// silhouette id; the pieces of a triangle in the order split() leaves them (inside part
+// before outside part, in place of their parent).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "tilevis/outputs.h"
+#include "visibility/setup.h"
+#include "visibility/svg.h"
+
+namespace tilevis::vis {
+
+struct GoldenConfig {
+  uint32_t tile_w = 32, tile_h = 32;
+  bool keep_pieces = false;  // collect visible pieces as polygons (for SVG)
+};
+
+// Per-tile counters (SVGPU Table 2 and more), in tiles.csv column order.
+inline const std::vector<std::string>& golden_tile_columns() {
+  static const std::vector<std::string> cols = {
+      "triangles",        // front-facing triangles binned to the tile
+      "edges",            // silhouette edges binned to the tile
+      "pair_tests",       // triangle × edge pairs examined (after the test-6 depth sort)
+      "candidate_pairs",  // pairs surviving tests 1–6 against the triangle's tile polygon
+      "clip_polygons",    // splits performed (each makes two polygons from one)
+      "pieces",           // polygons after clipping
+      "visible_pieces",   // pieces not occluded
+      "occlusion_tests",  // piece × occluder exact containment tests
+      "samples_covered",  // samples covered by visible pieces
+      "fragments_generated"};  // samples covered by all pieces (= by the tile's triangles)
+  return cols;
+}
+
+struct GoldenResult {
+  uint32_t width = 0, height = 0, samples = 1;
+  std::vector<int32_t> ids;                 // per sample, -1 background
+  std::vector<double> visible_area;         // per original triangle id, pixels²
+  outputs::TileTable tiles;
+  std::vector<PlanarPiece> pieces;          // visible pieces, when keep_pieces
+  uint64_t pair_tests = 0, candidate_pairs = 0, clip_polygons = 0, pieces_total = 0, visible_pieces = 0,
+           occlusion_tests = 0, samples_covered = 0, fragments_generated = 0;
+  uint64_t max_tile_triangles = 0, max_tile_edges = 0, max_tile_pieces = 0;
+};
+
+GoldenResult golden_visibility(const Setup& setup, const GoldenConfig& config);
+
+}  // namespace tilevis::vis

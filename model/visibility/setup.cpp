@@ -1,0 +1,230 @@
+#include "visibility/setup.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "geom/predicates.h"
+
+namespace tilevis::vis {
+namespace {
+
+struct ClipVertex {
+  double x, y, z, w;
+  uint32_t index;  // vertex index in the draw, kNoVertex if made by clipping
+};
+
+// Clip planes as distance functions; a vertex is inside when d >= 0.
+struct Plane {
+  double cx, cy, cz, cw;
+  double distance(const ClipVertex& v) const { return cx * v.x + cy * v.y + cz * v.z + cw * v.w; }
+};
+
+// Sutherland–Hodgman against one plane, in double precision. The intersection is
+// v0 + t (v1 - v0) with t = d0 / (d0 - d1), always computed from the inside vertex,
+// so a shared edge of two triangles is cut at the same point from both sides.
+void clip_polygon(std::vector<ClipVertex>& poly, std::vector<ClipVertex>& scratch, const Plane& p) {
+  scratch.clear();
+  const size_t n = poly.size();
+  for (size_t i = 0; i < n; ++i) {
+    const ClipVertex& a = poly[i];
+    const ClipVertex& b = poly[(i + 1) % n];
+    double da = p.distance(a), db = p.distance(b);
+    if (da >= 0) scratch.push_back(a);
+    if ((da >= 0) != (db >= 0)) {
+      const ClipVertex& in = da >= 0 ? a : b;
+      const ClipVertex& out = da >= 0 ? b : a;
+      double din = da >= 0 ? da : db, dout = da >= 0 ? db : da;
+      double t = din / (din - dout);
+      scratch.push_back({in.x + t * (out.x - in.x), in.y + t * (out.y - in.y), in.z + t * (out.z - in.z),
+                         in.w + t * (out.w - in.w), kNoVertex});
+    }
+  }
+  poly.swap(scratch);
+}
+
+struct Snapper {
+  double half_w, half_h, depth_near, depth_range, depth_scale, sub;
+  uint32_t depth_max;
+
+  Snapper(const trace::Frame& f, uint32_t depth_bits)
+      : half_w(f.width * 0.5),
+        half_h(f.height * 0.5),
+        depth_near(f.depth_near),
+        depth_range(double(f.depth_far) - double(f.depth_near)),
+        depth_scale(double((uint64_t(1) << depth_bits) - 1)),
+        sub(double(1u << f.subpixel_bits)),
+        depth_max(uint32_t((uint64_t(1) << depth_bits) - 1)) {}
+
+  // Viewport transform (y down) and snap: x, y rounded half to even to
+  // 1/2^subpixel_bits pixel; depth rounded to the nearest of 2^depth_bits levels.
+  geom::Vertex operator()(const ClipVertex& v) const {
+    double inv_w = 1.0 / v.w;
+    double xw = (v.x * inv_w + 1.0) * half_w;
+    double yw = (1.0 - v.y * inv_w) * half_h;
+    double zw = depth_near + depth_range * (v.z * inv_w + 1.0) * 0.5;
+    zw = std::clamp(zw, 0.0, 1.0);
+    geom::Vertex s;
+    s.x = static_cast<int32_t>(std::nearbyint(xw * sub));
+    s.y = static_cast<int32_t>(std::nearbyint(yw * sub));
+    s.z = static_cast<uint32_t>(std::nearbyint(zw * depth_scale));
+    s.z = std::min(s.z, depth_max);
+    return s;
+  }
+};
+
+// One triangle edge seen from one setup triangle, for silhouette extraction.
+struct EdgeUse {
+  uint64_t key;        // (min index << 32) | max index within the draw
+  uint32_t triangle;   // setup triangle
+  uint8_t edge;        // 0..2: v[edge] -> v[(edge+1)%3]
+};
+
+std::vector<uint32_t> weld_by_position(const std::vector<trace::Vec4>& v) {
+  std::vector<uint32_t> order(v.size()), weld(v.size());
+  for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+  auto key = [&](uint32_t i) { return std::array<float, 4>{v[i].x, v[i].y, v[i].z, v[i].w}; };
+  std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key(a) < key(b); });
+  for (size_t k = 0; k < order.size(); ++k)
+    weld[order[k]] = (k > 0 && key(order[k]) == key(order[k - 1])) ? weld[order[k - 1]] : order[k];
+  return weld;
+}
+
+}  // namespace
+
+double guard_band_ndc(uint32_t pixels) {
+  // Window x = (ndc + 1) · pixels / 2 must stay below 2^15 pixels in magnitude.
+  return std::floor(65536.0 / pixels) - 2.0;
+}
+
+Setup primitive_setup(const trace::Frame& frame, const SetupConfig& config) {
+  Setup s;
+  s.width = frame.width;
+  s.height = frame.height;
+  s.samples = frame.samples;
+  s.subpixel_bits = frame.subpixel_bits;
+  s.depth_bits = config.depth_bits;
+  const Snapper snap(frame, config.depth_bits);
+  const double gx = guard_band_ndc(frame.width), gy = guard_band_ndc(frame.height);
+  const std::array<Plane, 6> planes = {{{0, 0, 1, 1},     // near: z >= -w
+                                        {0, 0, -1, 1},    // far: z <= w
+                                        {1, 0, 0, gx},    // guard band left
+                                        {-1, 0, 0, gx},   // right
+                                        {0, 1, 0, gy},    // bottom
+                                        {0, -1, 0, gy}}};  // top
+
+  std::vector<ClipVertex> poly, scratch;
+  std::vector<geom::Vertex> snapped;
+  std::vector<EdgeUse> edges;
+  uint32_t id = 0;
+  for (uint32_t di = 0; di < frame.draws.size(); ++di) {
+    const trace::Draw& d = frame.draws[di];
+    const bool opaque = d.opaque() && !d.per_pixel_only();
+    // Soup draws key silhouettes by position: vertices with bit-identical clip-space
+    // positions are welded to the lowest such index.
+    std::vector<uint32_t> weld;
+    if (d.flags & trace::kTriangleSoup) weld = weld_by_position(d.vertices);
+    snapped.resize(d.vertices.size());
+    std::vector<bool> snapped_ok(d.vertices.size(), false);
+    edges.clear();
+    for (size_t t = 0; t < d.indices.size(); t += 3, ++id) {
+      s.triangle_draw.push_back(di);
+      ++s.stats.triangles_in;
+      poly.clear();
+      for (int k = 0; k < 3; ++k) {
+        uint32_t vi = d.indices[t + k];
+        const trace::Vec4& v = d.vertices[vi];
+        poly.push_back({v.x, v.y, v.z, v.w, vi});
+      }
+      bool culled = false, cut = false;
+      for (const Plane& p : planes) {
+        int inside = 0;
+        for (const auto& v : poly) inside += p.distance(v) >= 0;
+        if (inside == 0) {
+          culled = true;
+          break;
+        }
+        if (inside < int(poly.size())) {
+          clip_polygon(poly, scratch, p);
+          cut = true;
+        }
+      }
+      if (culled || poly.size() < 3) {
+        ++s.stats.frustum_culled;
+        continue;
+      }
+      s.stats.clipped += cut;
+      std::array<geom::Vertex, 16> sv{};
+      for (size_t k = 0; k < poly.size() && k < sv.size(); ++k) {
+        uint32_t vi = poly[k].index;
+        if (vi != kNoVertex) {
+          if (!snapped_ok[vi]) {
+            snapped[vi] = snap(poly[k]);
+            snapped_ok[vi] = true;
+          }
+          sv[k] = snapped[vi];
+        } else {
+          sv[k] = snap(poly[k]);
+        }
+      }
+      // Fan: (p0, pk, pk+1). Triangles made by clipping carry no vertex indices.
+      for (size_t k = 1; k + 1 < poly.size(); ++k) {
+        SetupTriangle st;
+        st.v[0] = sv[0];
+        st.v[1] = sv[k];
+        st.v[2] = sv[k + 1];
+        st.id = id;
+        st.draw = di;
+        st.opaque = opaque;
+        st.clipped = cut;
+        int64_t area = geom::orient2d(st.v[0].xy(), st.v[1].xy(), st.v[2].xy());
+        // Counter-clockwise in NDC is clockwise in y-down window space: negative area.
+        st.front = area < 0;
+        if (area == 0) ++s.stats.degenerate;
+        else if (area > 0) ++s.stats.back_facing;
+        else ++s.stats.front_facing;
+        auto tri = static_cast<uint32_t>(s.triangles.size());
+        uint32_t idx[3] = {cut ? kNoVertex : poly[0].index, cut ? kNoVertex : poly[k].index,
+                           cut ? kNoVertex : poly[k + 1].index};
+        if (!weld.empty())
+          for (auto& i : idx)
+            if (i != kNoVertex) i = weld[i];
+        for (uint8_t e = 0; e < 3; ++e) {
+          uint32_t i0 = idx[e], i1 = idx[(e + 1) % 3];
+          if (i0 == kNoVertex || i1 == kNoVertex) {
+            // An edge made by clipping has no neighbour to pair with: a boundary.
+            edges.push_back({~uint64_t(0), tri, e});
+            continue;
+          }
+          uint64_t key = (uint64_t(std::min(i0, i1)) << 32) | std::max(i0, i1);
+          edges.push_back({key, tri, e});
+        }
+        s.triangles.push_back(st);
+      }
+    }
+    if (!opaque) continue;
+    // Silhouette extraction: sort edge uses by key, then judge each run of equal keys.
+    std::sort(edges.begin(), edges.end(), [](const EdgeUse& a, const EdgeUse& b) {
+      return a.key != b.key ? a.key < b.key : a.triangle != b.triangle ? a.triangle < b.triangle : a.edge < b.edge;
+    });
+    for (size_t i = 0; i < edges.size();) {
+      size_t j = i + 1;
+      if (edges[i].key != ~uint64_t(0))
+        while (j < edges.size() && edges[j].key == edges[i].key) ++j;
+      size_t front = 0;
+      for (size_t k = i; k < j; ++k) front += s.triangles[edges[k].triangle].front;
+      size_t count = j - i;
+      if (front > 0 && (count != 2 || front != count)) {
+        const SetupTriangle& t = s.triangles[edges[i].triangle];
+        SilhouetteEdge se{t.v[edges[i].edge], t.v[(edges[i].edge + 1) % 3], di};
+        s.silhouettes.push_back(se);
+      }
+      i = j;
+    }
+  }
+  s.stats.setup_triangles = s.triangles.size();
+  s.stats.silhouette_edges = s.silhouettes.size();
+  return s;
+}
+
+}  // namespace tilevis::vis
