@@ -8,18 +8,24 @@
 
 #include "commands.h"
 #include "tilevis/outputs.h"
+#include "tilevis/trace.h"
+#include "visibility/explain.h"
+#include "visibility/setup.h"
 
 namespace tilevis::app {
 
 Command add_compare_command(CLI::App& app) {
   struct Args {
-    std::string a, b, out;
+    std::string a, b, out, explain;
   };
   auto args = std::make_shared<Args>();
   auto* cmd = app.add_subcommand("compare", "Compare two result directories (golden, truth, sim, cuda)");
   cmd->add_option("a", args->a, "First result directory")->required()->check(CLI::ExistingDirectory);
   cmd->add_option("b", args->b, "Second result directory")->required()->check(CLI::ExistingDirectory);
   cmd->add_option("-o,--output", args->out, "Directory for compare.json (default: the first result directory)");
+  cmd->add_option("--explain", args->explain,
+                  "Trace both results were made from: classify every mismatched sample by its cause")
+      ->check(CLI::ExistingFile);
   return {cmd, [args]() {
             auto a = outputs::read_result(args->a);
             auto b = outputs::read_result(args->b);
@@ -41,6 +47,21 @@ Command add_compare_command(CLI::App& app) {
                          c.area_mismatches);
             fmt::print("  tile counter cells that differ: {} (columns: {})\n", c.tile_counter_mismatches,
                        fmt::join(c.compared_columns, ", "));
+            if (!args->explain.empty()) {
+              uint32_t frame = a.stats.value("frame", 0u);
+              trace::Trace t = trace::read(args->explain);
+              if (frame >= t.frames.size()) throw std::runtime_error(args->explain + ": no frame " + std::to_string(frame));
+              trace::Frame f = std::move(t.frames[frame]);
+              f.samples = trace::standard_samples(a.samples, f.subpixel_bits);
+              vis::SetupConfig sc;
+              sc.depth_bits = a.stats["config"].value("depth_bits", 24u);
+              vis::MismatchReport m = vis::explain_mismatches(vis::primitive_setup(f, sc), a.ids, b.ids);
+              nlohmann::json kinds = m.kinds;
+              j["mismatch_causes"] = kinds;
+              std::ofstream(out / "compare.json") << j.dump(2) << '\n';
+              for (const auto& [kind, count] : m.kinds) fmt::print("  cause: {:>8} samples: {}\n", count, kind);
+              for (const auto& e : m.examples) fmt::print("    e.g. {}\n", e);
+            }
             fmt::print("  wrote {}\n", (out / "compare.json").string());
             return 0;
           }};
