@@ -100,6 +100,7 @@ int run_golden(const GoldenArgs& a, const trace::Frame& frame, uint32_t tw, uint
   totals["clip_polygons"] = r.clip_polygons;
   totals["pieces"] = r.pieces_total;
   totals["visible_pieces"] = r.visible_pieces;
+  totals["visible_triangles"] = r.visible_triangles;
   totals["occlusion_tests"] = r.occlusion_tests;
   totals["samples_covered"] = r.samples_covered;
   totals["fragments_generated"] = r.fragments_generated;

@@ -236,6 +236,7 @@ class TileStage {
       if (!visible) continue;
       ++row[6];
       row[8] += covered;
+      m_r.visible_triangles += piece.size() - 2;
       m_r.visible_area[tt.t->id] += geom::doubled_area(piece) / (2.0 * double(1 << sb) * double(1 << sb));
       if (m_cfg.keep_pieces) keep(piece, tt);
     }

@@ -47,6 +47,7 @@ struct GoldenResult {
   std::vector<PlanarPiece> pieces;          // visible pieces, when keep_pieces
   uint64_t pair_tests = 0, candidate_pairs = 0, clip_polygons = 0, pieces_total = 0, visible_pieces = 0,
            occlusion_tests = 0, samples_covered = 0, fragments_generated = 0;
+  uint64_t visible_triangles = 0;  // visible pieces fan-triangulated (SVGPU Fig. 6 counts output triangles)
   uint64_t max_tile_triangles = 0, max_tile_edges = 0, max_tile_pieces = 0;
 };
 
