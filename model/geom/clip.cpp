@@ -1,6 +1,7 @@
 #include "geom/clip.h"
 
 #include <array>
+#include <utility>
 
 namespace tilevis::geom {
 namespace {
@@ -97,12 +98,17 @@ ConvexPolygon clip(const ConvexPolygon& poly, const Line& l) {
 }
 
 ConvexPolygon clip_to_rect(const ConvexPolygon& poly, const Rect& r) {
-  const ConvexPolygon rect = ConvexPolygon::from_rect(r);
-  if (rect.empty()) return {};
+  if (poly.empty() || r.x0 >= r.x1 || r.y0 >= r.y1) return {};
+  const Point c[4] = {{r.x0, r.y0}, {r.x1, r.y0}, {r.x1, r.y1}, {r.x0, r.y1}};  // from_rect's lines
   ConvexPolygon cur = poly;
-  for (const auto& e : rect.edges()) {
-    if (cur.empty()) break;
-    cur = clip(cur, e.line);
+  ConvexPolygon next;
+  for (int i = 0; i < 4; ++i) {
+    const Line l = Line::through(c[i], c[(i + 1) % 4]);
+    const VertexSides s(cur, l);
+    if (!s.any_negative()) continue;  // no allocation for a polygon already inside
+    if (!s.any_positive()) return {};
+    emit_side(cur, s, l, 1, next);
+    std::swap(cur, next);
   }
   return cur;
 }
