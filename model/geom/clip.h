@@ -23,7 +23,8 @@ enum class LineRelation { inside, outside, crosses, empty };
 LineRelation classify(const ConvexPolygon& poly, const Line& l);
 
 // inside = poly ∩ {l >= 0}, outside = poly ∩ {l <= 0}; zero-area parts come back empty.
-// The outside part's clip line is l.flipped(). Either output may alias nothing else.
+// The outside part's clip line is l.flipped(). inside and outside must be distinct objects,
+// neither of them poly (they are cleared before poly is read).
 void split(const ConvexPolygon& poly, const Line& l, ConvexPolygon& inside, ConvexPolygon& outside);
 
 struct SplitResult {

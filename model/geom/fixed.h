@@ -8,6 +8,8 @@
 #include <cstdint>
 #include <optional>
 
+#include "geom/wide_int.h"
+
 namespace tilevis::geom {
 
 inline constexpr int kSubpixelBits = 8;
@@ -58,12 +60,14 @@ constexpr bool in_guard_band(int64_t coord) {
   return coord > -kGuardBandLimit && coord < kGuardBandLimit;
 }
 
-// Window coordinate in pixels -> 16.8, rounding to nearest, ties to even (as the hardware's
-// float-to-fixed converter does), independent of the FPU rounding mode. Out of band, NaN
-// and infinities give nullopt: the caller reports them, nothing wraps.
-inline std::optional<int32_t> snap_coord(float window_coord) {
-  // Exact: a float's 24-bit significand scaled by 2^8 is representable in a double.
-  const double d = static_cast<double>(window_coord) * kSubpixelScale;
+// Window coordinate in pixels -> fixed point with `subpixel_bits` fractional bits (16.8 by
+// default), rounding to nearest, ties to even (as the hardware's float-to-fixed converter
+// does), independent of the FPU rounding mode. Out of band, NaN and infinities give nullopt:
+// the caller reports them, nothing wraps. Float inputs convert to double exactly, so a
+// float window coordinate snaps as it would on its own.
+inline std::optional<int32_t> snap_coord(double window_coord, int subpixel_bits = kSubpixelBits) {
+  // Exact: scaling by a power of two.
+  const double d = window_coord * static_cast<double>(int64_t{1} << subpixel_bits);
   if (!(std::fabs(d) < 2.0 * kGuardBandLimit)) return std::nullopt;
   const double fl = std::floor(d);
   const double frac = d - fl;  // exact: |d| < 2^24
@@ -74,33 +78,27 @@ inline std::optional<int32_t> snap_coord(float window_coord) {
 }
 
 // Depth in [0,1] -> unsigned integer in [0, 2^D - 1]: clamp (NaN -> 0), then
-// round(z * (2^D - 1)) to nearest, ties to even. Computed on the float's integer significand
-// (m * (2^D - 1) < 2^24 * 2^32 = 2^56 fits uint64), so it is exact for D up to 32, where a
-// double product would not be. Precondition: 1 <= depth_bits <= 32.
-inline uint32_t snap_depth(float z, int depth_bits) {
+// round(z * (2^D - 1)) to nearest, ties to even, of the EXACT product: z's 53-bit integer
+// significand times 2^D - 1 is < 2^53 * 2^32 = 2^85, taken in 128 bits. A double product
+// would round first. Precondition: 1 <= depth_bits <= 32.
+inline uint32_t snap_depth(double z, int depth_bits) {
   const uint64_t max_value = (uint64_t{1} << depth_bits) - 1;
-  if (!(z > 0.0f)) return 0;
-  if (z >= 1.0f) return static_cast<uint32_t>(max_value);
-  const uint32_t bits = std::bit_cast<uint32_t>(z);
-  const uint32_t biased_exp = (bits >> 23) & 0xffu;
-  uint64_t significand = bits & 0x7fffffu;
-  int shift;  // z = significand * 2^-shift
-  if (biased_exp == 0) {
-    shift = 149;
-  } else {
-    significand |= uint64_t{1} << 23;
-    shift = 150 - static_cast<int>(biased_exp);  // z < 1 -> biased_exp <= 126 -> shift >= 24
-  }
-  const uint64_t product = significand * max_value;  // < 2^56
-  if (shift >= 58) return 0;                         // product * 2^-shift < 2^-2
-  uint64_t q = product >> shift;
-  const uint64_t rem = product & ((uint64_t{1} << shift) - 1);
-  const uint64_t half = uint64_t{1} << (shift - 1);
+  if (!(z > 0.0)) return 0;
+  if (z >= 1.0) return static_cast<uint32_t>(max_value);
+  int exponent = 0;
+  const double m = std::frexp(z, &exponent);  // z = m 2^exponent, m in [0.5, 1), exponent <= 0
+  const auto significand = static_cast<uint64_t>(std::ldexp(m, 53));  // exact, < 2^53
+  const int shift = 53 - exponent;                                       // z = significand 2^-shift, >= 53
+  if (shift >= 86) return 0;                                             // value < 2^85 2^-86 = 1/2
+  const UInt128 product = UInt128{significand} * max_value;              // < 2^85
+  UInt128 q = product >> shift;
+  const UInt128 rem = product & ((UInt128{1} << shift) - 1);
+  const UInt128 half = UInt128{1} << (shift - 1);
   if (rem > half || (rem == half && (q & 1) != 0)) ++q;
   return static_cast<uint32_t>(q);
 }
 
-inline std::optional<Vertex> snap_vertex(float x, float y, float z, int depth_bits) {
+inline std::optional<Vertex> snap_vertex(double x, double y, double z, int depth_bits) {
   const auto sx = snap_coord(x);
   const auto sy = snap_coord(y);
   if (!sx || !sy) return std::nullopt;

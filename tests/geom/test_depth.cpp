@@ -234,5 +234,60 @@ TEST(DepthOrder, MixedSmallAndWidePlanes) {
   }
 }
 
+// The wide fallbacks on their own (the filter decides almost every random case before them),
+// and the extreme magnitudes of every bound: corners of the band, z at 0 and 2^D - 1.
+TEST(DepthOrder, ExactFallbacksMatchOracleAtExtremes) {
+  std::mt19937_64 rng(82);
+  const int32_t L = kCoordLimit;
+  const int32_t corner[4] = {-L, -L + 1, L - 1, L};
+  for (int bits : {24, 26, 27, 32}) {
+    const uint32_t zmax = static_cast<uint32_t>((uint64_t{1} << bits) - 1);
+    auto extreme_vertex = [&](bool extreme) {
+      if (!extreme) return random_vertex(rng, L, bits);
+      return Vertex{corner[rng() % 4], corner[rng() % 4], (rng() & 1) ? zmax : 0u};
+    };
+    auto extreme_point = [&](bool extreme) {
+      return extreme ? Point{corner[rng() % 4], corner[rng() % 4]} : random_point(rng, -L, L);
+    };
+    auto extreme_line = [&](bool extreme) {
+      for (;;) {
+        const Point p = extreme_point(extreme), q = extreme_point(extreme);
+        if (!(p == q)) return Line::through(p, q);
+      }
+    };
+    for (int i = 0; i < 4000; ++i) {
+      const bool ex = i % 2 == 0;
+      Triangle a, b;
+      do a = Triangle{{extreme_vertex(ex), extreme_vertex(ex), extreme_vertex(ex)}};
+      while (doubled_area(a) == 0);
+      do b = Triangle{{extreme_vertex(ex), extreme_vertex(ex), extreme_vertex(ex)}};
+      while (doubled_area(b) == 0);
+      const DepthPlane pa = DepthPlane::from(a), pb = DepthPlane::from(b);
+      const Point s = extreme_point(ex);
+      const int at_s = sgn(depth_at(a, rpoint(s)) - depth_at(b, rpoint(s)));
+      ASSERT_EQ(depth_order(pa, pb, s), at_s);
+      ASSERT_EQ(detail::depth_order_sample_wide(pa, pb, s), at_s);
+      ImplicitPoint q[3];
+      for (auto& v : q) {
+        do v = intersect(extreme_line(ex), extreme_line(false));
+        while (!v.valid());
+      }
+      const int at_q = sgn(depth_at(a, rpoint(q[0])) - depth_at(b, rpoint(q[0])));
+      ASSERT_EQ(depth_order(pa, pb, q[0]), at_q);
+      ASSERT_EQ(detail::depth_order_implicit_exact(pa, pb, q[0]), at_q);
+      const RationalPoint g = centroid(q[0], q[1], q[2]);
+      const int at_g = sgn(depth_at(a, rpoint(g)) - depth_at(b, rpoint(g)));
+      ASSERT_EQ(depth_order(pa, pb, g), at_g);
+      ASSERT_EQ(detail::depth_order_rational_exact(pa, pb, g), at_g);
+      // Edge: a's edge v0v1 against plane b at a point on it.
+      if (a.v[0].xy() == a.v[1].xy()) continue;
+      const ImplicitPoint on = intersect(Line::through(a.v[0].xy(), a.v[1].xy()), extreme_line(ex));
+      if (!on.valid()) continue;
+      const int at_e = sgn(depth_at(b, rpoint(on)) - edge_depth(a.v[0], a.v[1], rpoint(on)));
+      ASSERT_EQ(depth_order_edge(pb, a.v[0], a.v[1], on), at_e);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace tilevis::geom::test

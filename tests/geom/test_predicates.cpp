@@ -210,7 +210,9 @@ TEST(RationalPoint, CentroidIsExact) {
     ASSERT_TRUE(is_correctly_rounded(g.fx, big(g.x)));
     const Line t = random_line(rng);
     const RPoint o = rpoint(g);
-    ASSERT_EQ(side(t, g), sgn(Rational(t.a) * o.x + Rational(t.b) * o.y + Rational(t.c)));
+    const int expect = sgn(Rational(t.a) * o.x + Rational(t.b) * o.y + Rational(t.c));
+    ASSERT_EQ(side(t, g), expect);
+    ASSERT_EQ(detail::side_exact(t, g), expect);  // the fallback alone
   }
   const CentroidCase cc = centroid_case(rng);
   EXPECT_EQ(rpoint(centroid(cc.p0, cc.p1, cc.p2)), rpoint(cc.m));
