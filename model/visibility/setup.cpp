@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <stdexcept>
 
 #include "geom/predicates.h"
 
@@ -43,33 +44,29 @@ void clip_polygon(std::vector<ClipVertex>& poly, std::vector<ClipVertex>& scratc
   poly.swap(scratch);
 }
 
+// Viewport transform (y down) in double, then the snap of geom/fixed.h: x, y to
+// 1/2^subpixel_bits pixel and depth to 2^depth_bits levels, both rounded to nearest-even.
 struct Snapper {
-  double half_w, half_h, depth_near, depth_range, depth_scale, sub;
-  uint32_t depth_max;
+  double half_w, half_h, depth_near, depth_range;
+  int subpixel_bits, depth_bits;
 
-  Snapper(const trace::Frame& f, uint32_t depth_bits)
+  Snapper(const trace::Frame& f, uint32_t bits)
       : half_w(f.width * 0.5),
         half_h(f.height * 0.5),
         depth_near(f.depth_near),
         depth_range(double(f.depth_far) - double(f.depth_near)),
-        depth_scale(double((uint64_t(1) << depth_bits) - 1)),
-        sub(double(1u << f.subpixel_bits)),
-        depth_max(uint32_t((uint64_t(1) << depth_bits) - 1)) {}
+        subpixel_bits(int(f.subpixel_bits)),
+        depth_bits(int(bits)) {}
 
-  // Viewport transform (y down) and snap: x, y rounded half to even to
-  // 1/2^subpixel_bits pixel; depth rounded to the nearest of 2^depth_bits levels.
   geom::Vertex operator()(const ClipVertex& v) const {
-    double inv_w = 1.0 / v.w;
-    double xw = (v.x * inv_w + 1.0) * half_w;
-    double yw = (1.0 - v.y * inv_w) * half_h;
-    double zw = depth_near + depth_range * (v.z * inv_w + 1.0) * 0.5;
-    zw = std::clamp(zw, 0.0, 1.0);
-    geom::Vertex s;
-    s.x = static_cast<int32_t>(std::nearbyint(xw * sub));
-    s.y = static_cast<int32_t>(std::nearbyint(yw * sub));
-    s.z = static_cast<uint32_t>(std::nearbyint(zw * depth_scale));
-    s.z = std::min(s.z, depth_max);
-    return s;
+    const double inv_w = 1.0 / v.w;
+    const double xw = (v.x * inv_w + 1.0) * half_w;
+    const double yw = (1.0 - v.y * inv_w) * half_h;
+    const double zw = depth_near + depth_range * (v.z * inv_w + 1.0) * 0.5;
+    const auto x = geom::snap_coord(xw, subpixel_bits), y = geom::snap_coord(yw, subpixel_bits);
+    // Guard-band clipping keeps every vertex inside the band (guard_band_ndc).
+    if (!x || !y) throw std::logic_error("primitive setup: vertex outside the guard band after clipping");
+    return {*x, *y, geom::snap_depth(zw, depth_bits)};
   }
 };
 
