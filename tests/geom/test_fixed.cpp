@@ -93,6 +93,49 @@ TEST(Snap, DepthMatchesExactOracle) {
   }
 }
 
+// Double inputs (the setup unit's viewport transform runs in double) and other sub-pixel
+// precisions: same exact round-half-even oracle.
+TEST(Snap, DoubleInputsAndSubpixelBits) {
+  std::mt19937_64 rng(13);
+  std::uniform_real_distribution<double> d(-40000.0, 40000.0);
+  for (int bits : {0, 4, 8}) {
+    for (int i = 0; i < 50000; ++i) {
+      double v = d(rng);
+      if (i % 3 == 0) v = std::round(v * 2.0 * (1 << bits)) / (2.0 * (1 << bits));  // exact ties
+      const Rational scaled = exact(v) * (1 << bits);
+      BigInt fl = boost::multiprecision::numerator(scaled) / boost::multiprecision::denominator(scaled);
+      if (Rational(fl) > scaled) fl -= 1;
+      const Rational frac = scaled - Rational(fl);
+      BigInt r = fl;
+      if (frac > Rational(1, 2) || (frac == Rational(1, 2) && (fl & 1) != 0)) r += 1;
+      const bool in_band = r > -(BigInt(1) << 23) && r < (BigInt(1) << 23);
+      const auto got = snap_coord(v, bits);
+      ASSERT_EQ(got.has_value(), in_band) << v;
+      if (in_band) {
+        ASSERT_EQ(BigInt(*got), r) << v;
+      }
+    }
+  }
+  std::uniform_real_distribution<double> dz(0.0, 1.0);
+  for (int bits : {16, 24, 32}) {
+    const BigInt max_value = (BigInt(1) << bits) - 1;
+    for (int i = 0; i < 50000; ++i) {
+      double z = dz(rng);
+      if (i % 4 == 0) z = std::ldexp(z, -static_cast<int>(rng() % 80));
+      if (i % 4 == 1) z = (std::round(z * static_cast<double>(max_value)) + 0.5) / static_cast<double>(max_value);
+      const Rational scaled = exact(z) * Rational(max_value);
+      BigInt fl = boost::multiprecision::numerator(scaled) / boost::multiprecision::denominator(scaled);
+      const Rational frac = scaled - Rational(fl);
+      BigInt r = fl;
+      if (frac > Rational(1, 2) || (frac == Rational(1, 2) && (fl & 1) != 0)) r += 1;
+      if (r > max_value) r = max_value;
+      ASSERT_EQ(BigInt(snap_depth(z, bits)), r) << z << " bits " << bits;
+    }
+  }
+  EXPECT_EQ(snap_depth(std::numeric_limits<double>::denorm_min(), 32), 0u);
+  EXPECT_EQ(snap_depth(std::nextafter(1.0, 0.0), 32), 0xffffffffu);
+}
+
 TEST(Snap, TileRect) {
   EXPECT_EQ(tile_rect(2, 3, 32, 16), (Rect{2 * 32 * 256, 3 * 16 * 256, 3 * 32 * 256, 4 * 16 * 256}));
 }
