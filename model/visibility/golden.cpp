@@ -77,21 +77,19 @@ bool survives(const ConvexPolygon& poly, const TileTriangle& tt, const Edge& e) 
   return s2 > 0;
 }
 
-class TileStage {
- public:
-  TileStage(const Setup& s, const GoldenConfig& cfg, GoldenResult& r) : m_s(s), m_cfg(cfg), m_r(r) {}
+}  // namespace
 
-  void run() {
+// The tile stage of the golden pipeline; GoldenTiler exposes its binning and per-tile work.
+class GoldenTiler::Impl {
+ public:
+  Impl(const Setup& s, const GoldenConfig& cfg, GoldenResult& r) : m_s(s), m_cfg(cfg), m_r(r) {
     prepare();
-    bin();
     const size_t n_samples = size_t(m_s.width) * m_s.height * m_s.samples.size();
     m_r.ids.assign(n_samples, -1);
     m_r.visible_area.assign(m_s.triangle_draw.size(), 0.0);
     m_r.tiles.resize(m_cfg.tile_w, m_cfg.tile_h, m_s.width, m_s.height, golden_tile_columns());
-    for (uint32_t tile = 0; tile < m_tile_tris.size(); ++tile) process_tile(tile);
   }
 
- private:
   void prepare() {
     for (const SetupTriangle& t : m_s.triangles) {
       if (!t.front) continue;
@@ -148,7 +146,7 @@ class TileStage {
     }
   }
 
-  void process_tile(uint32_t tile) {
+  void process_tile(uint32_t tile, std::vector<TileTriangleWork>* per_triangle) {
     const auto& tris = m_tile_tris[tile];
     const auto& edge_ids = m_tile_edges[tile];
     auto& row = m_r.tiles.rows[tile];
@@ -172,8 +170,21 @@ class TileStage {
     std::stable_sort(m_occluders.begin(), m_occluders.end(),
                      [&](uint32_t a, uint32_t b) { return m_tris[a].z_min < m_tris[b].z_min; });
 
-    for (uint32_t i : tris) process_triangle(m_tris[i], rect, tx, ty, row);
+    if (!per_triangle) {
+      for (uint32_t i : tris) process_triangle(m_tris[i], rect, tx, ty, row);
+      return;
+    }
+    for (uint32_t i : tris) {
+      TileTriangleWork w;
+      w.triangle = setup_index(i);
+      for (size_t c = 0; c < 8; ++c) w.counters[c] = -row[c + 2];
+      process_triangle(m_tris[i], rect, tx, ty, row);
+      for (size_t c = 0; c < 8; ++c) w.counters[c] += row[c + 2];
+      per_triangle->push_back(w);
+    }
   }
+
+  uint32_t setup_index(uint32_t front) const { return uint32_t(m_tris[front].t - m_s.triangles.data()); }
 
   void process_triangle(const TileTriangle& tt, const Rect& rect, uint32_t tx, uint32_t ty, std::vector<int64_t>& row) {
     ConvexPolygon poly = geom::clip_to_rect(ConvexPolygon::from_triangle(tt.tri), rect);
@@ -288,14 +299,39 @@ class TileStage {
   std::vector<ConvexPolygon> m_pieces;
 };
 
-}  // namespace
+GoldenTiler::GoldenTiler(const Setup& setup, const GoldenConfig& config, GoldenResult& result)
+    : m_impl(std::make_unique<Impl>(setup, config, result)) {}
+GoldenTiler::~GoldenTiler() = default;
+void GoldenTiler::bin() { m_impl->bin(); }
+uint32_t GoldenTiler::tiles_x() const { return m_impl->m_tiles_x; }
+uint32_t GoldenTiler::tiles_y() const { return m_impl->m_tiles_y; }
+std::vector<uint32_t> GoldenTiler::tile_triangles(uint32_t tile) const {
+  std::vector<uint32_t> out;
+  out.reserve(m_impl->m_tile_tris[tile].size());
+  for (uint32_t i : m_impl->m_tile_tris[tile]) out.push_back(m_impl->setup_index(i));
+  return out;
+}
+size_t GoldenTiler::tile_triangle_count(uint32_t tile) const { return m_impl->m_tile_tris[tile].size(); }
+const std::vector<uint32_t>& GoldenTiler::tile_edges(uint32_t tile) const { return m_impl->m_tile_edges[tile]; }
+void GoldenTiler::process_tile(uint32_t tile, std::vector<TileTriangleWork>* per_triangle) {
+  m_impl->process_tile(tile, per_triangle);
+}
 
 GoldenResult golden_visibility(const Setup& s, const GoldenConfig& cfg) {
   GoldenResult r;
   r.width = s.width;
   r.height = s.height;
   r.samples = uint32_t(s.samples.size());
-  TileStage(s, cfg, r).run();
+  GoldenTiler tiler(s, cfg, r);
+  tiler.bin();
+  for (uint32_t tile = 0; tile < tiler.tile_count(); ++tile) tiler.process_tile(tile);
+  sum_golden_totals(r);
+  return r;
+}
+
+void sum_golden_totals(GoldenResult& r) {
+  r.pair_tests = r.candidate_pairs = r.clip_polygons = r.pieces_total = r.visible_pieces = r.occlusion_tests =
+      r.samples_covered = r.fragments_generated = 0;
   for (const auto& row : r.tiles.rows) {
     r.pair_tests += uint64_t(row[2]);
     r.candidate_pairs += uint64_t(row[3]);
@@ -306,7 +342,6 @@ GoldenResult golden_visibility(const Setup& s, const GoldenConfig& cfg) {
     r.samples_covered += uint64_t(row[8]);
     r.fragments_generated += uint64_t(row[9]);
   }
-  return r;
 }
 
 }  // namespace tilevis::vis

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "tilevis/outputs.h"
@@ -52,5 +53,51 @@ struct GoldenResult {
 };
 
 GoldenResult golden_visibility(const Setup& setup, const GoldenConfig& config);
+
+// One front-facing triangle's share of a tile's counters: columns 2..9 of
+// golden_tile_columns() (pair_tests .. fragments_generated) counted for it alone.
+struct TileTriangleWork {
+  uint32_t triangle = 0;        // index into Setup::triangles
+  int64_t counters[8] = {};     // pair_tests, candidate_pairs, clip_polygons, pieces, visible_pieces,
+                                // occlusion_tests, samples_covered, fragments_generated
+};
+
+// The golden pipeline in reusable pieces, for producers that add time to it (the SystemC
+// model): bin() once, then process_tile() for any tile in any order. process_tile()
+// writes the tile's row of `result.tiles`, its samples of `result.ids` and its triangles'
+// visible areas exactly as golden_visibility() does; golden_visibility() is this class
+// run over every tile in row-major order followed by sum_totals().
+class GoldenTiler {
+ public:
+  // Sizes result.ids, result.visible_area and result.tiles; `setup`, `config` and
+  // `result` must outlive the tiler.
+  GoldenTiler(const Setup& setup, const GoldenConfig& config, GoldenResult& result);
+  ~GoldenTiler();
+  GoldenTiler(const GoldenTiler&) = delete;
+  GoldenTiler& operator=(const GoldenTiler&) = delete;
+
+  // Bins front-facing triangles and silhouette edges into tiles (exact overlap).
+  void bin();
+  uint32_t tiles_x() const;
+  uint32_t tiles_y() const;
+  uint32_t tile_count() const { return tiles_x() * tiles_y(); }
+  // After bin(): the tile's triangles (ascending Setup::triangles index) and silhouette
+  // edges (ascending Setup::silhouettes index).
+  std::vector<uint32_t> tile_triangles(uint32_t tile) const;
+  const std::vector<uint32_t>& tile_edges(uint32_t tile) const;
+  // Number of the tile's triangles without building the list.
+  size_t tile_triangle_count(uint32_t tile) const;
+
+  // Runs SVGPU §3.2–3.3 on one tile. With `per_triangle`, appends one record per binned
+  // triangle (in processing order) whose counters sum to the tile's row.
+  void process_tile(uint32_t tile, std::vector<TileTriangleWork>* per_triangle = nullptr);
+
+ private:
+  class Impl;
+  std::unique_ptr<Impl> m_impl;
+};
+
+// Frame totals of `result` (pair_tests .. fragments_generated) from its tile rows.
+void sum_golden_totals(GoldenResult& result);
 
 }  // namespace tilevis::vis
