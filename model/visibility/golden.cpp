@@ -123,10 +123,13 @@ class GoldenTiler::Impl {
       for (int64_t tx = tx0; tx <= tx1; ++tx) fn(uint32_t(ty * m_tiles_x + tx), tile_rect(uint32_t(tx), uint32_t(ty)));
   }
 
+  // The tile's rectangle, cut at the viewport's right and bottom edges: the last column and
+  // row of tiles may reach past the screen, and nothing there is visible.
   Rect tile_rect(uint32_t tx, uint32_t ty) const {
     const int32_t sb = int32_t(m_s.subpixel_bits);
     return {int32_t(tx * m_cfg.tile_w) << sb, int32_t(ty * m_cfg.tile_h) << sb,
-            int32_t((tx + 1) * m_cfg.tile_w) << sb, int32_t((ty + 1) * m_cfg.tile_h) << sb};
+            int32_t(std::min((tx + 1) * m_cfg.tile_w, m_s.width)) << sb,
+            int32_t(std::min((ty + 1) * m_cfg.tile_h, m_s.height)) << sb};
   }
 
   void bin() {
