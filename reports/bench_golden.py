@@ -23,7 +23,7 @@ def run_measured(cmd):
     if status != 0:
         sys.stderr.write(out + err)
         raise SystemExit(f"bench: failed: {' '.join(map(str, cmd))}")
-    return out, time.time() - t0, usage.ru_maxrss / 1024
+    return out, time.time() - t0, usage.ru_maxrss / 1024, usage.ru_utime + usage.ru_stime
 
 
 def main():
@@ -47,18 +47,21 @@ def main():
         run_measured([a.bin, "trace", scene, "-q", "-o", trace])
         for samples in a.samples.split(","):
             tdir = work / f"{scene.stem}_s{samples}_truth"
-            _, truth_s, truth_mb = run_measured([a.bin, "golden", trace, "--truth", "--samples", samples, "-o", tdir])
+            _, truth_s, truth_mb, _ = run_measured([a.bin, "golden", trace, "--truth", "--samples", samples, "-o", tdir])
             for tile in a.tiles.split(","):
                 gdir = work / f"{scene.stem}_s{samples}_t{tile}"
-                _, wall, mb = run_measured([a.bin, "golden", trace, "--tile", tile, "--samples", samples, "-o", gdir])
+                _, wall, mb, cpu = run_measured([a.bin, "golden", trace, "--tile", tile, "--samples", samples, "-o", gdir])
                 run_measured([a.bin, "compare", gdir, tdir])
-                g = json.loads((gdir / "stats.json").read_text())
                 c = json.loads((gdir / "compare.json").read_text())
+                if c["mismatched_samples"]:
+                    run_measured([a.bin, "compare", gdir, tdir, "--explain", trace])
+                    c = json.loads((gdir / "compare.json").read_text())
+                g = json.loads((gdir / "stats.json").read_text())
                 r = {"scene": scene.stem, "tile": tile, "samples": int(samples),
-                     "golden_seconds": g["host_seconds"], "golden_wall": wall, "golden_peak_mib": mb,
+                     "golden_seconds": g["host_seconds"], "golden_wall": wall, "golden_cpu": cpu, "golden_peak_mib": mb,
                      "truth_seconds": truth_s, "truth_peak_mib": truth_mb,
                      "sample_agreement": c["sample_agreement"], "mismatched_samples": c["mismatched_samples"],
-                     "samples_compared": c["samples_compared"], **{k: g["totals"][k] for k in (
+                     "samples_compared": c["samples_compared"], "mismatch_causes": c.get("mismatch_causes", {}), **{k: g["totals"][k] for k in (
                          "triangles_in", "silhouette_edges", "candidate_pairs", "clip_polygons", "pieces",
                          "visible_pieces")}}
                 rows.append(r)
@@ -70,13 +73,14 @@ def main():
     lines = ["# Golden pipeline: time, memory and agreement with the exact z-buffer truth", "",
              f"Machine: {machine}. Commit: {commit}. Command: `python3 reports/bench_golden.py --bin build/model/app/tilevis "
              f"--out {a.out} --tiles {a.tiles} --samples {a.samples}`. Golden time is the pipeline's own "
-             "(setup + tiles, one core), peak memory the whole process's.", "",
-             "| scene | tile | spp | golden s | peak MiB | truth s | agreement | mismatched | pieces | visible |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
+             "(setup + tiles, single-threaded), CPU s the whole process's user + system time (trace read and output writing included), "
+             "peak memory the whole process's.", "",
+             "| scene | tile | spp | golden s | process CPU s | peak MiB | truth s | agreement | mismatched | causes | pieces | visible |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        lines.append(f"| {r['scene']} | {r['tile']} | {r['samples']} | {r['golden_seconds']:.3f} | {r['golden_peak_mib']:.0f} | "
+        lines.append(f"| {r['scene']} | {r['tile']} | {r['samples']} | {r['golden_seconds']:.3f} | {r['golden_cpu']:.2f} | {r['golden_peak_mib']:.0f} | "
                      f"{r['truth_seconds']:.2f} | {100 * r['sample_agreement']:.5f} % | {r['mismatched_samples']} | "
-                     f"{r['pieces']:,} | {r['visible_pieces']:,} |")
+                     f"{'; '.join(f'{n} {k}' for k, n in r['mismatch_causes'].items())} | {r['pieces']:,} | {r['visible_pieces']:,} |")
     (out / "golden.md").write_text("\n".join(lines) + "\n")
     (out / "golden.json").write_text(json.dumps({"machine": machine, "commit": commit, "rows": rows}, indent=2) + "\n")
     print("\n".join(lines))
