@@ -4,6 +4,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 
 #include "tilevis/scene.h"
@@ -15,7 +17,8 @@ using tilevis::scene::SceneError;
 namespace {
 
 fs::path write_scene(const std::string& name, const std::string& json) {
-  fs::path dir = fs::temp_directory_path() / "tilevis_scene_tests";
+  // One folder per process: CTest runs these tests in parallel processes.
+  fs::path dir = fs::temp_directory_path() / ("tilevis_scene_tests_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   fs::path p = dir / name;
   std::ofstream(p) << json;

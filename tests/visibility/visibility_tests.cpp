@@ -6,6 +6,8 @@
 #include <fstream>
 #include <numeric>
 
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 
 #include "geom/predicates.h"
@@ -20,7 +22,8 @@ using namespace tilevis;
 namespace {
 
 trace::Frame frame_of(const std::string& name, const std::string& json) {
-  fs::path dir = fs::temp_directory_path() / "tilevis_visibility_tests";
+  // One folder per process: CTest runs these tests in parallel processes.
+  fs::path dir = fs::temp_directory_path() / ("tilevis_visibility_tests_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   fs::path p = dir / (name + ".json");
   std::ofstream(p) << json;
