@@ -1,0 +1,88 @@
+#!/usr/bin/env python3
+"""Every corrupted input ends with a one-line error naming the place, a non-zero exit, no
+signal, and under 1 GiB of memory: `tilevis info` on corrupted traces (the fuzz corpus's
+bad seeds, truncations, byte flips, huge counts) and `tilevis trace` on bad scenes."""
+import os
+import resource
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+LIMIT = 1 << 30  # bytes of address space: a run that needs more fails to allocate
+
+
+def limit():
+    resource.setrlimit(resource.RLIMIT_AS, (LIMIT * 2, LIMIT * 2))  # ASan needs headroom; RSS is checked below
+
+
+def run(cmd):
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, preexec_fn=limit)
+    _, status, usage = os.wait4(p.pid, 0)
+    err = p.stderr.read().decode(errors="replace")
+    return status, err, usage.ru_maxrss * 1024
+
+
+def check(name, cmd, place):
+    status, err, rss = run(cmd)
+    problems = []
+    if os.WIFSIGNALED(status):
+        problems.append(f"died of signal {os.WTERMSIG(status)}")
+    elif os.WEXITSTATUS(status) == 0:
+        problems.append("exit status 0")
+    lines = [l for l in err.splitlines() if l.strip()]
+    if len(lines) != 1:
+        problems.append(f"{len(lines)} lines on stderr")
+    if place and place not in err:
+        problems.append(f"message does not name {place!r}")
+    if rss > LIMIT:
+        problems.append(f"peak RSS {rss >> 20} MiB")
+    print(f"{'FAIL' if problems else 'ok  '} {name}: {err.strip()[:150]} {'; '.join(problems)}")
+    return not problems
+
+
+def main():
+    binary, corpus = sys.argv[1], Path(sys.argv[2])
+    tmp = Path(tempfile.mkdtemp(prefix="tilevis_cli_"))
+    good = max((p for p in corpus.iterdir() if p.name.startswith("valid")), key=lambda p: p.stat().st_size)
+    data = good.read_bytes()
+    cases = {}
+    for p in sorted(corpus.iterdir()):
+        if not p.name.startswith("valid"):
+            cases[p.name] = p.read_bytes()
+    for n in (0, 7, 8, 20, 31, len(data) // 2, len(data) - 1):
+        cases[f"truncated_{n}"] = data[:n]
+    for off in (0, 9, 13, 17, 25, 40, 60, 90):
+        b = bytearray(data)
+        b[off] ^= 0xFF
+        cases[f"flip_{off}"] = bytes(b)
+    cases["appended"] = data + b"\0" * 3
+    cases["huge_frame_count"] = data[:24] + b"\xff\xff\xff\xff" + data[28:]
+    ok = True
+    for name, content in cases.items():
+        f = tmp / f"{name}.tvt"
+        f.write_bytes(content)
+        status, _, _ = run([binary, "info", str(f)])
+        if os.WIFEXITED(status) and os.WEXITSTATUS(status) == 0:
+            print(f"ok   {name}: accepted (a corruption the format cannot see, e.g. inside a float)")
+            continue
+        ok &= check(name, [binary, "info", str(f)], str(f))
+    scenes = {
+        "bad_json": '{"objects": [',
+        "unknown_key": '{"objects": [], "colour": 1}',
+        "bad_mesh": '{"objects": [{"mesh": "nowhere.obj"}]}',
+        "bad_viewport": '{"viewport": [0, 1], "objects": []}',
+    }
+    for name, text in scenes.items():
+        f = tmp / f"{name}.json"
+        f.write_text(text)
+        ok &= check(name, [binary, "trace", str(f), "-o", str(tmp / "out.tvt")], str(f))
+    ok &= check("missing_trace", [binary, "info", str(tmp / "missing.tvt")], "missing.tvt")
+    ok &= check("bad_tile", [binary, "golden", str(good), "--tile", "3", "-o", str(tmp / "g")], "--tile")
+    shutil.rmtree(tmp)
+    sys.exit(0 if ok else 1)
+
+
+if __name__ == "__main__":
+    main()
