@@ -81,8 +81,23 @@ def main():
         lines.append(f"| {r['scene']} | {r['tile']} | {r['samples']} | {r['golden_seconds']:.3f} | {r['golden_cpu']:.2f} | {r['golden_peak_mib']:.0f} | "
                      f"{r['truth_seconds']:.2f} | {100 * r['sample_agreement']:.5f} % | {r['mismatched_samples']} | "
                      f"{'; '.join(f'{n} {k}' for k, n in r['mismatch_causes'].items())} | {r['pieces']:,} | {r['visible_pieces']:,} |")
+    # SVGPU Fig. 6: output triangles of the bunny against the number of bins (64 .. 4,096
+    # bins over the 1920x1080 screen: 8x8 .. 64x64 tiles).
+    fig6 = []
+    bunny = work / "traces" / "bunny.tvt"
+    if bunny.exists():
+        paper = {"240x135": "32K", "120x68": "37K", "60x34": "48K", "30x17": "71K"}
+        lines += ["", "## Output growth: bunny, SVGPU Fig. 6", "",
+                  "| bins | tile | pieces | visible pieces | visible output triangles | SVGPU Fig. 6 |", "|---|---|---|---|---|---|"]
+        for bins, tile in ((64, "240x135"), (256, "120x68"), (1024, "60x34"), (4096, "30x17")):
+            gdir = work / f"bunny_fig6_{tile}"
+            run_measured([a.bin, "golden", bunny, "--tile", tile, "-o", gdir])
+            t = json.loads((gdir / "stats.json").read_text())["totals"]
+            fig6.append({"bins": bins, "tile": tile, "pieces": t["pieces"], "visible_pieces": t["visible_pieces"],
+                         "visible_triangles": t["visible_triangles"]})
+            lines.append(f"| {bins:,} | {tile} | {t['pieces']:,} | {t['visible_pieces']:,} | {t['visible_triangles']:,} | {paper[tile]} |")
     (out / "golden.md").write_text("\n".join(lines) + "\n")
-    (out / "golden.json").write_text(json.dumps({"machine": machine, "commit": commit, "rows": rows}, indent=2) + "\n")
+    (out / "golden.json").write_text(json.dumps({"machine": machine, "commit": commit, "rows": rows, "fig6": fig6}, indent=2) + "\n")
     print("\n".join(lines))
 
 
