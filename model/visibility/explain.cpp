@@ -64,7 +64,11 @@ MismatchReport explain_mismatches(const Setup& s, const std::vector<int32_t>& a,
                         int32_t(((pixel / s.width) << s.subpixel_bits) + s.samples[k % n].y)};
     std::string kind;
     if (a[k] < 0 || b[k] < 0) {
-      kind = "coverage differs (one producer shows background)";
+      // One shows background: the other's triangle covers the sample, so a piece of it was
+      // judged hidden there; penetration by another triangle is what makes that possible.
+      const SetupTriangle* t = part_covering(owners[uint32_t(std::max(a[k], b[k]))], p);
+      kind = t && pierced(s, t) ? "background on one side: the covering triangle is pierced by another"
+                                : "unexplained: background on one side, no interpenetration";
     } else {
       const SetupTriangle* ta = part_covering(owners[uint32_t(a[k])], p);
       const SetupTriangle* tb = part_covering(owners[uint32_t(b[k])], p);
