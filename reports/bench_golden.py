@@ -69,7 +69,9 @@ def main():
                       f"{mb:7.1f} MiB  agreement {100 * r['sample_agreement']:9.5f} % "
                       f"({r['mismatched_samples']} of {r['samples_compared']})  pieces {r['pieces']}", flush=True)
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
-    machine = f"{platform.node()}, {os.cpu_count()} cores, {platform.processor() or platform.machine()}"
+    cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")),
+               platform.machine())
+    machine = f"{platform.node()}: {cpu}, {os.cpu_count()} cores, {platform.system()} {platform.release()}"
     lines = ["# Golden pipeline: time, memory and agreement with the exact z-buffer truth", "",
              f"Machine: {machine}. Commit: {commit}. Command: `python3 reports/bench_golden.py --bin build/model/app/tilevis "
              f"--out {a.out} --tiles {a.tiles} --samples {a.samples}`. Golden time is the pipeline's own "
