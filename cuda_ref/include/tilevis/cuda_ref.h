@@ -1,0 +1,74 @@
+// The CUDA reference implementation of the SVGPU visibility pipeline (cuda_ref/): from a
+// clip-space trace frame to the canonical outputs (ids per sample, visible area per original
+// triangle, per-tile counters). Host-only interface: no CUDA types.
+//
+// Precision `exact` takes every geometric decision with exact integer predicates and agrees
+// with the golden pipeline (model/visibility) bit for bit: ids and per-tile counters. `float`
+// runs the per-tile visibility in float32 arithmetic, as SVGPU did.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "tilevis/trace.h"
+
+namespace tilevis::cuda {
+
+enum class Precision { exact, floating };
+enum class Device {
+  gpu,  // CUDA device 0
+  cpu   // the same stage bodies run one element at a time on the host (no GPU needed):
+        // checks the kernels' logic here; timings are host times
+};
+
+struct CudaConfig {
+  uint32_t tile_w = 32, tile_h = 32;
+  uint32_t depth_bits = 24;
+  Precision precision = Precision::exact;
+  Device device = Device::gpu;
+  uint32_t runs = 20;    // timed runs after warm-up; stage times are medians
+  uint32_t warmup = 2;
+  bool shuffle_cpu = false;  // cpu: visit elements in a scrambled order (order-independence check)
+  uint32_t initial_pool = 0;  // 0: default; else the first size of every overflow-checked pool
+                              // (tests use a tiny one to exercise grow-and-retry)
+};
+
+// Per-stage times in milliseconds (median over runs), in pipeline order.
+struct StageTime {
+  std::string name;
+  double ms = 0;
+};
+
+struct CudaResult {
+  uint32_t width = 0, height = 0, samples = 1;
+  std::vector<int32_t> ids;            // (y * width + x) * samples + s; -1 background
+  std::vector<double> visible_area;    // per original triangle, pixels²
+  uint32_t tiles_x = 0, tiles_y = 0, tile_w = 0, tile_h = 0;
+  std::vector<std::string> tile_columns;       // golden_tile_columns() order
+  std::vector<std::vector<int64_t>> tile_rows;  // row-major tiles
+
+  // Totals (names as in the golden stats.json).
+  uint64_t triangles_in = 0, triangles_front = 0, triangles_back = 0, triangles_degenerate = 0,
+           triangles_clipped = 0, triangles_frustum_culled = 0, silhouette_edges = 0;
+  uint64_t pair_tests = 0, candidate_pairs = 0, clip_polygons = 0, pieces = 0, visible_pieces = 0,
+           visible_triangles = 0, occlusion_tests = 0, samples_covered = 0, fragments_generated = 0;
+  uint64_t max_tile_triangles = 0, max_tile_edges = 0, max_tile_pieces = 0;
+  uint64_t float_anomalies = 0;  // float only: polygons that outgrew their bound (non-convex results)
+
+  std::vector<StageTime> stage_ms;  // medians
+  double total_ms = 0;              // median of the whole pipeline (trace in device memory -> id raster)
+  double upload_ms = 0, download_ms = 0;
+  uint32_t runs = 0;
+  uint32_t retries = 0;             // grow-and-retry rounds (first run)
+  uint64_t peak_device_bytes = 0;
+  std::string device_name;
+};
+
+// Whether a CUDA device is usable; `why` says what is missing otherwise.
+bool cuda_available(std::string* why = nullptr);
+
+// Throws std::runtime_error with a one-line reason (no device, CUDA error, bad config).
+CudaResult run_cuda(const trace::Frame& frame, const CudaConfig& config);
+
+}  // namespace tilevis::cuda

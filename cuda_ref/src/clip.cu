@@ -1,0 +1,309 @@
+// Clipping (SVGPU §3.2.2) with the re-check: each (tile, triangle) item with candidate edges
+// is clipped by one warp. Candidates go in ascending silhouette id; for each, the warp's lanes
+// re-test the current pieces in parallel (32 at a time), and a ballot gives every split piece
+// its slot: the inside part replaces its parent, the outside part is appended in parent order,
+// exactly the order a sequential loop leaves (the canonical piece order).
+//
+// No hand-sized buffers (SVGPU §4.3's failure): piece slots and polygon edges come from pools
+// with device-side bump counters. An item that finds its pool exhausted stops and is counted;
+// the host grows the pools from the counters and runs the frame again.
+#include "pipeline.cuh"
+
+namespace tilevis::cuda {
+namespace {
+
+// A team of lanes working on one item: a warp on the device, one lane on the host.
+struct HostTeam {
+  static constexpr uint32_t kSize = 1;
+  TV_HD uint32_t lane() const { return 0; }
+  TV_HD uint32_t ballot(bool p) const { return p ? 1u : 0u; }
+  TV_HD uint64_t bcast(uint64_t v) const { return v; }
+  TV_HD void sync() const {}
+};
+
+struct WarpTeam {
+  static constexpr uint32_t kSize = 32;
+  TV_HD uint32_t lane() const {
+#if defined(__CUDA_ARCH__)
+    return threadIdx.x & 31;
+#else
+    return 0;
+#endif
+  }
+  TV_HD uint32_t ballot(bool p) const {
+#if defined(__CUDA_ARCH__)
+    return __ballot_sync(0xffffffffu, p);
+#else
+    return p;
+#endif
+  }
+  TV_HD uint64_t bcast(uint64_t v) const {
+#if defined(__CUDA_ARCH__)
+    return __shfl_sync(0xffffffffu, static_cast<unsigned long long>(v), 0);
+#else
+    return v;
+#endif
+  }
+  TV_HD void sync() const {
+#if defined(__CUDA_ARCH__)
+    __syncwarp();
+#endif
+  }
+};
+
+TV_HD inline uint32_t popc(uint32_t v) {
+#if defined(__CUDA_ARCH__)
+  return __popc(v);
+#else
+  return uint32_t(__builtin_popcount(v));
+#endif
+}
+
+template <class P>
+struct ClipArgs {
+  const TileTri<P>* tris;
+  const SilEdge<P>* edges;
+  const uint64_t* item_key;
+  const uint32_t* item_tri;
+  TileGrid grid;
+  int64_t* rows;
+  const uint64_t* cands;
+  const uint32_t* cand_count;
+  uint32_t* cand_cursor;
+  const uint32_t* cand_offset;
+  uint32_t* cand_edges;
+  uint32_t* cand_sorted;
+  uint64_t cand_cap;  // room in cand_edges / cand_sorted; offsets past it belong to an overflowed run
+  uint32_t* clip_items;
+  uint32_t* item_slot;
+  uint64_t* slot_poly;  // edge offset << 32 | edge count
+  uint64_t slot_cap;
+  PEdge<P>* pool;
+  uint64_t pool_cap;
+  uint32_t* piece_count;
+  uint64_t* counters;
+  uint32_t slot_factor;
+  uint64_t n_items;
+};
+
+template <class P>
+TV_HD void cand_scatter(const ClipArgs<P>& a, uint64_t k) {
+  const uint64_t d = a.cands[k];
+  const uint32_t j = uint32_t(d >> 32);
+  const uint64_t at = uint64_t(a.cand_offset[j]) + atomic_add(&a.cand_cursor[j], 1u);
+  if (at < a.cand_cap) a.cand_edges[at] = uint32_t(d);
+}
+
+template <class P>
+TV_HD void clip_list(const ClipArgs<P>& a, uint64_t j) {
+  if (a.cand_count[j] == 0) return;
+  a.clip_items[atomic_add(&a.counters[kClipItems], 1)] = uint32_t(j);
+}
+
+// The most pieces c lines can cut a convex region into: 1 + c + c (c - 1) / 2.
+TV_HD inline uint64_t piece_bound(uint64_t c) { return 1 + c + c * (c - 1) / 2; }
+
+template <class P, class Team>
+TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team) {
+  const uint32_t lane = team.lane();
+  const uint32_t j = a.clip_items[w];
+  const uint32_t c = a.cand_count[j], off = a.cand_offset[j];
+  const uint32_t tile = uint32_t(a.item_key[j]);
+  const TileTri<P>& tt = a.tris[a.item_tri[j]];
+  if (uint64_t(off) + c > a.cand_cap) return;  // the candidate list overflowed: this run is repeated
+
+  // Candidates in ascending silhouette id (the canonical order): each id's rank is its slot.
+  for (uint32_t k = lane; k < c; k += Team::kSize) {
+    const uint32_t x = a.cand_edges[off + k];
+    uint32_t r = 0;
+    for (uint32_t m = 0; m < c; ++m) r += a.cand_edges[off + m] < x;
+    a.cand_sorted[off + r] = x;
+  }
+
+  const uint64_t want = tmin<uint64_t>(piece_bound(c), uint64_t(a.slot_factor) * (c + 1));
+  uint64_t base = 0;
+  if (lane == 0) {
+    base = bump(&a.counters[kSlotsUsed], want, a.slot_cap);
+    if (base != ~uint64_t{0}) {
+      const Rect r = a.grid.rect(tile);
+      const uint64_t at = bump(&a.counters[kEdgesUsed], kTileCap, a.pool_cap);
+      if (at == ~uint64_t{0}) {
+        base = ~uint64_t{0};
+      } else {
+        bool overflow = false;
+        const uint32_t n = tile_polygon<P>(tt, r, a.pool + at, overflow);
+        a.slot_poly[base] = (at << 32) | n;
+        a.item_slot[j] = uint32_t(base);
+      }
+    }
+  }
+  base = team.bcast(base);
+  team.sync();
+  if (base == ~uint64_t{0}) {
+    if (lane == 0) atomic_add(&a.counters[kClipOverflow], 1);
+    return;
+  }
+  uint64_t* slots = a.slot_poly + base;
+  uint32_t count = 1, splits = 0, anomalies = 0;
+  bool failed = false;
+  for (uint32_t ci = 0; ci < c && !failed; ++ci) {
+    const SilEdge<P>& e = a.edges[a.cand_sorted[off + ci]];
+    const uint32_t n = count;
+    uint32_t appended = 0;
+    for (uint32_t k0 = 0; k0 < n; k0 += Team::kSize) {
+      const uint32_t k = k0 + lane;
+      bool flag = false;
+      uint64_t sp = 0;
+      if (k < n) {
+        sp = slots[k];
+        flag = survives<P>(a.pool + (sp >> 32), uint32_t(sp), tt, e);
+      }
+      const uint32_t mask = team.ballot(flag);
+      bool fail = false;
+      if (flag) {
+        const uint32_t rank = popc(mask & ((1u << lane) - 1u));
+        const uint64_t dst = uint64_t(n) + appended + rank;
+        const uint32_t m = uint32_t(sp);
+        const uint64_t at = dst < want ? bump(&a.counters[kEdgesUsed], 2 * (m + 1), a.pool_cap) : ~uint64_t{0};
+        if (dst >= want) atomic_add(&a.counters[kReserveOverflow], 1);
+        if (at == ~uint64_t{0}) {
+          fail = true;
+        } else {
+          PolyOut<P> in{a.pool + at, 0, m + 1, false}, out{a.pool + at + m + 1, 0, m + 1, false};
+          split<P>(a.pool + (sp >> 32), m, e.line, in, out);
+          if (in.overflow || out.overflow) {
+            ++anomalies;  // only float arithmetic can break convexity
+            in.n = tmin(in.n, m + 1);
+            out.n = tmin(out.n, m + 1);
+          }
+          slots[k] = (at << 32) | in.n;
+          slots[dst] = ((at + m + 1) << 32) | out.n;
+          ++splits;
+        }
+      }
+      appended += popc(mask);
+      if (team.ballot(fail) != 0) failed = true;
+    }
+    team.sync();
+    count = n + appended;
+  }
+  if (splits) atomic_add(&a.rows[uint64_t(tile) * kTileColumns + kColClips], int64_t(splits));
+  if (anomalies) atomic_add(&a.counters[kFloatAnomalies], anomalies);
+  if (lane == 0) {
+    if (failed) atomic_add(&a.counters[kClipOverflow], 1);
+    a.piece_count[j] = count;
+  }
+}
+
+template <class P>
+TV_HD void clip_item_host(const ClipArgs<P>& a, uint64_t w) {
+  clip_item<P>(a, w, HostTeam{});
+}
+
+template <class P>
+__global__ void k_cand_scatter(ClipArgs<P> a, const uint64_t* count, uint64_t cap) {
+  const uint64_t n = *count < cap ? *count : cap;
+  TV_GRID_LOOP(i, n) cand_scatter<P>(a, i);
+}
+template <class P>
+__global__ void k_clip_list(ClipArgs<P> a, uint64_t n) {
+  TV_GRID_LOOP(i, n) clip_list<P>(a, i);
+}
+template <class P>
+__global__ void k_clip_items(ClipArgs<P> a, const uint64_t* count, uint64_t cap) {
+  const uint64_t n = *count < cap ? *count : cap;
+  const uint64_t warp = (uint64_t(blockIdx.x) * blockDim.x + threadIdx.x) / 32;
+  const uint64_t warps = uint64_t(gridDim.x) * blockDim.x / 32;
+  for (uint64_t w = warp; w < n; w += warps) clip_item<P>(a, w, WarpTeam{});
+}
+
+// After clipping: the pieces of every item, their prefix sum (the flat piece index space of
+// occlusion and raster), per-tile piece counts and the largest piece count of a triangle.
+struct PieceArgs {
+  const uint32_t* piece_count;
+  const uint64_t* item_key;
+  int64_t* rows;
+  uint64_t* counters;
+};
+TV_HD void count_pieces(const PieceArgs& a, uint64_t j) {
+  const uint32_t n = a.piece_count[j];
+  if (n == 0) return;
+  atomic_add(&a.rows[a.item_key[j] * kTileColumns + kColPieces], int64_t(n));
+  atomic_max(&a.counters[kMaxTilePieces], uint64_t(n));
+}
+__global__ void k_count_pieces(PieceArgs a, uint64_t n) {
+  TV_GRID_LOOP(i, n) count_pieces(a, i);
+}
+
+}  // namespace
+
+template <class P>
+bool stage_clip(Pipeline<P>& p) {
+  Exec& ex = p.ex;
+  const uint64_t ni = p.n_items;
+  ClipArgs<P> a{};
+  a.tris = p.tris.get();
+  a.edges = p.edges.get();
+  a.item_key = p.item_key_sorted.get();
+  a.item_tri = p.item_tri_sorted.get();
+  a.grid = p.grid;
+  a.rows = p.tile_rows.get();
+  a.cands = p.cands.get();
+  a.cand_count = p.cand_count.get();
+  a.cand_cursor = p.cand_cursor.need(ni + 1);
+  a.cand_offset = p.cand_offset.need(ni + 1);
+  a.cand_edges = p.cand_edges.need(p.caps.candidates);
+  a.cand_sorted = p.cand_scratch.need(p.caps.candidates);
+  a.cand_cap = p.caps.candidates;
+  a.clip_items = p.clip_items.need(ni + 1);
+  a.item_slot = p.item_slot.need(ni + 1);
+  a.slot_poly = p.slot_poly.need(p.caps.clip_slots);
+  a.slot_cap = p.caps.clip_slots;
+  a.pool = p.clip_edges.need(p.caps.clip_edges);
+  a.pool_cap = p.caps.clip_edges;
+  a.piece_count = p.piece_count.get();
+  a.counters = p.counters.get();
+  a.slot_factor = p.caps.slot_factor;
+  a.n_items = ni;
+
+  ex.zero(a.cand_cursor, ni * 4);
+  ex.exclusive_scan(a.cand_count, p.cand_offset.get(), ni);
+  ex.launch_dyn(k_cand_scatter<P>, cand_scatter<P>, p.counters.get() + kCandidates, p.caps.candidates, a);
+  ex.launch(k_clip_list<P>, clip_list<P>, ni, a);
+  if (ex.where == Where::cpu) {
+    ex.launch_dyn(k_clip_items<P>, clip_item_host<P>, p.counters.get() + kClipItems, ni, a);
+  } else {
+    k_clip_items<P><<<ex.grid_blocks * 2, 128, 0, ex.stream>>>(a, p.counters.get() + kClipItems, ni);
+    TV_CUDA(cudaGetLastError());
+  }
+  ex.launch(k_count_pieces, count_pieces, ni, PieceArgs{p.piece_count.get(), a.item_key, a.rows, a.counters});
+  ex.exclusive_scan(p.piece_count.get(), p.piece_offset.need(ni + 1), ni);
+
+  // sync: overflow counters and the piece count, in one copy.
+  uint64_t c[kCounterCount];
+  ex.download(c, p.counters.get(), sizeof(c));
+  p.n_pieces = ex.read(p.piece_offset.get() + ni);
+  bool ok = true;
+  Capacities& caps = p.caps;
+  auto grow = [&](uint64_t& cap, uint64_t used) {
+    if (used > cap) {
+      cap = tmax(2 * cap, used + used / 2);
+      ok = false;
+    }
+  };
+  grow(caps.deep_pairs, c[kDeepPairs]);
+  grow(caps.candidates, c[kCandidates]);
+  if (c[kClipOverflow]) {
+    ok = false;
+    grow(caps.clip_slots, c[kSlotsUsed]);
+    grow(caps.clip_edges, c[kEdgesUsed]);
+    if (c[kReserveOverflow]) caps.slot_factor *= 4;  // bounded: reservations never exceed piece_bound(c)
+  }
+  if (caps.clip_edges >= (uint64_t{1} << 32)) throw std::runtime_error("cuda: clipping needs more than 2^32 polygon edges");
+  return ok;
+}
+
+template bool stage_clip<ExactP>(Pipeline<ExactP>&);
+template bool stage_clip<FloatP>(Pipeline<FloatP>&);
+
+}  // namespace tilevis::cuda

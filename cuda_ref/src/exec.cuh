@@ -1,0 +1,210 @@
+// Where the stages run: on the GPU (kernels, CUB scans and sorts, one stream) or, for checking
+// the kernels' logic without a GPU, on the host, calling the same __host__ __device__ stage
+// bodies one element at a time. Buffers are grow-only and counted, so the peak device
+// footprint of a scene is reported.
+#pragma once
+
+#include <cuda_runtime.h>
+
+#include <cstdint>
+#include <cstring>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "wide.cuh"
+
+namespace tilevis::cuda {
+
+void cuda_check(cudaError_t e, const char* what);
+#define TV_CUDA(call) ::tilevis::cuda::cuda_check((call), #call)
+
+// Grid-stride loop over [0, n) (64-bit safe).
+#define TV_GRID_LOOP(i, n)                                                                   \
+  for (uint64_t i = uint64_t(blockIdx.x) * blockDim.x + threadIdx.x; i < uint64_t(n);       \
+       i += uint64_t(gridDim.x) * blockDim.x)
+
+// ---- atomics that also run single-threaded on the host -------------------------------------
+
+TV_HD inline uint32_t atomic_add(uint32_t* p, uint32_t v) {
+#if defined(__CUDA_ARCH__)
+  return atomicAdd(p, v);
+#else
+  const uint32_t o = *p;
+  *p = o + v;
+  return o;
+#endif
+}
+TV_HD inline uint64_t atomic_add(uint64_t* p, uint64_t v) {
+#if defined(__CUDA_ARCH__)
+  return atomicAdd(reinterpret_cast<unsigned long long*>(p), static_cast<unsigned long long>(v));
+#else
+  const uint64_t o = *p;
+  *p = o + v;
+  return o;
+#endif
+}
+TV_HD inline void atomic_add(int64_t* p, int64_t v) { atomic_add(reinterpret_cast<uint64_t*>(p), uint64_t(v)); }
+TV_HD inline void atomic_max(uint32_t* p, uint32_t v) {
+#if defined(__CUDA_ARCH__)
+  atomicMax(p, v);
+#else
+  if (v > *p) *p = v;
+#endif
+}
+TV_HD inline void atomic_max(uint64_t* p, uint64_t v) {
+#if defined(__CUDA_ARCH__)
+  atomicMax(reinterpret_cast<unsigned long long*>(p), static_cast<unsigned long long>(v));
+#else
+  if (v > *p) *p = v;
+#endif
+}
+TV_HD inline void atomic_min(uint32_t* p, uint32_t v) {
+#if defined(__CUDA_ARCH__)
+  atomicMin(p, v);
+#else
+  if (v < *p) *p = v;
+#endif
+}
+TV_HD inline uint32_t atomic_cas(uint32_t* p, uint32_t expect, uint32_t v) {
+#if defined(__CUDA_ARCH__)
+  return atomicCAS(p, expect, v);
+#else
+  const uint32_t o = *p;
+  if (o == expect) *p = v;
+  return o;
+#endif
+}
+TV_HD inline uint64_t atomic_cas(uint64_t* p, uint64_t expect, uint64_t v) {
+#if defined(__CUDA_ARCH__)
+  return atomicCAS(reinterpret_cast<unsigned long long*>(p), static_cast<unsigned long long>(expect),
+                   static_cast<unsigned long long>(v));
+#else
+  const uint64_t o = *p;
+  if (o == expect) *p = v;
+  return o;
+#endif
+}
+
+// Bump allocation from a pool of `cap` elements; the counter keeps counting past the end so
+// the host learns the size it needs. Returns UINT64_MAX on overflow.
+TV_HD inline uint64_t bump(uint64_t* counter, uint64_t n, uint64_t cap) {
+  const uint64_t at = atomic_add(counter, n);
+  return at + n <= cap ? at : ~uint64_t{0};
+}
+
+enum class Where { gpu, cpu };
+
+class Exec {
+ public:
+  Exec(Where where, bool shuffle);
+  ~Exec();
+  Exec(const Exec&) = delete;
+  Exec& operator=(const Exec&) = delete;
+
+  const Where where;
+  const bool shuffle;
+  cudaStream_t stream = nullptr;
+  uint32_t grid_blocks = 0;  // blocks of 256 that fill the GPU (grid-stride kernels)
+  std::string device_name;
+
+  void* alloc(size_t bytes);
+  void release(void* p, size_t bytes);
+  uint64_t live_bytes() const { return m_live; }
+  uint64_t peak_bytes() const { return m_peak; }
+
+  void upload(void* dst, const void* src, size_t bytes);
+  void download(void* dst, const void* src, size_t bytes);
+  void zero(void* p, size_t bytes);
+  void fill_ones(void* p, size_t bytes);
+  void sync();
+  template <class T>
+  T read(const T* p) {
+    T v;
+    download(&v, p, sizeof(T));
+    return v;
+  }
+
+  // Visiting order of a host loop over n elements (identity, or scrambled when shuffling).
+  uint64_t host_index(uint64_t k, uint64_t n) const;
+
+  // Runs body(args, i) for i in [0, n): the kernel on the GPU, a loop on the host.
+  template <class Args>
+  void launch(void (*kernel)(Args, uint64_t), void (*body)(const Args&, uint64_t), uint64_t n, const Args& args,
+              uint32_t block = 256) {
+    if (n == 0) return;
+    if (where == Where::cpu) {
+      for (uint64_t k = 0; k < n; ++k) body(args, host_index(k, n));
+      return;
+    }
+    const uint64_t want = (n + block - 1) / block;
+    const uint32_t blocks = uint32_t(want < grid_blocks * 8ull ? want : grid_blocks * 8ull);
+    launch_kernel(reinterpret_cast<const void*>(kernel), blocks, block, &args, n);
+  }
+  // A kernel whose grid-stride loop reads its element count from device memory (no host
+  // round trip); on the host the count is read first.
+  template <class Args>
+  void launch_dyn(void (*kernel)(Args, const uint64_t*, uint64_t), void (*body)(const Args&, uint64_t),
+                  const uint64_t* count, uint64_t cap, const Args& args, uint32_t block = 256) {
+    if (where == Where::cpu) {
+      uint64_t n = *count < cap ? *count : cap;
+      for (uint64_t k = 0; k < n; ++k) body(args, host_index(k, n));
+      return;
+    }
+    kernel<<<grid_blocks * 4, block, 0, stream>>>(args, count, cap);
+    TV_CUDA(cudaGetLastError());
+  }
+
+  // out[i] = sum of in[0..i) for i in [0, n]; in has n elements. Returns nothing: out[n]
+  // holds the total on the device.
+  void exclusive_scan(const uint32_t* in, uint64_t* out, uint64_t n);
+  void exclusive_scan(const uint32_t* in, uint32_t* out, uint64_t n);
+  // Stable sort of (key, value) pairs by the key's bits [0, end_bit).
+  void sort_pairs(const uint64_t* keys_in, uint64_t* keys_out, const uint32_t* vals_in, uint32_t* vals_out, uint64_t n,
+                  int end_bit);
+
+ private:
+  void launch_kernel(const void* fn, uint32_t blocks, uint32_t block, const void* args, uint64_t n);
+  void* temp(size_t bytes);
+  uint64_t m_live = 0, m_peak = 0;
+  void* m_temp = nullptr;
+  size_t m_temp_bytes = 0;
+  uint64_t m_seed = 0x9e3779b97f4a7c15ull;
+};
+
+// A grow-only buffer on the executing side (device memory, or host memory for the cpu path).
+template <class T>
+class Buf {
+ public:
+  Buf() = default;
+  explicit Buf(Exec* ex) : m_ex(ex) {}
+  Buf(const Buf&) = delete;
+  Buf& operator=(const Buf&) = delete;
+  ~Buf() { reset(); }
+  void bind(Exec* ex) { m_ex = ex; }
+  // Ensures room for n elements (contents are not kept when it grows).
+  T* need(uint64_t n) {
+    if (n > m_cap) {
+      reset();
+      const uint64_t cap = n + n / 4 + 16;
+      m_p = static_cast<T*>(m_ex->alloc(cap * sizeof(T)));
+      m_cap = cap;
+    }
+    return m_p;
+  }
+  void reset() {
+    if (m_p) m_ex->release(m_p, m_cap * sizeof(T));
+    m_p = nullptr;
+    m_cap = 0;
+  }
+  T* get() const { return m_p; }
+  uint64_t cap() const { return m_cap; }
+  void zero(uint64_t n) { m_ex->zero(m_p, n * sizeof(T)); }
+
+ private:
+  Exec* m_ex = nullptr;
+  T* m_p = nullptr;
+  uint64_t m_cap = 0;
+};
+
+}  // namespace tilevis::cuda

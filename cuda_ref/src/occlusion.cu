@@ -1,0 +1,67 @@
+// Occlusion (SVGPU §3.3), one thread per piece: the centroid of the piece's first three
+// vertices against the tile's original opaque triangles, nearest first (stable by z_min),
+// stopping at the first that hides it or at the first wholly behind it. Visible pieces get
+// their exact area (doubled area terms rounded once each, summed in fan order).
+#include "pieces.cuh"
+
+namespace tilevis::cuda {
+namespace {
+
+template <class P>
+struct OccArgs {
+  PieceSource<P> src;
+  const uint32_t* occ_tri;     // by (tile, not opaque, z_min)
+  const uint32_t* item_begin;  // per tile, first entry in occ_tri
+  const uint32_t* occ_count;   // per tile, opaque entries
+  int64_t* rows;
+  uint8_t* visible;
+  double* area;
+  uint64_t* counters;
+  double area_scale;  // 2 * 2^sb * 2^sb
+};
+
+template <class P>
+TV_HD void occlude_piece(const OccArgs<P>& a, uint64_t p) {
+  PEdge<P> local[kTileCap];
+  const PieceView<P> v = piece_at<P>(a.src, p, local);
+  a.visible[p] = 0;
+  if (v.n < 3) return;  // a float polygon that degenerated: covers nothing
+  const TileTri<P>& tt = a.src.tris[v.tri];
+  uint32_t tests = 0;
+  const bool hidden = occluded<P>(v.e, tt, a.src.tris, a.occ_tri + a.item_begin[v.tile], a.occ_count[v.tile], tests);
+  int64_t* row = a.rows + uint64_t(v.tile) * kTileColumns;
+  if (tests) atomic_add(&row[kColOcclusionTests], int64_t(tests));
+  if (hidden) return;
+  a.visible[p] = 1;
+  atomic_add(&row[kColVisiblePieces], 1);
+  atomic_add(&a.counters[kVisibleTriangles], uint64_t(v.n - 2));
+  a.area[p] = ddiv(doubled_area<P>(v.e, v.n), a.area_scale);
+}
+
+template <class P>
+__global__ void k_occlude(OccArgs<P> a, uint64_t n) {
+  TV_GRID_LOOP(i, n) occlude_piece<P>(a, i);
+}
+
+}  // namespace
+
+template <class P>
+void stage_occlusion(Pipeline<P>& p) {
+  OccArgs<P> a{};
+  a.src = piece_source(p);
+  a.occ_tri = p.occ_tri_sorted.get();
+  a.item_begin = p.tile_item_begin.get();
+  a.occ_count = p.tile_occ_count.get();
+  a.rows = p.tile_rows.get();
+  a.visible = p.piece_visible.need(p.n_pieces + 1);
+  a.area = p.piece_area.need(p.n_pieces + 1);
+  a.counters = p.counters.get();
+  const double s = double(1u << p.f.subpixel_bits);
+  a.area_scale = 2.0 * s * s;
+  p.ex.launch(k_occlude<P>, occlude_piece<P>, p.n_pieces, a);
+}
+
+template void stage_occlusion<ExactP>(Pipeline<ExactP>&);
+template void stage_occlusion<FloatP>(Pipeline<FloatP>&);
+
+}  // namespace tilevis::cuda

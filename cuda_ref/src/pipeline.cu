@@ -1,0 +1,375 @@
+// run_cuda: the stages in order on one stream, per-stage times from CUDA events (median over
+// the timed runs), grow-and-retry when a device counter reports an overflow, and the result
+// brought back to the host in the canonical layout.
+#include <algorithm>
+#include <chrono>
+#include <cstdlib>
+#include <numeric>
+
+#include <cub/device/device_radix_sort.cuh>
+#include <cub/device/device_scan.cuh>
+
+#include "pipeline.cuh"
+
+namespace tilevis::cuda {
+
+void cuda_check(cudaError_t e, const char* what) {
+  if (e != cudaSuccess) throw std::runtime_error(std::string("cuda: ") + what + ": " + cudaGetErrorString(e));
+}
+
+// ---- Exec --------------------------------------------------------------------------------
+
+Exec::Exec(Where w, bool shuf) : where(w), shuffle(shuf) {
+  if (where == Where::cpu) {
+    device_name = "host emulation (cpu)";
+    return;
+  }
+  int count = 0;
+  TV_CUDA(cudaGetDeviceCount(&count));
+  if (count == 0) throw std::runtime_error("cuda: no CUDA device");
+  TV_CUDA(cudaSetDevice(0));
+  cudaDeviceProp prop{};
+  TV_CUDA(cudaGetDeviceProperties(&prop, 0));
+  device_name = prop.name;
+  grid_blocks = uint32_t(prop.multiProcessorCount) * 2;
+  TV_CUDA(cudaStreamCreateWithFlags(&stream, cudaStreamNonBlocking));
+}
+
+Exec::~Exec() {
+  if (m_temp) release(m_temp, m_temp_bytes);
+  if (stream) cudaStreamDestroy(stream);
+}
+
+void* Exec::alloc(size_t bytes) {
+  void* p = nullptr;
+  if (where == Where::cpu) {
+    p = std::aligned_alloc(64, (bytes + 63) / 64 * 64);
+    if (!p) throw std::runtime_error("cuda (cpu): out of host memory");
+  } else {
+    TV_CUDA(cudaMalloc(&p, bytes));
+  }
+  m_live += bytes;
+  m_peak = std::max(m_peak, m_live);
+  return p;
+}
+
+void Exec::release(void* p, size_t bytes) {
+  if (where == Where::cpu) std::free(p);
+  else cudaFree(p);
+  m_live -= bytes;
+}
+
+void Exec::upload(void* dst, const void* src, size_t bytes) {
+  if (bytes == 0) return;
+  if (where == Where::cpu) std::memcpy(dst, src, bytes);
+  else TV_CUDA(cudaMemcpyAsync(dst, src, bytes, cudaMemcpyHostToDevice, stream));
+}
+
+void Exec::download(void* dst, const void* src, size_t bytes) {
+  if (bytes == 0) return;
+  if (where == Where::cpu) {
+    std::memcpy(dst, src, bytes);
+    return;
+  }
+  TV_CUDA(cudaMemcpyAsync(dst, src, bytes, cudaMemcpyDeviceToHost, stream));
+  TV_CUDA(cudaStreamSynchronize(stream));
+}
+
+void Exec::zero(void* p, size_t bytes) {
+  if (bytes == 0) return;
+  if (where == Where::cpu) std::memset(p, 0, bytes);
+  else TV_CUDA(cudaMemsetAsync(p, 0, bytes, stream));
+}
+
+void Exec::fill_ones(void* p, size_t bytes) {
+  if (bytes == 0) return;
+  if (where == Where::cpu) std::memset(p, 0xff, bytes);
+  else TV_CUDA(cudaMemsetAsync(p, 0xff, bytes, stream));
+}
+
+void Exec::sync() {
+  if (where == Where::gpu) TV_CUDA(cudaStreamSynchronize(stream));
+}
+
+uint64_t Exec::host_index(uint64_t k, uint64_t n) const {
+  if (!shuffle || n < 3) return k;
+  // A fixed permutation of [0, n): k -> (k * s + n / 3) mod n with gcd(s, n) = 1.
+  static thread_local uint64_t last_n = 0, stride = 1;
+  if (n != last_n) {
+    stride = n * 5 / 8 | 1;
+    while (std::gcd(stride, n) != 1) stride += 2;
+    last_n = n;
+  }
+  return static_cast<uint64_t>((static_cast<U128>(k) * stride + n / 3) % n);
+}
+
+void Exec::launch_kernel(const void* fn, uint32_t blocks, uint32_t block, const void* args, uint64_t n) {
+  void* params[] = {const_cast<void*>(args), &n};
+  TV_CUDA(cudaLaunchKernel(fn, dim3(blocks), dim3(block), params, 0, stream));
+}
+
+void* Exec::temp(size_t bytes) {
+  if (bytes > m_temp_bytes) {
+    if (m_temp) release(m_temp, m_temp_bytes);
+    m_temp_bytes = bytes + bytes / 4 + 256;
+    m_temp = alloc(m_temp_bytes);
+  }
+  return m_temp;
+}
+
+namespace {
+template <class T>
+__global__ void k_scan_total(const uint32_t* in, T* out, uint64_t n) {
+  out[n] = n ? out[n - 1] + T(in[n - 1]) : T(0);
+}
+
+}  // namespace
+
+void Exec::exclusive_scan(const uint32_t* in, uint64_t* out, uint64_t n) {
+  if (where == Where::cpu) {
+    uint64_t s = 0;
+    for (uint64_t i = 0; i < n; ++i) {
+      const uint64_t v = in[i];
+      out[i] = s;
+      s += v;
+    }
+    out[n] = s;
+    return;
+  }
+  if (n) {
+    size_t bytes = 0;
+    TV_CUDA(cub::DeviceScan::ExclusiveScan(nullptr, bytes, in, out, ::cuda::std::plus<uint64_t>{}, uint64_t{0}, n, stream));
+    void* t = temp(bytes);
+    TV_CUDA(cub::DeviceScan::ExclusiveScan(t, bytes, in, out, ::cuda::std::plus<uint64_t>{}, uint64_t{0}, n, stream));
+  }
+  k_scan_total<uint64_t><<<1, 1, 0, stream>>>(in, out, n);
+  TV_CUDA(cudaGetLastError());
+}
+
+void Exec::exclusive_scan(const uint32_t* in, uint32_t* out, uint64_t n) {
+  if (where == Where::cpu) {
+    uint32_t s = 0;
+    for (uint64_t i = 0; i < n; ++i) {
+      const uint32_t v = in[i];
+      out[i] = s;
+      s += v;
+    }
+    out[n] = s;
+    return;
+  }
+  if (n) {
+    size_t bytes = 0;
+    TV_CUDA(cub::DeviceScan::ExclusiveScan(nullptr, bytes, in, out, ::cuda::std::plus<uint32_t>{}, uint32_t{0}, n, stream));
+    void* t = temp(bytes);
+    TV_CUDA(cub::DeviceScan::ExclusiveScan(t, bytes, in, out, ::cuda::std::plus<uint32_t>{}, uint32_t{0}, n, stream));
+  }
+  k_scan_total<uint32_t><<<1, 1, 0, stream>>>(in, out, n);
+  TV_CUDA(cudaGetLastError());
+}
+
+void Exec::sort_pairs(const uint64_t* keys_in, uint64_t* keys_out, const uint32_t* vals_in, uint32_t* vals_out,
+                      uint64_t n, int end_bit) {
+  if (n == 0) return;
+  if (end_bit < 1) end_bit = 1;
+  if (where == Where::cpu) {
+    std::vector<uint64_t> order(n);
+    std::iota(order.begin(), order.end(), 0);
+    const uint64_t mask = end_bit >= 64 ? ~uint64_t{0} : (uint64_t{1} << end_bit) - 1;
+    std::stable_sort(order.begin(), order.end(),
+                     [&](uint64_t a, uint64_t b) { return (keys_in[a] & mask) < (keys_in[b] & mask); });
+    for (uint64_t i = 0; i < n; ++i) {
+      keys_out[i] = keys_in[order[i]];
+      vals_out[i] = vals_in[order[i]];
+    }
+    return;
+  }
+  size_t bytes = 0;
+  TV_CUDA(cub::DeviceRadixSort::SortPairs(nullptr, bytes, keys_in, keys_out, vals_in, vals_out, n, 0, end_bit, stream));
+  void* t = temp(bytes);
+  TV_CUDA(cub::DeviceRadixSort::SortPairs(t, bytes, keys_in, keys_out, vals_in, vals_out, n, 0, end_bit, stream));
+}
+
+// ---- the run -------------------------------------------------------------------------------
+
+namespace {
+
+const char* const kStages[] = {"setup", "silhouettes", "binning", "cull", "clip", "occlusion", "raster"};
+constexpr int kStageCount = 7;
+
+class Timer {
+ public:
+  explicit Timer(Exec& ex) : m_ex(ex) {
+    if (ex.where == Where::gpu)
+      for (auto& e : m_ev) TV_CUDA(cudaEventCreate(&e));
+  }
+  ~Timer() {
+    for (auto& e : m_ev)
+      if (e) cudaEventDestroy(e);
+  }
+  void mark(int k) {
+    if (m_ex.where == Where::gpu) TV_CUDA(cudaEventRecord(m_ev[k], m_ex.stream));
+    else m_host[k] = std::chrono::steady_clock::now();
+  }
+  // Stage k's time (between marks k and k + 1), after the stream has finished.
+  double ms(int a, int b) {
+    if (m_ex.where == Where::gpu) {
+      float t = 0;
+      TV_CUDA(cudaEventElapsedTime(&t, m_ev[a], m_ev[b]));
+      return t;
+    }
+    return std::chrono::duration<double, std::milli>(m_host[b] - m_host[a]).count();
+  }
+
+ private:
+  Exec& m_ex;
+  cudaEvent_t m_ev[kStageCount + 1] = {};
+  std::chrono::steady_clock::time_point m_host[kStageCount + 1];
+};
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+template <class P>
+bool run_once(Pipeline<P>& p, Timer& t) {
+  p.ex.zero(p.counters.get(), kCounterCount * 8);
+  t.mark(0);
+  stage_setup(p);
+  t.mark(1);
+  stage_silhouettes(p);
+  t.mark(2);
+  stage_binning(p);
+  t.mark(3);
+  stage_cull(p);
+  t.mark(4);
+  if (!stage_clip(p)) return false;
+  t.mark(5);
+  stage_occlusion(p);
+  t.mark(6);
+  stage_raster(p);
+  t.mark(7);
+  p.ex.sync();
+  return true;
+}
+
+template <class P>
+CudaResult run(const trace::Frame& frame, const CudaConfig& cfg) {
+  Exec ex(cfg.device == Device::cpu ? Where::cpu : Where::gpu, cfg.shuffle_cpu);
+  Pipeline<P> p(ex);
+  p.cfg = cfg;
+  if (cfg.initial_pool) {
+    p.caps.deep_pairs = p.caps.candidates = p.caps.clip_slots = p.caps.clip_edges = cfg.initial_pool;
+    p.caps.slot_factor = 1;
+  }
+  CudaResult r;
+  r.device_name = ex.device_name;
+
+  auto t0 = std::chrono::steady_clock::now();
+  upload_frame_common(ex, frame, cfg.depth_bits, p.f, p.draws_host, p.vertices, p.indices, p.tri_draw, p.draws,
+                      p.sample_xy);
+  p.counters.need(kCounterCount);
+  ex.sync();
+  r.upload_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+
+  Timer timer(ex);
+  // First run: grow and retry until no device counter overflows.
+  while (!run_once(p, timer)) {
+    if (++r.retries > 32) throw std::runtime_error("cuda: buffers still overflow after 32 retries");
+  }
+  for (uint32_t w = 1; w < cfg.warmup; ++w)
+    if (!run_once(p, timer)) ++r.retries;
+  std::vector<std::vector<double>> stage(kStageCount);
+  std::vector<double> total;
+  const uint32_t runs = std::max<uint32_t>(cfg.runs, 1);
+  for (uint32_t k = 0; k < runs;) {
+    if (!run_once(p, timer)) {  // cannot happen with learned capacities, but never time a partial run
+      ++r.retries;
+      continue;
+    }
+    for (int s = 0; s < kStageCount; ++s) stage[s].push_back(timer.ms(s, s + 1));
+    total.push_back(timer.ms(0, kStageCount));
+    ++k;
+  }
+  r.runs = runs;
+  for (int s = 0; s < kStageCount; ++s) r.stage_ms.push_back({kStages[s], median(stage[s])});
+  r.total_ms = median(total);
+
+  // Results of the last run.
+  t0 = std::chrono::steady_clock::now();
+  r.width = p.f.width;
+  r.height = p.f.height;
+  r.samples = p.f.n_samples;
+  const uint64_t n_samples = uint64_t(r.width) * r.height * r.samples;
+  r.ids.resize(n_samples);
+  ex.download(r.ids.data(), p.ids.get(), n_samples * 4);
+  r.visible_area.resize(p.f.n_triangles);
+  ex.download(r.visible_area.data(), p.area.get(), p.f.n_triangles * 8);
+  std::vector<int64_t> rows(uint64_t(p.n_tiles) * kTileColumns);
+  ex.download(rows.data(), p.tile_rows.get(), rows.size() * 8);
+  uint64_t c[kCounterCount];
+  ex.download(c, p.counters.get(), sizeof(c));
+  r.download_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+
+  r.tiles_x = p.tiles_x;
+  r.tiles_y = p.tiles_y;
+  r.tile_w = cfg.tile_w;
+  r.tile_h = cfg.tile_h;
+  r.tile_columns = {"triangles",       "edges",          "pair_tests",      "candidate_pairs", "clip_polygons",
+                    "pieces",          "visible_pieces", "occlusion_tests", "samples_covered", "fragments_generated"};
+  r.tile_rows.resize(p.n_tiles);
+  for (uint32_t t = 0; t < p.n_tiles; ++t) {
+    r.tile_rows[t].assign(rows.begin() + int64_t(t) * kTileColumns, rows.begin() + int64_t(t + 1) * kTileColumns);
+    const auto& row = r.tile_rows[t];
+    r.max_tile_triangles = std::max<uint64_t>(r.max_tile_triangles, uint64_t(row[kColTriangles]));
+    r.max_tile_edges = std::max<uint64_t>(r.max_tile_edges, uint64_t(row[kColEdges]));
+    r.pair_tests += uint64_t(row[kColPairTests]);
+    r.candidate_pairs += uint64_t(row[kColCandidates]);
+    r.clip_polygons += uint64_t(row[kColClips]);
+    r.pieces += uint64_t(row[kColPieces]);
+    r.visible_pieces += uint64_t(row[kColVisiblePieces]);
+    r.occlusion_tests += uint64_t(row[kColOcclusionTests]);
+    r.samples_covered += uint64_t(row[kColSamplesCovered]);
+    r.fragments_generated += uint64_t(row[kColFragments]);
+  }
+  r.triangles_in = p.f.n_triangles;
+  r.triangles_front = c[kFrontFacing];
+  r.triangles_back = c[kBackFacing];
+  r.triangles_degenerate = c[kDegenerate];
+  r.triangles_clipped = c[kClippedTris];
+  r.triangles_frustum_culled = c[kFrustumCulled];
+  r.silhouette_edges = p.n_edges;
+  r.visible_triangles = c[kVisibleTriangles];
+  r.max_tile_pieces = c[kMaxTilePieces];
+  r.float_anomalies = c[kFloatAnomalies];
+  r.peak_device_bytes = ex.peak_bytes();
+  return r;
+}
+
+}  // namespace
+
+bool cuda_available(std::string* why) {
+  int count = 0;
+  const cudaError_t e = cudaGetDeviceCount(&count);
+  if (e != cudaSuccess || count == 0) {
+    if (why) *why = e != cudaSuccess ? cudaGetErrorString(e) : "no CUDA device";
+    return false;
+  }
+  return true;
+}
+
+CudaResult run_cuda(const trace::Frame& frame, const CudaConfig& cfg) {
+  if (cfg.tile_w < 1 || cfg.tile_h < 1 || cfg.tile_w > 4096 || cfg.tile_h > 4096)
+    throw std::runtime_error("cuda: tile size out of range");
+  if (cfg.depth_bits < 1 || cfg.depth_bits > 32) throw std::runtime_error("cuda: depth bits must be 1..32");
+  if (frame.samples.empty()) throw std::runtime_error("cuda: frame has no sample positions");
+  if (cfg.device == Device::gpu) {
+    std::string why;
+    if (!cuda_available(&why)) throw std::runtime_error("cuda: no usable GPU (" + why + ")");
+  }
+  return cfg.precision == Precision::exact ? run<ExactP>(frame, cfg) : run<FloatP>(frame, cfg);
+}
+
+}  // namespace tilevis::cuda

@@ -1,0 +1,235 @@
+// The state the stages share: the frame in device memory and every intermediate buffer.
+// One file per stage (setup.cu, silhouettes.cu, binning.cu, cull.cu, clip.cu, occlusion.cu,
+// raster.cu) fills its part; pipeline.cu runs them, times them and grows buffers on overflow.
+#pragma once
+
+#include <vector>
+
+#include "exec.cuh"
+#include "poly.cuh"
+#include "tilevis/cuda_ref.h"
+
+namespace tilevis::cuda {
+
+inline constexpr uint32_t kNone = 0xffffffffu;
+
+// The tile grid. A tile's rectangle ends at the viewport's right and bottom edges: the last
+// column and row of tiles may reach past the screen, and nothing there is visible.
+struct TileGrid {
+  uint32_t tile_w, tile_h, tiles_x, tiles_y, sb, width, height;
+  TV_HD Rect rect(uint32_t tx, uint32_t ty) const {
+    const uint32_t x1 = (tx + 1) * tile_w < width ? (tx + 1) * tile_w : width;
+    const uint32_t y1 = (ty + 1) * tile_h < height ? (ty + 1) * tile_h : height;
+    return {int32_t(tx * tile_w) << sb, int32_t(ty * tile_h) << sb, int32_t(x1) << sb, int32_t(y1) << sb};
+  }
+  TV_HD Rect rect(uint32_t tile) const { return rect(tile % tiles_x, tile / tiles_x); }
+};
+
+// Device-side counters, read back once per run (one small copy).
+enum Counter : uint32_t {
+  kFrustumCulled,
+  kClippedTris,
+  kDegenerate,
+  kBackFacing,
+  kFrontFacing,
+  kDeepPairs,       // pairs that passed the cheap tests (test 6, bounding boxes, test 4)
+  kCandidates,      // pairs that survived tests 1-3
+  kClipItems,       // (tile, triangle) items with candidates
+  kSlotsUsed,       // piece slots reserved by clipping items
+  kEdgesUsed,       // polygon edges allocated by clipping
+  kClipOverflow,    // clipping items that ran out of pool room (slots or edges)
+  kReserveOverflow, // clipping items with more pieces than their reservation
+  kFloatAnomalies,  // float: polygons that outgrew their bound
+  kVisibleTriangles,
+  kMaxTilePieces,
+  kCounterCount
+};
+
+// A snapped setup triangle (canonical order: by trace triangle, then fan position).
+struct SetupTri {
+  Vtx v[3];
+  uint32_t id;    // trace triangle
+  uint32_t draw;
+  uint32_t front;   // negative doubled area in window space
+  uint32_t opaque;  // opaque draw without shader depth/discard
+  uint32_t cut;     // made by clip-space clipping: its edges are boundaries
+};
+
+struct DrawInfo {
+  uint32_t vertex_offset, vertex_count;
+  uint32_t triangle_offset, triangle_count;
+  uint32_t opaque, soup;
+};
+
+struct FrameDev {
+  uint32_t width, height, subpixel_bits, depth_bits, n_samples;
+  float depth_near, depth_far;
+  uint32_t n_draws;
+  uint64_t n_vertices, n_triangles;
+};
+
+// What a pipeline run learned about sizes; kept between runs (grow-only), so timed runs
+// after the first allocate nothing.
+struct Capacities {
+  uint64_t deep_pairs = 1 << 16;
+  uint64_t candidates = 1 << 14;
+  uint64_t clip_slots = 1 << 16;
+  uint64_t clip_edges = 1 << 20;
+  uint32_t slot_factor = 4;  // piece slots reserved per clipping item: factor * (candidates + 1)
+};
+
+template <class P>
+struct Pipeline {
+  Exec& ex;
+  CudaConfig cfg;
+  FrameDev f{};
+  Capacities caps;
+  std::vector<DrawInfo> draws_host;
+
+  // Frame (uploaded once).
+  Buf<float4> vertices;
+  Buf<uint32_t> indices;        // global vertex indices, 3 per triangle
+  Buf<uint32_t> tri_draw;       // per trace triangle
+  Buf<DrawInfo> draws;
+  Buf<uint32_t> sample_xy;      // per sample: x | y << 16
+  Buf<uint64_t> counters;       // Counter
+
+  // Setup.
+  Buf<uint32_t> fan_count;
+  Buf<uint64_t> fan_offset;
+  Buf<uint32_t> weld;           // per vertex: lowest index with the same position (soup draws)
+  Buf<uint32_t> weld_table;
+  Buf<SetupTri> setup;
+  Buf<uint64_t> use_key;        // 3 per setup triangle: edge key, or kBoundary
+  uint64_t n_setup = 0;
+
+  // Silhouettes.
+  Buf<uint64_t> hash_keys;
+  Buf<uint64_t> hash_counts;    // uses | front uses << 32
+  Buf<uint32_t> hash_first;     // lowest use index
+  uint64_t hash_cap = 0;
+  Buf<uint32_t> sil_flag;
+  Buf<uint64_t> sil_offset;
+  Buf<uint64_t> sil_key, sil_key_sorted;
+  Buf<uint32_t> sil_use, sil_use_sorted;
+  Buf<SilEdge<P>> edges;
+  uint64_t n_edges = 0;
+
+  // Front triangles.
+  Buf<uint32_t> front_flag;
+  Buf<uint64_t> front_offset;
+  Buf<TileTri<P>> tris;
+  uint64_t n_tris = 0;
+
+  // Binning.
+  uint32_t tiles_x = 0, tiles_y = 0, n_tiles = 0;
+  TileGrid grid{};
+  Buf<uint32_t> tri_tiles, edge_tiles;        // tiles per triangle / edge
+  Buf<uint64_t> tri_tiles_off, edge_tiles_off;
+  Buf<uint64_t> item_key, item_key_sorted;    // (tile, triangle) pairs by tile
+  Buf<uint32_t> item_tri, item_tri_sorted;
+  Buf<uint64_t> occ_key, occ_key_sorted;      // the same pairs by (tile, not opaque, z_min)
+  Buf<uint32_t> occ_tri, occ_tri_sorted;
+  Buf<uint64_t> tedge_key, tedge_key_sorted;  // (tile, edge) pairs by (tile, z_min)
+  Buf<uint32_t> tedge_id, tedge_id_sorted;
+  Buf<uint32_t> tile_item_begin, tile_edge_begin, tile_occ_count;  // n_tiles + 1 (begin of next = end)
+  Buf<uint64_t> area_key, area_key_sorted;    // items by original id (visible-area fold order)
+  Buf<uint32_t> area_item, area_item_sorted;
+  uint64_t n_items = 0, n_tile_edges = 0;
+
+  // Per-tile counters, golden_tile_columns() order.
+  Buf<int64_t> tile_rows;
+
+  // Cull and clip.
+  Buf<uint32_t> pair_count;
+  Buf<uint64_t> pair_offset;
+  Buf<uint32_t> piece_count;       // per item
+  Buf<uint32_t> cand_count, cand_cursor;
+  Buf<uint32_t> cand_offset;       // scan of cand_count (n_items + 1)
+  Buf<uint64_t> deep;              // item << 32 | edge
+  Buf<uint64_t> cands;             // item << 32 | edge (unordered)
+  Buf<uint32_t> cand_edges;        // per item, its candidate edges (ascending after the clip's sort)
+  Buf<uint32_t> cand_scratch;
+  Buf<uint32_t> clip_items;
+  Buf<uint32_t> item_slot;         // first piece slot of a clipping item
+  Buf<uint64_t> slot_poly;         // piece slot: edge offset << 32 | edge count
+  Buf<PEdge<P>> clip_edges;
+
+  // Pieces.
+  Buf<uint64_t> piece_offset;      // scan of piece_count (n_items + 1)
+  uint64_t n_pieces = 0;
+  Buf<uint8_t> piece_visible;
+  Buf<double> piece_area;
+
+  // Outputs.
+  Buf<uint32_t> winner;            // per sample: front triangle + 1 of the last visible piece
+  Buf<int32_t> ids;
+  Buf<double> area;                // per trace triangle
+
+  explicit Pipeline(Exec& e) : ex(e) {
+    for (auto* b : {&fan_count, &weld, &weld_table, &hash_first, &sil_flag, &sil_use, &sil_use_sorted, &front_flag,
+                    &tri_tiles, &edge_tiles, &item_tri, &item_tri_sorted, &occ_tri, &occ_tri_sorted, &tedge_id,
+                    &tedge_id_sorted, &tile_item_begin, &tile_edge_begin, &tile_occ_count, &area_item,
+                    &area_item_sorted, &pair_count, &piece_count, &cand_count, &cand_cursor, &cand_offset,
+                    &cand_edges, &cand_scratch, &clip_items, &item_slot, &winner, &indices, &tri_draw, &sample_xy})
+      b->bind(&e);
+    for (auto* b : {&fan_offset, &use_key, &hash_keys, &hash_counts, &sil_offset, &sil_key, &sil_key_sorted,
+                    &front_offset, &tri_tiles_off, &edge_tiles_off, &item_key, &item_key_sorted, &occ_key,
+                    &occ_key_sorted, &tedge_key, &tedge_key_sorted, &area_key, &area_key_sorted, &pair_offset,
+                    &deep, &cands, &slot_poly, &piece_offset, &counters})
+      b->bind(&e);
+    vertices.bind(&e);
+    draws.bind(&e);
+    setup.bind(&e);
+    edges.bind(&e);
+    tris.bind(&e);
+    tile_rows.bind(&e);
+    clip_edges.bind(&e);
+    piece_visible.bind(&e);
+    piece_area.bind(&e);
+    ids.bind(&e);
+    area.bind(&e);
+  }
+};
+
+inline constexpr uint32_t kTileColumns = 10;
+enum TileColumn : uint32_t {
+  kColTriangles,
+  kColEdges,
+  kColPairTests,
+  kColCandidates,
+  kColClips,
+  kColPieces,
+  kColVisiblePieces,
+  kColOcclusionTests,
+  kColSamplesCovered,
+  kColFragments
+};
+
+inline uint32_t bits_for(uint64_t v) {  // bits to hold values in [0, v]
+  uint32_t b = 0;
+  while (b < 64 && (v >> b) != 0) ++b;
+  return b;
+}
+
+// Stages (one file each). Each returns after queueing its work on the stream; those that
+// need a size on the host read it (a synchronisation, named where it happens).
+void upload_frame_common(Exec& ex, const trace::Frame& frame, uint32_t depth_bits, FrameDev& f,
+                         std::vector<DrawInfo>& draws_host, Buf<float4>& vertices, Buf<uint32_t>& indices,
+                         Buf<uint32_t>& tri_draw, Buf<DrawInfo>& draws, Buf<uint32_t>& sample_xy);
+template <class P>
+void stage_setup(Pipeline<P>& p);
+template <class P>
+void stage_silhouettes(Pipeline<P>& p);
+template <class P>
+void stage_binning(Pipeline<P>& p);
+template <class P>
+void stage_cull(Pipeline<P>& p);
+template <class P>
+bool stage_clip(Pipeline<P>& p);  // false: a buffer overflowed (capacities grown; run again)
+template <class P>
+void stage_occlusion(Pipeline<P>& p);
+template <class P>
+void stage_raster(Pipeline<P>& p);
+
+}  // namespace tilevis::cuda

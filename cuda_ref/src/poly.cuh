@@ -1,0 +1,365 @@
+// The tile stage's geometry, written once over a precision policy (Exact or Float):
+// convex polygons in plane-based form (SVGPU §3.2.2 after Bernstein & Fussell 2009), the
+// pair tests of SVGPU §3.2.1, the split that keeps both sides, the §3.3 occlusion test.
+//
+// Canonical edge order (the interior test point depends on it): a polygon's lines are in
+// positive order (orient2d > 0, interior on the positive side), vertex i is line(i-1) ∩
+// line(i). A triangle gives lines p0p1, p1p2, p2p0 (p0p2, p2p1, p1p0 when negatively ordered),
+// so vertex 0 is p0; tile rectangles clip by top, right, bottom, left. A split child keeps the
+// parent's bounding lines in the parent's order, with the clip line (flipped for the outside
+// part) right after the edge leaving the kept side; a vertex the clip line passes through
+// keeps the parent's representation.
+#pragma once
+
+#include "approx.cuh"
+#include "exact.cuh"
+
+namespace tilevis::cuda {
+
+struct ExactP {
+  static constexpr bool kExact = true;
+  using Line = exact::Line;
+  using V = exact::IPoint;
+  using R = exact::RPoint;
+  using Plane = exact::Plane;
+
+  TV_HD static Line line(Pt p, Pt q) { return Line::through(p, q); }
+  TV_HD static V vertex(Pt p) { return V::of(p); }
+  TV_HD static int side(const Line& l, const V& v) { return exact::side(l, v); }
+  TV_HD static V meet(const Line& a, const Line& b) { return exact::intersect(a, b); }
+  TV_HD static int64_t eval(const Line& l, Pt s) { return l.eval(s); }
+  TV_HD static bool in_half(const Line& l, Pt s) { return in_half_plane(l, s); }
+  TV_HD static bool in_half(const Line& l, const R& r) { return exact::in_half_plane(l, r); }
+  TV_HD static R interior(const V& a, const V& b, const V& c) { return exact::centroid(a, b, c); }
+  TV_HD static double rx(const R& r) { return ddiv(r.fx, r.fw); }
+  TV_HD static double ry(const R& r) { return ddiv(r.fy, r.fw); }
+  // sign((c - a) . d) for c on the line through a with direction d: < 2^98 (I128).
+  TV_HD static int along(const V& c, const Vtx& a, int64_t dx, int64_t dy) {
+    return sign128((c.x - I128{a.x} * c.w) * dx + (c.y - I128{a.y} * c.w) * dy);
+  }
+  TV_HD static Plane plane(const Vtx& a, const Vtx& b, const Vtx& c) { return exact::plane_of(a, b, c); }
+  TV_HD static int depth(const Plane& p, const Plane& q, const R& s) { return exact::depth_order(p, q, s); }
+  TV_HD static int depth(const Plane& p, Pt s, uint32_t z) { return exact::depth_order(p, s, z); }
+  TV_HD static int depth_edge(const Plane& p, const Vtx& a, const Vtx& b, const V& s) {
+    return exact::depth_order_edge(p, a, b, s);
+  }
+  TV_HD static void bounds(const V& v, int64_t& fx, int64_t& fy, int64_t& cx, int64_t& cy) {
+    fx = exact::floor_div(v.x, v.w);
+    fy = exact::floor_div(v.y, v.w);
+    cx = exact::ceil_div(v.x, v.w);
+    cy = exact::ceil_div(v.y, v.w);
+  }
+  // Doubled area of the fan triangle (v0, a, b) = det[v0; a; b] / (w0 wa wb): the numerator
+  // |x (y w - y w)| <= 2^72 2^122, three terms < 2^196 (W256); the denominator <= 2^147 (W192).
+  // Each is rounded once, then divided: the polygon's area is their sum in fan order.
+  TV_HD static double area_term(const V& v0, const V& a, const V& b) {
+    const W256 x0 = wide<4>(v0.x), y0 = wide<4>(v0.y), w0 = wide<4>(I128{v0.w});
+    const W256 xa = wide<4>(a.x), ya = wide<4>(a.y), wa = wide<4>(I128{a.w});
+    const W256 xb = wide<4>(b.x), yb = wide<4>(b.y), wb = wide<4>(I128{b.w});
+    const W256 num = x0 * (ya * wb - yb * wa) - y0 * (xa * wb - xb * wa) + w0 * (xa * yb - xb * ya);
+    const W192 den = wide<3>(v0.w) * wide<3>(mul64(a.w, b.w));
+    return ddiv(num.to_double(), den.to_double());
+  }
+};
+
+struct FloatP {
+  static constexpr bool kExact = false;
+  using Line = approx::Line;
+  using V = approx::Vec;
+  using R = approx::Vec;
+  using Plane = approx::Plane;
+
+  TV_HD static Line line(Pt p, Pt q) { return Line::through(p, q); }
+  TV_HD static V vertex(Pt p) { return V::of(p); }
+  TV_HD static int side(const Line& l, const V& v) { return approx::side(l, v); }
+  TV_HD static V meet(const Line& a, const Line& b) { return approx::intersect(a, b); }
+  TV_HD static float eval(const Line& l, Pt s) { return l.eval(float(s.x), float(s.y)); }
+  TV_HD static bool in_half(const Line& l, Pt s) { return approx::in_half_plane(l, V::of(s)); }
+  TV_HD static bool in_half(const Line& l, const R& r) { return approx::in_half_plane(l, r); }
+  TV_HD static R interior(const V& a, const V& b, const V& c) { return approx::centroid(a, b, c); }
+  TV_HD static double rx(const R& r) { return r.x; }
+  TV_HD static double ry(const R& r) { return r.y; }
+  TV_HD static int along(const V& c, const Vtx& a, int64_t dx, int64_t dy) {
+    return approx::signf((c.x - float(a.x)) * float(dx) + (c.y - float(a.y)) * float(dy));
+  }
+  TV_HD static Plane plane(const Vtx& a, const Vtx& b, const Vtx& c) { return approx::plane_of(a, b, c); }
+  TV_HD static int depth(const Plane& p, const Plane& q, const R& s) { return approx::depth_order(p, q, s); }
+  TV_HD static int depth(const Plane& p, Pt s, uint32_t z) { return approx::depth_order(p, s, z); }
+  TV_HD static int depth_edge(const Plane& p, const Vtx& a, const Vtx& b, const V& s) {
+    return approx::depth_order_edge(p, a, b, s);
+  }
+  TV_HD static void bounds(const V& v, int64_t& fx, int64_t& fy, int64_t& cx, int64_t& cy) {
+    fx = int64_t(floorf(v.x));
+    fy = int64_t(floorf(v.y));
+    cx = int64_t(ceilf(v.x));
+    cy = int64_t(ceilf(v.y));
+  }
+  TV_HD static double area_term(const V& v0, const V& a, const V& b) {
+    const double ax = double(a.x) - v0.x, ay = double(a.y) - v0.y, bx = double(b.x) - v0.x, by = double(b.y) - v0.y;
+    return ax * by - ay * bx;
+  }
+};
+
+template <class P>
+struct PEdge {
+  typename P::Line line;
+  typename P::V start;  // line(i-1) ∩ line(i)
+};
+
+// A polygon being written: edges go to `e` up to `cap`; pushing past it sets `overflow`
+// (the caller grows the buffer and retries, or, in float precision, counts an anomaly).
+template <class P>
+struct PolyOut {
+  PEdge<P>* e;
+  uint32_t n, cap;
+  bool overflow;
+  TV_HD void push(const typename P::Line& l, const typename P::V& v) {
+    if (n < cap) e[n] = {l, v};
+    else overflow = true;
+    ++n;
+  }
+};
+
+// A front-facing triangle as the tile stage sees it (SVGPU's tile-list entry).
+template <class P>
+struct TileTri {
+  Vtx v[3];
+  typename P::Line edge[3];  // positive order, as the triangle's polygon
+  typename P::Plane plane;
+  Rect bbox;                 // closed, sub-pixel units
+  uint32_t z_min, z_max;
+  uint32_t id;               // original (trace) triangle
+  uint32_t opaque;
+};
+
+// A silhouette edge as the tile stage sees it.
+template <class P>
+struct SilEdge {
+  Vtx a, b;
+  typename P::Line line;  // through a, b
+  Rect bbox;
+  uint32_t z_min, z_max;
+};
+
+template <class P>
+TV_HD inline TileTri<P> make_tile_tri(const Vtx& v0, const Vtx& v1, const Vtx& v2, uint32_t id, bool opaque) {
+  TileTri<P> t;
+  t.v[0] = v0;
+  t.v[1] = v1;
+  t.v[2] = v2;
+  const int64_t area = orient2d(v0.xy(), v1.xy(), v2.xy());
+  if (area > 0) {
+    t.edge[0] = P::line(v0.xy(), v1.xy());
+    t.edge[1] = P::line(v1.xy(), v2.xy());
+    t.edge[2] = P::line(v2.xy(), v0.xy());
+  } else {
+    t.edge[0] = P::line(v0.xy(), v2.xy());
+    t.edge[1] = P::line(v2.xy(), v1.xy());
+    t.edge[2] = P::line(v1.xy(), v0.xy());
+  }
+  t.plane = P::plane(v0, v1, v2);
+  t.bbox = {tmin(tmin(v0.x, v1.x), v2.x), tmin(tmin(v0.y, v1.y), v2.y), tmax(tmax(v0.x, v1.x), v2.x),
+            tmax(tmax(v0.y, v1.y), v2.y)};
+  t.z_min = tmin(tmin(v0.z, v1.z), v2.z);
+  t.z_max = tmax(tmax(v0.z, v1.z), v2.z);
+  t.id = id;
+  t.opaque = opaque ? 1u : 0u;
+  return t;
+}
+
+template <class P>
+TV_HD inline SilEdge<P> make_sil_edge(const Vtx& a, const Vtx& b) {
+  SilEdge<P> e;
+  e.a = a;
+  e.b = b;
+  e.line = P::line(a.xy(), b.xy());
+  e.bbox = {tmin(a.x, b.x), tmin(a.y, b.y), tmax(a.x, b.x), tmax(a.y, b.y)};
+  e.z_min = tmin(a.z, b.z);
+  e.z_max = tmax(a.z, b.z);
+  return e;
+}
+
+// The triangle's polygon (positive order, vertex 0 = v0) clipped to the tile rectangle by
+// its top, right, bottom and left lines, keeping the inside. <= 3 + 4 = 7 edges when exact.
+// Returns the edge count (0: empty); `overflow` when a float polygon outgrew kTileCap.
+inline constexpr uint32_t kTileCap = 8;
+
+template <class P>
+TV_HD inline uint32_t tile_polygon(const TileTri<P>& t, const Rect& r, PEdge<P>* out, bool& overflow) {
+  PEdge<P> buf[kTileCap];
+  PEdge<P>* cur = out;
+  PEdge<P>* next = buf;
+  Pt p0 = t.v[0].xy(), p1 = t.v[1].xy(), p2 = t.v[2].xy();
+  const int64_t area = orient2d(p0, p1, p2);
+  if (area == 0) return 0;
+  if (area < 0) {
+    const Pt s = p1;
+    p1 = p2;
+    p2 = s;
+  }
+  cur[0] = {t.edge[0], P::vertex(p0)};
+  cur[1] = {t.edge[1], P::vertex(p1)};
+  cur[2] = {t.edge[2], P::vertex(p2)};
+  uint32_t n = 3;
+  const Pt c[4] = {{r.x0, r.y0}, {r.x1, r.y0}, {r.x1, r.y1}, {r.x0, r.y1}};
+  for (int k = 0; k < 4; ++k) {
+    const typename P::Line l = P::line(c[k], c[(k + 1) & 3]);
+    bool pos = false, neg = false;
+    for (uint32_t i = 0; i < n; ++i) {
+      const int s = P::side(l, cur[i].start);
+      pos |= s > 0;
+      neg |= s < 0;
+    }
+    if (!neg) continue;
+    if (!pos) return 0;
+    PolyOut<P> o{next, 0, kTileCap, false};
+    const int s0 = P::side(l, cur[0].start);
+    int si = s0;
+    for (uint32_t i = 0; i < n; ++i) {
+      const uint32_t j = i + 1 == n ? 0 : i + 1;
+      const int sn = j == 0 ? s0 : P::side(l, cur[j].start);
+      if (si > 0 || sn > 0) {
+        o.push(cur[i].line, si >= 0 ? cur[i].start : P::meet(l, cur[i].line));
+        if (sn <= 0) o.push(l, sn == 0 ? cur[j].start : P::meet(cur[i].line, l));
+      }
+      si = sn;
+    }
+    if (o.overflow) {
+      overflow = true;
+      o.n = kTileCap;
+    }
+    n = o.n;
+    PEdge<P>* s = cur;
+    cur = next;
+    next = s;
+  }
+  if (cur != out)
+    for (uint32_t i = 0; i < n; ++i) out[i] = cur[i];
+  return n;
+}
+
+// Sides of a polygon's vertices against l: whether some vertex is strictly positive / negative.
+template <class P>
+TV_HD inline void line_sides(const PEdge<P>* poly, uint32_t n, const typename P::Line& l, bool& pos, bool& neg) {
+  pos = neg = false;
+  for (uint32_t i = 0; i < n; ++i) {
+    const int s = P::side(l, poly[i].start);
+    pos |= s > 0;
+    neg |= s < 0;
+  }
+}
+
+// SVGPU §3.2.1 tests 1-3 of a silhouette edge against a (piece of a) triangle. true: the
+// pair survives and the piece must be split by the edge's line.
+template <class P>
+TV_HD inline bool survives(const PEdge<P>* poly, uint32_t n, const TileTri<P>& tt, const SilEdge<P>& e) {
+  if (n == 0) return false;
+  // Test 1: the polygon lies on one side of the line (touching counts as one side).
+  bool pos, neg;
+  line_sides<P>(poly, n, e.line, pos, neg);
+  if (!pos || !neg) return false;
+  // Test 2 (exact form): AB misses the polygon's interior. Some polygon line has both ends
+  // on its outer side or on it; otherwise the separating axis along AB itself is ruled out
+  // by test 1, which just found vertices strictly on both sides of AB's line.
+  const Pt a = e.a.xy(), b = e.b.xy();
+  if (a == b) return false;
+  for (uint32_t i = 0; i < n; ++i)
+    if (P::eval(poly[i].line, a) <= 0 && P::eval(poly[i].line, b) <= 0) return false;
+  // Test 3: the chord of AB's line through the polygon: `first` where the line's edge of the
+  // inside part starts, `second` where it ends.
+  typename P::V first = poly[0].start, second = poly[0].start;
+  const int s0 = P::side(e.line, poly[0].start);
+  int si = s0;
+  for (uint32_t i = 0; i < n; ++i) {
+    const uint32_t j = i + 1 == n ? 0 : i + 1;
+    const int sn = j == 0 ? s0 : P::side(e.line, poly[j].start);
+    if (si > 0 && sn <= 0) first = sn == 0 ? poly[j].start : P::meet(poly[i].line, e.line);
+    if (si <= 0 && sn > 0) second = si == 0 ? poly[i].start : P::meet(e.line, poly[i].line);
+    si = sn;
+  }
+  const int64_t dx = int64_t{e.b.x} - e.a.x, dy = int64_t{e.b.y} - e.a.y;
+  // sign(z_triangle - z_edge) at each end of the overlap; > 0: the edge is nearer there.
+  const int s1 = P::along(first, e.a, dx, dy) < 0 ? P::depth(tt.plane, a, e.a.z) : P::depth_edge(tt.plane, e.a, e.b, first);
+  if (s1 > 0) return true;
+  const int s2 = P::along(second, e.b, dx, dy) > 0 ? P::depth(tt.plane, b, e.b.z) : P::depth_edge(tt.plane, e.a, e.b, second);
+  return s2 > 0;
+}
+
+// Splits a polygon that `l` crosses into inside = poly ∩ {l >= 0} and outside = poly ∩
+// {l <= 0}, in one pass over the vertices (signs: one positive block, one negative block).
+template <class P>
+TV_HD inline void split(const PEdge<P>* poly, uint32_t n, const typename P::Line& l, PolyOut<P>& in, PolyOut<P>& out) {
+  const typename P::Line lf = l.flipped();
+  const int s0 = P::side(l, poly[0].start);
+  int si = s0;
+  for (uint32_t i = 0; i < n; ++i) {
+    const uint32_t j = i + 1 == n ? 0 : i + 1;
+    const int sn = j == 0 ? s0 : P::side(l, poly[j].start);
+    const typename P::Line& li = poly[i].line;
+    if (si > 0 || sn > 0) {
+      in.push(li, si >= 0 ? poly[i].start : P::meet(l, li));
+      if (sn <= 0) in.push(l, sn == 0 ? poly[j].start : P::meet(li, l));
+    }
+    if (si < 0 || sn < 0) {
+      out.push(li, si <= 0 ? poly[i].start : P::meet(lf, li));
+      if (sn >= 0) out.push(lf, sn == 0 ? poly[j].start : P::meet(li, lf));
+    }
+    si = sn;
+  }
+}
+
+// SVGPU §3.3: the piece is hidden if an original opaque triangle nearer at its interior
+// point contains that point; equal depth: the earlier-submitted triangle stays in front.
+// Occluders come nearest first (by z_min); the first hit ends the search, and an occluder
+// whose nearest point is behind the piece's farthest ends it too. `tests` counts exact
+// containment tests (the occluder's bounding box, widened by a margin far above the error of
+// the test point's doubles, rejects first).
+template <class P>
+TV_HD inline bool occluded(const PEdge<P>* piece, const TileTri<P>& tt, const TileTri<P>* tris, const uint32_t* occ,
+                           uint32_t n_occ, uint32_t& tests) {
+  const typename P::R q = P::interior(piece[0].start, piece[1].start, piece[2].start);
+  const double qx = P::rx(q), qy = P::ry(q);
+  for (uint32_t k = 0; k < n_occ; ++k) {
+    const TileTri<P>& u = tris[occ[k]];
+    if (u.z_min > tt.z_max) break;
+    if (u.id == tt.id) continue;
+    if (qx < u.bbox.x0 - 1.0 || qx > u.bbox.x1 + 1.0 || qy < u.bbox.y0 - 1.0 || qy > u.bbox.y1 + 1.0) continue;
+    ++tests;
+    if (orient2d(u.v[0].xy(), u.v[1].xy(), u.v[2].xy()) == 0) continue;
+    if (!P::in_half(u.edge[0], q) || !P::in_half(u.edge[1], q) || !P::in_half(u.edge[2], q)) continue;
+    const int order = P::depth(u.plane, tt.plane, q);
+    if (order < 0 || (order == 0 && u.id < tt.id)) return true;
+  }
+  return false;
+}
+
+template <class P>
+TV_HD inline bool covers(const PEdge<P>* poly, uint32_t n, Pt s) {
+  for (uint32_t i = 0; i < n; ++i)
+    if (!P::in_half(poly[i].line, s)) return false;
+  return n > 0;
+}
+
+// Smallest closed integer rectangle holding the polygon.
+template <class P>
+TV_HD inline Rect bounding_box(const PEdge<P>* poly, uint32_t n) {
+  int64_t x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  for (uint32_t i = 0; i < n; ++i) {
+    int64_t fx, fy, cx, cy;
+    P::bounds(poly[i].start, fx, fy, cx, cy);
+    if (i == 0 || fx < x0) x0 = fx;
+    if (i == 0 || fy < y0) y0 = fy;
+    if (i == 0 || cx > x1) x1 = cx;
+    if (i == 0 || cy > y1) y1 = cy;
+  }
+  return {int32_t(x0), int32_t(y0), int32_t(x1), int32_t(y1)};
+}
+
+template <class P>
+TV_HD inline double doubled_area(const PEdge<P>* poly, uint32_t n) {
+  double sum = 0;
+  for (uint32_t i = 1; i + 1 < n; ++i) sum = dadd(sum, P::area_term(poly[0].start, poly[i].start, poly[i + 1].start));
+  return sum;
+}
+
+}  // namespace tilevis::cuda

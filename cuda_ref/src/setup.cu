@@ -1,0 +1,336 @@
+// Primitive setup on the GPU, one thread per trace triangle: near/far and guard-band
+// clipping in clip space (double precision, Sutherland-Hodgman, intersection computed from
+// the inside vertex), viewport transform and snapping (x, y to 1/2^subpixel_bits pixel,
+// round half to even; depth to 2^D - 1 levels), fan triangulation, facing after the snap, and
+// the edge keys of silhouette extraction (SVGPU §3.1). The double arithmetic uses explicit
+// round-to-nearest operations (never contracted to FMA), so the device reproduces the
+// host's setup bit for bit.
+#include <cmath>
+
+#include "pipeline.cuh"
+
+namespace tilevis::cuda {
+namespace {
+
+struct ClipV {
+  double x, y, z, w;
+  uint32_t index;  // global vertex index; kNone when made by clipping
+};
+
+inline constexpr uint32_t kMaxClipVerts = 16;  // 3 + one per plane (convex): 9
+
+struct SetupArgs {
+  FrameDev f;
+  const float4* vertices;
+  const uint32_t* indices;
+  const uint32_t* tri_draw;
+  const DrawInfo* draws;
+  const uint32_t* weld;
+  uint32_t* fan_count;
+  const uint64_t* fan_offset;
+  SetupTri* setup;
+  uint64_t* use_key;
+  uint64_t* counters;
+  double gx, gy;  // guard band half-widths in NDC
+};
+
+// Plane k as a distance c . (x, y, z, w), inside when >= 0, evaluated left to right.
+TV_HD inline double distance(int k, double gx, double gy, const ClipV& v) {
+  double cx = 0, cy = 0, cz = 0, cw = 1;
+  switch (k) {
+    case 0: cz = 1; break;               // near: z >= -w
+    case 1: cz = -1; break;              // far: z <= w
+    case 2: cx = 1; cw = gx; break;      // guard band left
+    case 3: cx = -1; cw = gx; break;     // right
+    case 4: cy = 1; cw = gy; break;      // bottom
+    default: cy = -1; cw = gy; break;    // top
+  }
+  return dadd(dadd(dadd(dmul(cx, v.x), dmul(cy, v.y)), dmul(cz, v.z)), dmul(cw, v.w));
+}
+
+// Clips the triangle against the six planes. Returns the vertex count (0: culled) and
+// whether a plane cut it.
+TV_HD inline uint32_t clip_triangle(const SetupArgs& a, uint64_t t, ClipV* poly, bool& cut) {
+  ClipV scratch[kMaxClipVerts];
+  uint32_t n = 3;
+  for (int k = 0; k < 3; ++k) {
+    const uint32_t vi = a.indices[3 * t + k];
+    const float4 v = a.vertices[vi];
+    poly[k] = {double(v.x), double(v.y), double(v.z), double(v.w), vi};
+  }
+  cut = false;
+  for (int p = 0; p < 6; ++p) {
+    uint32_t inside = 0;
+    for (uint32_t i = 0; i < n; ++i) inside += distance(p, a.gx, a.gy, poly[i]) >= 0;
+    if (inside == 0) return 0;
+    if (inside == n) continue;
+    cut = true;
+    uint32_t m = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+      const ClipV& va = poly[i];
+      const ClipV& vb = poly[i + 1 == n ? 0 : i + 1];
+      const double da = distance(p, a.gx, a.gy, va), db = distance(p, a.gx, a.gy, vb);
+      if (da >= 0 && m < kMaxClipVerts) scratch[m++] = va;
+      if ((da >= 0) != (db >= 0)) {
+        const ClipV& in = da >= 0 ? va : vb;
+        const ClipV& out = da >= 0 ? vb : va;
+        const double din = da >= 0 ? da : db, dout = da >= 0 ? db : da;
+        const double s = ddiv(din, dsub(din, dout));
+        if (m < kMaxClipVerts)
+          scratch[m++] = {dadd(in.x, dmul(s, dsub(out.x, in.x))), dadd(in.y, dmul(s, dsub(out.y, in.y))),
+                          dadd(in.z, dmul(s, dsub(out.z, in.z))), dadd(in.w, dmul(s, dsub(out.w, in.w))), kNone};
+      }
+    }
+    for (uint32_t i = 0; i < m; ++i) poly[i] = scratch[i];
+    n = m;
+  }
+  return n < 3 ? 0 : n;
+}
+
+TV_HD inline double round_even(double v) {
+#if defined(__CUDA_ARCH__)
+  return rint(v);
+#else
+  return std::nearbyint(v);  // default rounding mode: to nearest, ties to even
+#endif
+}
+
+// Viewport transform (y down) and snap: x, y to 1/2^subpixel_bits pixel, rounded to nearest
+// even (scaling by a power of two is exact, so rounding the product is rounding the
+// coordinate); guard-band clipping has kept every vertex inside |x| < 2^15 pixels.
+TV_HD inline Vtx snap(const FrameDev& f, const ClipV& v) {
+  const double half_w = dmul(double(f.width), 0.5), half_h = dmul(double(f.height), 0.5);
+  const double near = double(f.depth_near), range = dsub(double(f.depth_far), double(f.depth_near));
+  const double sub = double(1u << f.subpixel_bits);
+  const double inv_w = ddiv(1.0, v.w);
+  const double xw = dmul(dadd(dmul(v.x, inv_w), 1.0), half_w);
+  const double yw = dmul(dsub(1.0, dmul(v.y, inv_w)), half_h);
+  const double zw = dadd(near, dmul(dmul(range, dadd(dmul(v.z, inv_w), 1.0)), 0.5));
+  Vtx s;
+  s.x = int32_t(round_even(dmul(xw, sub)));
+  s.y = int32_t(round_even(dmul(yw, sub)));
+  s.z = snap_depth(zw, f.depth_bits);
+  return s;
+}
+
+TV_HD void setup_count(const SetupArgs& a, uint64_t t) {
+  ClipV poly[kMaxClipVerts];
+  bool cut = false;
+  const uint32_t n = clip_triangle(a, t, poly, cut);
+  a.fan_count[t] = n ? n - 2 : 0;
+  if (n == 0) atomic_add(&a.counters[kFrustumCulled], 1);
+  else if (cut) atomic_add(&a.counters[kClippedTris], 1);
+}
+
+TV_HD void setup_emit(const SetupArgs& a, uint64_t t) {
+  ClipV poly[kMaxClipVerts];
+  bool cut = false;
+  const uint32_t n = clip_triangle(a, t, poly, cut);
+  if (n == 0) return;
+  const uint32_t d = a.tri_draw[t];
+  const DrawInfo& di = a.draws[d];
+  Vtx sv[kMaxClipVerts];
+  for (uint32_t k = 0; k < n; ++k) sv[k] = snap(a.f, poly[k]);
+  // Edges made by clipping have no neighbour: boundaries, sorted after the draw's keyed edges.
+  const uint64_t boundary = (uint64_t(di.vertex_offset + di.vertex_count - 1) << 32) | 0xffffffffu;
+  uint64_t out = a.fan_offset[t];
+  for (uint32_t k = 1; k + 1 < n; ++k, ++out) {
+    SetupTri st;
+    st.v[0] = sv[0];
+    st.v[1] = sv[k];
+    st.v[2] = sv[k + 1];
+    st.id = uint32_t(t);
+    st.draw = d;
+    st.opaque = di.opaque;
+    st.cut = cut;
+    const int64_t area = orient2d(st.v[0].xy(), st.v[1].xy(), st.v[2].xy());
+    // Counter-clockwise in NDC is clockwise in y-down window space: negative area.
+    st.front = area < 0;
+    atomic_add(&a.counters[area == 0 ? kDegenerate : area > 0 ? kBackFacing : kFrontFacing], 1);
+    a.setup[out] = st;
+    uint32_t idx[3] = {poly[0].index, poly[k].index, poly[k + 1].index};
+    for (int e = 0; e < 3; ++e) {
+      uint64_t key;
+      if (!di.opaque) {
+        key = ~uint64_t{0};  // no silhouettes from non-opaque draws
+      } else if (cut) {
+        key = boundary;
+      } else {
+        uint32_t i0 = idx[e], i1 = idx[(e + 1) % 3];
+        if (di.soup) {
+          i0 = a.weld[i0];
+          i1 = a.weld[i1];
+        }
+        key = (uint64_t(i0 < i1 ? i0 : i1) << 32) | (i0 < i1 ? i1 : i0);
+      }
+      a.use_key[3 * out + e] = key;
+    }
+  }
+}
+
+__global__ void k_setup_count(SetupArgs a, uint64_t n) {
+  TV_GRID_LOOP(i, n) setup_count(a, i);
+}
+__global__ void k_setup_emit(SetupArgs a, uint64_t n) {
+  TV_GRID_LOOP(i, n) setup_emit(a, i);
+}
+
+// ---- welding of triangle-soup draws by position -------------------------------------------
+
+struct WeldArgs {
+  const float4* vertices;
+  const DrawInfo* draws;
+  uint32_t n_draws;
+  uint32_t* table;
+  uint64_t mask;
+  uint32_t* weld;
+};
+
+TV_HD inline uint32_t draw_of_vertex(const WeldArgs& a, uint32_t v) {
+  uint32_t lo = 0, hi = a.n_draws;  // last draw whose vertex_offset <= v
+  while (hi - lo > 1) {
+    const uint32_t mid = (lo + hi) / 2;
+    if (a.draws[mid].vertex_offset <= v) lo = mid;
+    else hi = mid;
+  }
+  return lo;
+}
+
+TV_HD inline uint32_t float_key(float v) {  // -0 and +0 compare equal: one key
+  uint32_t b;
+  __builtin_memcpy(&b, &v, 4);
+  return v == 0.0f ? 0u : b;
+}
+
+TV_HD inline bool same_position(const float4& p, const float4& q) {
+  return p.x == q.x && p.y == q.y && p.z == q.z && p.w == q.w;
+}
+
+TV_HD inline uint64_t weld_hash(const float4& p, uint32_t draw) {
+  uint64_t h = 0x9e3779b97f4a7c15ull * (draw + 1);
+  for (uint32_t k : {float_key(p.x), float_key(p.y), float_key(p.z), float_key(p.w)}) {
+    h ^= k;
+    h *= 0xff51afd7ed558ccdull;
+    h ^= h >> 33;
+  }
+  return h;
+}
+
+// The slot of v's position class in the table (inserting v if the class is new).
+TV_HD inline uint64_t weld_slot(const WeldArgs& a, uint32_t v, bool insert) {
+  const uint32_t d = draw_of_vertex(a, v);
+  const float4 p = a.vertices[v];
+  uint64_t h = weld_hash(p, d) & a.mask;
+  for (;;) {
+    uint32_t cur = a.table[h];
+    if (cur == kNone && insert) {
+      cur = atomic_cas(&a.table[h], kNone, v);
+      if (cur == kNone) return h;
+    }
+    if (cur != kNone && draw_of_vertex(a, cur) == d && same_position(a.vertices[cur], p)) return h;
+    h = (h + 1) & a.mask;
+  }
+}
+
+TV_HD void weld_insert(const WeldArgs& a, uint64_t v) {
+  if (!a.draws[draw_of_vertex(a, uint32_t(v))].soup) return;
+  const uint64_t h = weld_slot(a, uint32_t(v), true);
+  atomic_min(&a.table[h], uint32_t(v));  // the class's lowest index
+}
+
+TV_HD void weld_resolve(const WeldArgs& a, uint64_t v) {
+  if (!a.draws[draw_of_vertex(a, uint32_t(v))].soup) {
+    a.weld[v] = uint32_t(v);
+    return;
+  }
+  a.weld[v] = a.table[weld_slot(a, uint32_t(v), false)];
+}
+
+__global__ void k_weld_insert(WeldArgs a, uint64_t n) {
+  TV_GRID_LOOP(i, n) weld_insert(a, i);
+}
+__global__ void k_weld_resolve(WeldArgs a, uint64_t n) {
+  TV_GRID_LOOP(i, n) weld_resolve(a, i);
+}
+
+}  // namespace
+
+void upload_frame_common(Exec& ex, const trace::Frame& frame, uint32_t depth_bits, FrameDev& f,
+                         std::vector<DrawInfo>& draws_host, Buf<float4>& vertices, Buf<uint32_t>& indices,
+                         Buf<uint32_t>& tri_draw, Buf<DrawInfo>& draws, Buf<uint32_t>& sample_xy) {
+  f = {};
+  f.width = frame.width;
+  f.height = frame.height;
+  f.subpixel_bits = frame.subpixel_bits;
+  f.depth_bits = depth_bits;
+  f.n_samples = uint32_t(frame.samples.size());
+  f.depth_near = frame.depth_near;
+  f.depth_far = frame.depth_far;
+  f.n_draws = uint32_t(frame.draws.size());
+  std::vector<float4> v;
+  std::vector<uint32_t> idx, td;
+  draws_host.clear();
+  for (uint32_t d = 0; d < frame.draws.size(); ++d) {
+    const trace::Draw& dr = frame.draws[d];
+    DrawInfo di{};
+    di.vertex_offset = uint32_t(v.size());
+    di.vertex_count = uint32_t(dr.vertices.size());
+    di.triangle_offset = uint32_t(td.size());
+    di.triangle_count = uint32_t(dr.indices.size() / 3);
+    di.opaque = dr.opaque() && !dr.per_pixel_only();
+    di.soup = (dr.flags & trace::kTriangleSoup) != 0;
+    if (v.size() + dr.vertices.size() >= 0xffffffffull) throw std::runtime_error("cuda: more than 2^32 - 2 vertices");
+    for (const auto& p : dr.vertices) v.push_back(make_float4(p.x, p.y, p.z, p.w));
+    for (size_t k = 0; k + 2 < dr.indices.size(); k += 3) {
+      for (int j = 0; j < 3; ++j) idx.push_back(di.vertex_offset + dr.indices[k + j]);
+      td.push_back(d);
+    }
+    draws_host.push_back(di);
+  }
+  f.n_vertices = v.size();
+  f.n_triangles = td.size();
+  std::vector<uint32_t> s;
+  for (const auto& sp : frame.samples) s.push_back(uint32_t(sp.x) | uint32_t(sp.y) << 16);
+  ex.upload(vertices.need(v.size() + 1), v.data(), v.size() * sizeof(float4));
+  ex.upload(indices.need(idx.size() + 1), idx.data(), idx.size() * 4);
+  ex.upload(tri_draw.need(td.size() + 1), td.data(), td.size() * 4);
+  ex.upload(draws.need(draws_host.size() + 1), draws_host.data(), draws_host.size() * sizeof(DrawInfo));
+  ex.upload(sample_xy.need(s.size() + 1), s.data(), s.size() * 4);
+}
+
+template <class P>
+void stage_setup(Pipeline<P>& p) {
+  Exec& ex = p.ex;
+  const FrameDev& f = p.f;
+  const uint64_t n = f.n_triangles;
+  // Guard band: window x = (ndc + 1) pixels / 2 stays below 2^15 pixels in magnitude.
+  const double gx = std::floor(65536.0 / f.width) - 2.0, gy = std::floor(65536.0 / f.height) - 2.0;
+
+  uint32_t* weld = p.weld.need(f.n_vertices + 1);
+  bool any_soup = false;
+  for (const auto& d : p.draws_host) any_soup |= d.soup && d.vertex_count > 0;
+  if (any_soup) {
+    uint64_t cap = 1;
+    while (cap < 2 * f.n_vertices + 2) cap <<= 1;
+    uint32_t* table = p.weld_table.need(cap);
+    ex.fill_ones(table, cap * 4);
+    WeldArgs w{p.vertices.get(), p.draws.get(), f.n_draws, table, cap - 1, weld};
+    ex.launch(k_weld_insert, weld_insert, f.n_vertices, w);
+    ex.launch(k_weld_resolve, weld_resolve, f.n_vertices, w);
+  }
+
+  SetupArgs a{f,       p.vertices.get(), p.indices.get(), p.tri_draw.get(), p.draws.get(), weld, p.fan_count.need(n + 1),
+              nullptr, nullptr,          nullptr,         p.counters.get(), gx,            gy};
+  a.fan_offset = p.fan_offset.need(n + 1);
+  ex.launch(k_setup_count, setup_count, n, a);
+  ex.exclusive_scan(a.fan_count, p.fan_offset.get(), n);
+  p.n_setup = ex.read(p.fan_offset.get() + n);  // sync: the setup triangle count sizes what follows
+  a.setup = p.setup.need(p.n_setup + 1);
+  a.use_key = p.use_key.need(3 * p.n_setup + 1);
+  ex.launch(k_setup_emit, setup_emit, n, a);
+}
+
+template void stage_setup<ExactP>(Pipeline<ExactP>&);
+template void stage_setup<FloatP>(Pipeline<FloatP>&);
+
+}  // namespace tilevis::cuda

@@ -1,0 +1,165 @@
+// tilevis cuda T -o DIR: the CUDA reference implementation (cuda_ref/) on a trace frame, in
+// the canonical output layout of `tilevis golden`, plus per-stage GPU times (CUDA events,
+// median of --runs after warm-up), the device name and its peak device memory.
+#include <chrono>
+
+#include <fmt/format.h>
+
+#include "commands.h"
+#include "tilevis/outputs.h"
+#include "tilevis/trace.h"
+#if TILEVIS_HAVE_CUDA_REF
+#include "tilevis/cuda_ref.h"
+#endif
+
+namespace tilevis::app {
+namespace {
+
+struct CudaArgs {
+  std::string trace, out, tile = "32", precision = "exact", device = "gpu";
+  uint32_t samples = 0, frame = 0, depth_bits = 24, runs = 20;
+};
+
+#if TILEVIS_HAVE_CUDA_REF
+const std::vector<std::string>& tile_columns() {
+  static const std::vector<std::string> cols = {"triangles",       "edges",          "pair_tests",
+                                                "candidate_pairs", "clip_polygons",  "pieces",
+                                                "visible_pieces",  "occlusion_tests", "samples_covered",
+                                                "fragments_generated"};
+  return cols;
+}
+
+int run(const CudaArgs& a, const trace::Frame& frame, uint32_t tw, uint32_t th) {
+  cuda::CudaConfig cfg;
+  cfg.tile_w = tw;
+  cfg.tile_h = th;
+  cfg.depth_bits = a.depth_bits;
+  cfg.precision = a.precision == "float" ? cuda::Precision::floating : cuda::Precision::exact;
+  cfg.device = a.device == "cpu" ? cuda::Device::cpu : cuda::Device::gpu;
+  cfg.runs = a.runs;
+  if (cfg.device == cuda::Device::gpu) {
+    std::string why;
+    if (!cuda::cuda_available(&why)) {
+      fmt::print(stderr, "tilevis cuda: no usable CUDA GPU ({}); nothing written (--device cpu runs the kernels' "
+                         "logic on the host)\n", why);
+      return 2;
+    }
+  } else {
+    cfg.runs = std::min<uint32_t>(cfg.runs, 1);
+    cfg.warmup = 1;
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  cuda::CudaResult r = cuda::run_cuda(frame, cfg);
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  outputs::Result out;
+  out.width = r.width;
+  out.height = r.height;
+  out.samples = r.samples;
+  out.ids = std::move(r.ids);
+  out.visible_area = std::move(r.visible_area);
+  out.tiles.resize(tw, th, r.width, r.height, tile_columns());
+  if (out.tiles.rows.size() != r.tile_rows.size()) throw std::runtime_error("cuda: tile table size mismatch");
+  out.tiles.rows = std::move(r.tile_rows);
+  nlohmann::json totals = {{"triangles_in", r.triangles_in},
+                           {"triangles_front", r.triangles_front},
+                           {"triangles_back", r.triangles_back},
+                           {"triangles_degenerate", r.triangles_degenerate},
+                           {"triangles_clipped", r.triangles_clipped},
+                           {"triangles_frustum_culled", r.triangles_frustum_culled},
+                           {"silhouette_edges", r.silhouette_edges},
+                           {"pair_tests", r.pair_tests},
+                           {"candidate_pairs", r.candidate_pairs},
+                           {"clip_polygons", r.clip_polygons},
+                           {"pieces", r.pieces},
+                           {"visible_pieces", r.visible_pieces},
+                           {"visible_triangles", r.visible_triangles},
+                           {"occlusion_tests", r.occlusion_tests},
+                           {"samples_covered", r.samples_covered},
+                           {"fragments_generated", r.fragments_generated},
+                           {"fragments_shaded", r.samples_covered},
+                           {"max_tile_triangles", r.max_tile_triangles},
+                           {"max_tile_edges", r.max_tile_edges},
+                           {"max_tile_pieces", r.max_tile_pieces},
+                           {"float_anomalies", r.float_anomalies}};
+  nlohmann::json stages = nlohmann::json::object();
+  for (const auto& s : r.stage_ms) stages[s.name] = s.ms;
+  out.stats = {{"tool", "cuda"},
+               {"trace", a.trace},
+               {"frame", a.frame},
+               {"config",
+                {{"tile_w", tw},
+                 {"tile_h", th},
+                 {"samples", r.samples},
+                 {"depth_bits", a.depth_bits},
+                 {"precision", a.precision},
+                 {"device", a.device}}},
+               {"totals", totals},
+               {"device", r.device_name},
+               {"stage_ms", stages},
+               {"total_ms", r.total_ms},
+               {"timing", a.device == "gpu" ? "CUDA events, median of runs after warm-up" : "host clock (emulation)"},
+               {"runs", r.runs},
+               {"upload_ms", r.upload_ms},
+               {"download_ms", r.download_ms},
+               {"retries", r.retries},
+               {"peak_device_bytes", r.peak_device_bytes},
+               {"host_seconds", secs}};
+  outputs::write_result(out, a.out);
+  fmt::print("cuda {} frame {} at {}x{} tiles, {} on {}: {} triangles, {} silhouette edges, {} candidate pairs, "
+             "{} clips, {} pieces ({} visible); {:.3f} ms (median of {}), peak {:.1f} MiB -> {}\n",
+             a.trace, a.frame, tw, th, a.precision, r.device_name, r.triangles_in, r.silhouette_edges,
+             r.candidate_pairs, r.clip_polygons, r.pieces, r.visible_pieces, r.total_ms, r.runs,
+             double(r.peak_device_bytes) / (1 << 20), a.out);
+  for (const auto& s : r.stage_ms) fmt::print("  {:<12} {:9.3f} ms\n", s.name, s.ms);
+  return 0;
+}
+#endif
+
+}  // namespace
+
+Command add_cuda_command(CLI::App& app) {
+  auto a = std::make_shared<CudaArgs>();
+  auto* cmd = app.add_subcommand("cuda", "Run the CUDA reference implementation (cuda_ref) on a trace");
+  cmd->add_option("trace", a->trace, "Trace file")->required()->check(CLI::ExistingFile);
+  cmd->add_option("-o,--output", a->out, "Result directory")->required();
+  cmd->add_option("--tile", a->tile, "Tile size, N or WxH (4..256)")->capture_default_str();
+  cmd->add_option("--samples", a->samples, "Samples per pixel (1, 2, 4, 8, 16); default: the trace's");
+  cmd->add_option("--precision", a->precision, "exact (bit-identical to golden) or float (float32, as SVGPU)")
+      ->check(CLI::IsMember({"exact", "float"}))
+      ->capture_default_str();
+  cmd->add_option("--runs", a->runs, "Timed runs after warm-up (stage times are medians)")
+      ->check(CLI::Range(1, 10000))
+      ->capture_default_str();
+  cmd->add_option("--frame", a->frame, "Frame of the trace")->capture_default_str();
+  cmd->add_option("--depth-bits", a->depth_bits, "Bits of snapped depth")->check(CLI::Range(1, 24))->capture_default_str();
+  cmd->add_option("--device", a->device, "gpu, or cpu: the kernels' logic on the host, one element at a time")
+      ->check(CLI::IsMember({"gpu", "cpu"}))
+      ->capture_default_str();
+  return {cmd, [a]() {
+            uint32_t tw = 0, th = 0;
+            if (!parse_size(a->tile, tw, th) || tw < 4 || th < 4 || tw > 256 || th > 256)
+              throw std::runtime_error(fmt::format("--tile {}: expected N or WxH with 4 <= N <= 256", a->tile));
+#if TILEVIS_HAVE_CUDA_REF
+            trace::Trace t = trace::read(a->trace);
+            if (a->frame >= t.frames.size())
+              throw std::runtime_error(
+                  fmt::format("--frame {}: {} has {} frame(s)", a->frame, a->trace, t.frames.size()));
+            trace::Frame frame = std::move(t.frames[a->frame]);
+            if (a->samples) {
+              try {
+                frame.samples = trace::standard_samples(a->samples, frame.subpixel_bits);
+              } catch (const std::invalid_argument&) {
+                throw std::runtime_error(fmt::format("--samples {}: expected 1, 2, 4, 8 or 16", a->samples));
+              }
+            }
+            return run(*a, frame, tw, th);
+#else
+            fmt::print(stderr, "tilevis cuda: this tilevis was built without CUDA (no nvcc at configure time, or "
+                               "-DTILEVIS_CUDA=OFF); nothing written\n");
+            return 2;
+#endif
+          }};
+}
+
+}  // namespace tilevis::app

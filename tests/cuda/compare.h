@@ -1,0 +1,86 @@
+// cuda_ref against the golden pipeline: what differs, counted.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "tilevis/cuda_ref.h"
+#include "visibility/golden.h"
+#include "visibility/setup.h"
+
+namespace tilevis::cudatest {
+
+struct Diff {
+  uint64_t samples_compared = 0, id_mismatches = 0, tile_cells = 0, tile_cell_mismatches = 0, area_bit_mismatches = 0,
+           area_mismatches = 0;  // > 1e-9 relative
+  std::string first_tile_mismatch;
+  bool totals_equal = true;
+  std::string totals;
+  double agreement() const { return samples_compared ? 1.0 - double(id_mismatches) / double(samples_compared) : 1.0; }
+};
+
+inline vis::GoldenResult golden_of(const trace::Frame& f, uint32_t tile_w, uint32_t tile_h) {
+  vis::Setup s = vis::primitive_setup(f, {});
+  vis::GoldenConfig gc;
+  gc.tile_w = tile_w;
+  gc.tile_h = tile_h;
+  return vis::golden_visibility(s, gc);
+}
+
+inline Diff diff(const vis::GoldenResult& g, const cuda::CudaResult& c) {
+  Diff d;
+  for (size_t i = 0; i < g.ids.size() && i < c.ids.size(); ++i) {
+    if (g.ids[i] < 0 && c.ids[i] < 0) continue;
+    ++d.samples_compared;
+    d.id_mismatches += g.ids[i] != c.ids[i];
+  }
+  if (g.ids.size() != c.ids.size()) d.id_mismatches += 1000000000;
+  for (size_t t = 0; t < g.tiles.rows.size(); ++t)
+    for (size_t k = 0; k < g.tiles.rows[t].size(); ++k) {
+      ++d.tile_cells;
+      const int64_t cv = t < c.tile_rows.size() && k < c.tile_rows[t].size() ? c.tile_rows[t][k] : -1;
+      if (g.tiles.rows[t][k] == cv) continue;
+      if (!d.tile_cell_mismatches)
+        d.first_tile_mismatch = "tile " + std::to_string(t) + " " + g.tiles.columns[k] + ": golden " +
+                                std::to_string(g.tiles.rows[t][k]) + ", cuda " + std::to_string(cv);
+      ++d.tile_cell_mismatches;
+    }
+  for (size_t i = 0; i < g.visible_area.size() && i < c.visible_area.size(); ++i) {
+    const double x = g.visible_area[i], y = c.visible_area[i];
+    d.area_bit_mismatches += x != y;
+    const double scale = std::max(std::abs(x), std::abs(y));
+    if (scale > 0 && std::abs(x - y) / scale > 1e-9) ++d.area_mismatches;
+  }
+  auto both = [&](const char* name, uint64_t a, uint64_t b) {
+    if (a != b) {
+      d.totals_equal = false;
+      d.totals += std::string(name) + " " + std::to_string(a) + " vs " + std::to_string(b) + "; ";
+    }
+  };
+  both("pair_tests", g.pair_tests, c.pair_tests);
+  both("candidate_pairs", g.candidate_pairs, c.candidate_pairs);
+  both("clip_polygons", g.clip_polygons, c.clip_polygons);
+  both("pieces", g.pieces_total, c.pieces);
+  both("visible_pieces", g.visible_pieces, c.visible_pieces);
+  both("visible_triangles", g.visible_triangles, c.visible_triangles);
+  both("occlusion_tests", g.occlusion_tests, c.occlusion_tests);
+  both("samples_covered", g.samples_covered, c.samples_covered);
+  both("fragments_generated", g.fragments_generated, c.fragments_generated);
+  both("max_tile_triangles", g.max_tile_triangles, c.max_tile_triangles);
+  both("max_tile_edges", g.max_tile_edges, c.max_tile_edges);
+  both("max_tile_pieces", g.max_tile_pieces, c.max_tile_pieces);
+  return d;
+}
+
+inline cuda::CudaConfig config(cuda::Device device, cuda::Precision precision, uint32_t tile_w, uint32_t tile_h) {
+  cuda::CudaConfig c;
+  c.device = device;
+  c.precision = precision;
+  c.tile_w = tile_w;
+  c.tile_h = tile_h;
+  c.runs = 1;
+  c.warmup = 1;
+  return c;
+}
+
+}  // namespace tilevis::cudatest

@@ -1,0 +1,142 @@
+// cuda_ref's kernels' logic, run on the host one element at a time (Device::cpu), against the
+// golden pipeline: bit-identical ids, per-tile counters and visible areas in `exact`; the
+// `float` precision's agreement measured. No GPU needed: this is what CI and machines without
+// a device check before GPU time is spent.
+#include <gtest/gtest.h>
+
+#include "compare.h"
+#include "scenes.h"
+#if TILEVIS_HAVE_SCENE
+#include <filesystem>
+#include "tilevis/scene.h"
+#endif
+
+using namespace tilevis;
+namespace ct = tilevis::cudatest;
+
+namespace {
+
+struct Case {
+  std::string scene;
+  uint32_t tile_w, tile_h, samples;
+};
+
+std::string name_of(const ::testing::TestParamInfo<Case>& i) {
+  return i.param.scene + "_" + std::to_string(i.param.tile_w) + "x" + std::to_string(i.param.tile_h) + "_s" +
+         std::to_string(i.param.samples);
+}
+
+std::vector<Case> cases() {
+  std::vector<Case> v;
+  for (const auto& s : ct::scene_names())
+    for (uint32_t t : {16u, 32u, 64u}) v.push_back({s, t, t, 1});
+  for (const auto& s : {"cubes", "mixed", "coplanar"}) v.push_back({s, 32, 32, 4});
+  v.push_back({"cubes", 48, 8, 1});
+  v.push_back({"ground", 7, 13, 2});
+  return v;
+}
+
+class ExactEmulation : public ::testing::TestWithParam<Case> {};
+
+TEST_P(ExactEmulation, BitIdenticalToGolden) {
+  const Case& c = GetParam();
+  const trace::Frame f = ct::scene(c.scene, c.samples);
+  const auto g = ct::golden_of(f, c.tile_w, c.tile_h);
+  const auto r = cuda::run_cuda(f, ct::config(cuda::Device::cpu, cuda::Precision::exact, c.tile_w, c.tile_h));
+  const auto d = ct::diff(g, r);
+  EXPECT_GT(d.samples_compared, 0u);
+  EXPECT_EQ(d.id_mismatches, 0u);
+  EXPECT_EQ(d.tile_cell_mismatches, 0u) << d.first_tile_mismatch;
+  EXPECT_EQ(d.area_bit_mismatches, 0u);
+  EXPECT_TRUE(d.totals_equal) << d.totals;
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, ExactEmulation, ::testing::ValuesIn(cases()), name_of);
+
+TEST(Emulation, ScenesExerciseThePipeline) {
+  // The scenes are only worth comparing if they clip, split, occlude and tie.
+  const auto cubes = ct::golden_of(ct::scene("cubes"), 32, 32);
+  EXPECT_GT(cubes.clip_polygons, 20u);
+  EXPECT_GT(cubes.occlusion_tests, 100u);
+  const auto ground = vis::primitive_setup(ct::scene("ground"), {});
+  EXPECT_GT(ground.stats.clipped, 0u);
+  const auto stack = ct::golden_of(ct::scene("stack"), 32, 32);
+  EXPECT_GT(stack.pair_tests, 10000u);
+  const auto mixed = vis::primitive_setup(ct::scene("mixed"), {});
+  EXPECT_LT(mixed.silhouettes.size(), 60u);  // the soup sphere is welded: an outline, not every edge
+}
+
+TEST(Emulation, OrderIndependent) {
+  // Elements visited in a scrambled order (as a GPU may run them) give the same result.
+  for (const auto& s : {"cubes", "stack", "mixed"}) {
+    const trace::Frame f = ct::scene(s, 4);
+    auto cfg = ct::config(cuda::Device::cpu, cuda::Precision::exact, 32, 32);
+    const auto a = cuda::run_cuda(f, cfg);
+    cfg.shuffle_cpu = true;
+    const auto b = cuda::run_cuda(f, cfg);
+    EXPECT_EQ(a.ids, b.ids) << s;
+    EXPECT_EQ(a.tile_rows, b.tile_rows) << s;
+    EXPECT_EQ(a.visible_area, b.visible_area) << s;
+  }
+}
+
+TEST(Emulation, GrowAndRetryFromTinyPools) {
+  // Every overflow-checked pool starts at 4 elements: device counters report the overflow,
+  // the host grows the pools and runs again, and the result is still exact.
+  const trace::Frame f = ct::scene("cubes");
+  auto cfg = ct::config(cuda::Device::cpu, cuda::Precision::exact, 64, 64);
+  cfg.initial_pool = 4;
+  const auto r = cuda::run_cuda(f, cfg);
+  EXPECT_GT(r.retries, 0u);
+  const auto d = ct::diff(ct::golden_of(f, 64, 64), r);
+  EXPECT_EQ(d.id_mismatches, 0u);
+  EXPECT_EQ(d.tile_cell_mismatches, 0u) << d.first_tile_mismatch;
+}
+
+TEST(Emulation, FloatAgreementIsMeasured) {
+  for (const auto& s : ct::scene_names()) {
+    const trace::Frame f = ct::scene(s);
+    const auto exact = cuda::run_cuda(f, ct::config(cuda::Device::cpu, cuda::Precision::exact, 32, 32));
+    const auto fl = cuda::run_cuda(f, ct::config(cuda::Device::cpu, cuda::Precision::floating, 32, 32));
+    uint64_t compared = 0, mismatched = 0;
+    for (size_t i = 0; i < exact.ids.size(); ++i) {
+      if (exact.ids[i] < 0 && fl.ids[i] < 0) continue;
+      ++compared;
+      mismatched += exact.ids[i] != fl.ids[i];
+    }
+    ASSERT_GT(compared, 0u) << s;
+    // float32 is not exact, but on these small scenes it must be close.
+    EXPECT_GT(1.0 - double(mismatched) / double(compared), 0.99) << s;
+    EXPECT_EQ(fl.triangles_front, exact.triangles_front) << s;  // setup is shared
+  }
+}
+
+TEST(Emulation, RejectsBadConfig) {
+  const trace::Frame f = ct::scene("cubes");
+  auto cfg = ct::config(cuda::Device::cpu, cuda::Precision::exact, 0, 32);
+  EXPECT_THROW(cuda::run_cuda(f, cfg), std::runtime_error);
+  cfg = ct::config(cuda::Device::cpu, cuda::Precision::exact, 32, 32);
+  cfg.depth_bits = 40;
+  EXPECT_THROW(cuda::run_cuda(f, cfg), std::runtime_error);
+}
+
+#if TILEVIS_HAVE_SCENE
+// A shipped mesh scene (the Stanford bunny) at a small viewport, built by the scene generator.
+TEST(Emulation, ShippedBunnyAgrees) {
+  tilevis::scene::BuildOptions o;
+  o.width = 400;
+  o.height = 300;
+  o.samples = 1;
+  const trace::Frame f =
+      tilevis::scene::build_trace(std::filesystem::path(TILEVIS_SOURCE_DIR) / "traces/scenes/bunny.json", o).frames.at(0);
+  for (uint32_t tile : {16u, 64u}) {
+    const auto r = cuda::run_cuda(f, ct::config(cuda::Device::cpu, cuda::Precision::exact, tile, tile));
+    const auto d = ct::diff(ct::golden_of(f, tile, tile), r);
+    EXPECT_EQ(d.id_mismatches, 0u) << tile;
+    EXPECT_EQ(d.tile_cell_mismatches, 0u) << d.first_tile_mismatch;
+    EXPECT_EQ(d.area_bit_mismatches, 0u) << tile;
+  }
+}
+#endif
+
+}  // namespace

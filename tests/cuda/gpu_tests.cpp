@@ -1,0 +1,96 @@
+// cuda_ref on the GPU (device 0) against the golden pipeline and its own host emulation.
+// Every test skips, saying why, where no CUDA device is usable (CI, build machines).
+#include <gtest/gtest.h>
+
+#include "compare.h"
+#include "scenes.h"
+
+using namespace tilevis;
+namespace ct = tilevis::cudatest;
+
+namespace {
+
+// GTEST_SKIP returns from the test itself, so this is a macro, not a function.
+#define REQUIRE_GPU()                                                                   \
+  do {                                                                                  \
+    std::string why;                                                                    \
+    if (!cuda::cuda_available(&why)) GTEST_SKIP() << "no CUDA device (" << why << "): GPU test not run"; \
+  } while (0)
+
+class ExactGpu : public ::testing::TestWithParam<std::tuple<std::string, uint32_t, uint32_t>> {};
+
+TEST_P(ExactGpu, BitIdenticalToGolden) {
+  REQUIRE_GPU();
+  const auto& [name, tile, samples] = GetParam();
+  const trace::Frame f = ct::scene(name, samples);
+  auto cfg = ct::config(cuda::Device::gpu, cuda::Precision::exact, tile, tile);
+  cfg.runs = 3;
+  const auto r = cuda::run_cuda(f, cfg);
+  const auto d = ct::diff(ct::golden_of(f, tile, tile), r);
+  EXPECT_GT(d.samples_compared, 0u);
+  EXPECT_EQ(d.id_mismatches, 0u);
+  EXPECT_EQ(d.tile_cell_mismatches, 0u) << d.first_tile_mismatch;
+  EXPECT_EQ(d.area_bit_mismatches, 0u);
+  EXPECT_TRUE(d.totals_equal) << d.totals;
+  EXPECT_EQ(r.stage_ms.size(), 7u);
+  EXPECT_GT(r.total_ms, 0.0);
+  EXPECT_GT(r.peak_device_bytes, 0u);
+  EXPECT_FALSE(r.device_name.empty());
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, ExactGpu,
+                         ::testing::Combine(::testing::ValuesIn(ct::scene_names()), ::testing::Values(16u, 32u, 64u),
+                                            ::testing::Values(1u, 4u)));
+
+TEST(Gpu, SameAsHostEmulationInBothPrecisions) {
+  REQUIRE_GPU();
+  for (auto prec : {cuda::Precision::exact, cuda::Precision::floating}) {
+    const trace::Frame f = ct::scene("cubes", 4);
+    const auto gpu = cuda::run_cuda(f, ct::config(cuda::Device::gpu, prec, 32, 32));
+    const auto cpu = cuda::run_cuda(f, ct::config(cuda::Device::cpu, prec, 32, 32));
+    EXPECT_EQ(gpu.ids, cpu.ids);
+    EXPECT_EQ(gpu.tile_rows, cpu.tile_rows);
+    if (prec == cuda::Precision::exact) {
+      EXPECT_EQ(gpu.visible_area, cpu.visible_area);
+    }
+  }
+}
+
+TEST(Gpu, DeterministicAcrossRuns) {
+  REQUIRE_GPU();
+  const trace::Frame f = ct::scene("stack");
+  const auto a = cuda::run_cuda(f, ct::config(cuda::Device::gpu, cuda::Precision::exact, 16, 16));
+  const auto b = cuda::run_cuda(f, ct::config(cuda::Device::gpu, cuda::Precision::exact, 16, 16));
+  EXPECT_EQ(a.ids, b.ids);
+  EXPECT_EQ(a.tile_rows, b.tile_rows);
+  EXPECT_EQ(a.visible_area, b.visible_area);
+}
+
+TEST(Gpu, GrowAndRetryFromTinyPools) {
+  REQUIRE_GPU();
+  const trace::Frame f = ct::scene("cubes");
+  auto cfg = ct::config(cuda::Device::gpu, cuda::Precision::exact, 64, 64);
+  cfg.initial_pool = 4;
+  const auto r = cuda::run_cuda(f, cfg);
+  EXPECT_GT(r.retries, 0u);
+  const auto d = ct::diff(ct::golden_of(f, 64, 64), r);
+  EXPECT_EQ(d.id_mismatches, 0u);
+  EXPECT_EQ(d.tile_cell_mismatches, 0u) << d.first_tile_mismatch;
+}
+
+TEST(Gpu, FloatAgreementIsMeasured) {
+  REQUIRE_GPU();
+  const trace::Frame f = ct::scene("cubes");
+  const auto exact = cuda::run_cuda(f, ct::config(cuda::Device::gpu, cuda::Precision::exact, 32, 32));
+  const auto fl = cuda::run_cuda(f, ct::config(cuda::Device::gpu, cuda::Precision::floating, 32, 32));
+  uint64_t compared = 0, mismatched = 0;
+  for (size_t i = 0; i < exact.ids.size(); ++i) {
+    if (exact.ids[i] < 0 && fl.ids[i] < 0) continue;
+    ++compared;
+    mismatched += exact.ids[i] != fl.ids[i];
+  }
+  ASSERT_GT(compared, 0u);
+  EXPECT_GT(1.0 - double(mismatched) / double(compared), 0.99);
+}
+
+}  // namespace

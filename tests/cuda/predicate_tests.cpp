@@ -1,0 +1,175 @@
+// cuda_ref's exact arithmetic against model/geom's, on the host: the two are independent
+// implementations of the same predicates, so any decision (or rounding) they disagree on is
+// a bug in one of them. Random inputs over the whole coordinate range, plus the adversarial
+// ones where filters must fall back to exact arithmetic (points on lines, coplanar planes).
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "geom/clip.h"
+#include "geom/depth.h"
+#include "geom/fixed.h"
+#include "geom/polygon.h"
+#include "geom/predicates.h"
+#include "poly.cuh"
+
+namespace g = tilevis::geom;
+namespace c = tilevis::cuda;
+
+namespace {
+
+std::mt19937_64 rng(20261122);
+
+int32_t coord(int32_t lim = (1 << 23) - 1) { return std::uniform_int_distribution<int32_t>(-lim, lim)(rng); }
+uint32_t depth() { return std::uniform_int_distribution<uint32_t>(0, (1u << 24) - 1)(rng); }
+
+g::Line gline(const c::ILine& l) { return {l.a, l.b, l.c}; }
+g::ImplicitPoint gpoint(const c::exact::IPoint& p) { return {p.x, p.y, p.w}; }
+
+template <int L>
+g::WideInt<L> gwide(const c::Wide<L>& w) {
+  g::WideInt<L> r{};
+  for (int i = 0; i < L; ++i) r.limb[i] = w.limb[i];
+  return r;
+}
+
+TEST(CudaPredicates, WideToDoubleRoundsLikeGeom) {
+  for (int k = 0; k < 200000; ++k) {
+    c::Wide<5> w;
+    const int top = int(rng() % 5);
+    for (int i = 0; i < 5; ++i) w.limb[i] = i <= top ? rng() : 0;
+    if (k % 3 == 0) {  // a tie: 54 significant bits ending in 1, nothing below
+      const int shift = int(rng() % 200);
+      w = c::Wide<5>::of(int64_t((rng() >> 10) | 1));
+      for (int s = 0; s < shift; ++s) w = w + w;
+    }
+    if (k % 2) w = -w;
+    ASSERT_EQ(w.to_double(), gwide(w).to_double()) << k;
+  }
+}
+
+TEST(CudaPredicates, Int128ToDoubleIsCorrectlyRounded) {
+  for (int k = 0; k < 200000; ++k) {
+    c::I128 v = static_cast<c::I128>((static_cast<c::U128>(rng()) << 64) | rng());
+    v >>= int(rng() % 127);
+    if (k % 4 == 0) v = (v | 1) << int(rng() % 60);
+    ASSERT_EQ(c::i128_to_double(v), static_cast<double>(v)) << k;
+  }
+}
+
+TEST(CudaPredicates, SnapDepthMatchesGeom) {
+  std::uniform_real_distribution<double> u(-0.1, 1.1);
+  for (int k = 0; k < 200000; ++k) {
+    double z = u(rng);
+    const uint32_t bits = 1 + uint32_t(rng() % 32);
+    if (k % 5 == 0) z = (double(rng() % ((uint64_t{1} << bits) - 1)) + 0.5) / double((uint64_t{1} << bits) - 1);
+    ASSERT_EQ(c::snap_depth(z, bits), g::snap_depth(z, int(bits))) << z << " " << bits;
+  }
+}
+
+TEST(CudaPredicates, SidesOfImplicitAndRationalPoints) {
+  for (int k = 0; k < 50000; ++k) {
+    const c::Pt p[6] = {{coord(), coord()}, {coord(), coord()}, {coord(), coord()},
+                        {coord(), coord()}, {coord(), coord()}, {coord(), coord()}};
+    const c::ILine l1 = c::ILine::through(p[0], p[1]), l2 = c::ILine::through(p[2], p[3]), l3 = c::ILine::through(p[4], p[5]);
+    const auto q = c::exact::intersect(l1, l2);
+    if (q.w == 0) continue;
+    const auto gq = g::intersect(gline(l1), gline(l2));
+    ASSERT_EQ(gq.x, q.x);
+    ASSERT_EQ(gq.w, q.w);
+    ASSERT_EQ(c::exact::side(l3, q), g::side(gline(l3), gq));
+    ASSERT_EQ(c::exact::side(l1, q), 0);  // on its own line: exactly
+    const auto q2 = c::exact::intersect(l2, l3), q3 = c::exact::intersect(l3, l1);
+    if (q2.w == 0 || q3.w == 0) continue;
+    const auto r = c::exact::centroid(q, q2, q3);
+    const auto gr = g::centroid(gq, gpoint(q2), gpoint(q3));
+    ASSERT_EQ(r.fx, gr.fx);
+    ASSERT_EQ(r.fw, gr.fw);
+    const c::ILine l4 = c::ILine::through(p[k % 6], p[(k + 1) % 6]);
+    ASSERT_EQ(c::exact::side(l4, r), g::side(gline(l4), gr));
+  }
+}
+
+TEST(CudaPredicates, DepthOrdersAgreeIncludingTies) {
+  for (int k = 0; k < 30000; ++k) {
+    c::Vtx a[3], b[3];
+    for (auto& v : a) v = {coord(1 << 20), coord(1 << 20), depth()};
+    for (auto& v : b) v = {coord(1 << 20), coord(1 << 20), depth()};
+    if (k % 3 == 0) b[0] = a[0], b[1] = a[1], b[2] = a[2];  // coplanar: every order is a tie
+    const auto pa = c::exact::plane_of(a[0], a[1], a[2]), pb = c::exact::plane_of(b[0], b[1], b[2]);
+    const g::Triangle ta{{g::Vertex{a[0].x, a[0].y, a[0].z}, g::Vertex{a[1].x, a[1].y, a[1].z}, g::Vertex{a[2].x, a[2].y, a[2].z}}};
+    const g::Triangle tb{{g::Vertex{b[0].x, b[0].y, b[0].z}, g::Vertex{b[1].x, b[1].y, b[1].z}, g::Vertex{b[2].x, b[2].y, b[2].z}}};
+    const auto ga = g::DepthPlane::from(ta), gb = g::DepthPlane::from(tb);
+    if (pa.area == 0 || pb.area == 0) continue;
+    ASSERT_EQ(pa.alpha, ga.alpha);
+    ASSERT_EQ(pa.gamma, ga.gamma);
+    ASSERT_EQ(pa.fgamma, ga.fgamma);
+    const c::ILine l1 = c::ILine::through(a[0].xy(), b[1].xy()), l2 = c::ILine::through(a[2].xy(), b[0].xy());
+    const c::ILine l3 = c::ILine::through(a[1].xy(), b[2].xy());
+    const auto q1 = c::exact::intersect(l1, l2), q2 = c::exact::intersect(l2, l3), q3 = c::exact::intersect(l3, l1);
+    if (q1.w == 0 || q2.w == 0 || q3.w == 0) continue;
+    const auto r = c::exact::centroid(q1, q2, q3);
+    const auto gr = g::centroid(gpoint(q1), gpoint(q2), gpoint(q3));
+    const int o = c::exact::depth_order(pa, pb, r);
+    ASSERT_EQ(o, g::depth_order(ga, gb, gr));
+    if (k % 3 == 0) {
+      ASSERT_EQ(o, 0);
+    }
+    ASSERT_EQ(c::exact::depth_order(pa, b[0].xy(), b[0].z), g::depth_order(ga, g::Point{b[0].x, b[0].y}, b[0].z));
+    // Test 3: a point on segment a0-b1's line (its intersection with l2).
+    ASSERT_EQ(c::exact::depth_order_edge(pa, a[0], b[1], q1),
+              g::depth_order_edge(ga, g::Vertex{a[0].x, a[0].y, a[0].z}, g::Vertex{b[1].x, b[1].y, b[1].z}, gpoint(q1)));
+  }
+}
+
+TEST(CudaPredicates, SplitKeepsGeomsCanonicalOrderAndRepresentation) {
+  using E = c::PEdge<c::ExactP>;
+  for (int k = 0; k < 20000; ++k) {
+    const int32_t lim = 1 << (10 + k % 13);
+    const c::Vtx v0{coord(lim), coord(lim), 0}, v1{coord(lim), coord(lim), 0}, v2{coord(lim), coord(lim), 0};
+    if (c::orient2d(v0.xy(), v1.xy(), v2.xy()) == 0) continue;
+    const auto tt = c::make_tile_tri<c::ExactP>(v0, v1, v2, 0, true);
+    const int32_t x0 = coord(lim), y0 = coord(lim);
+    const c::Rect rect{x0, y0, x0 + 1 + int32_t(rng() % uint64_t(lim)), y0 + 1 + int32_t(rng() % uint64_t(lim))};
+    E poly[c::kTileCap];
+    bool overflow = false;
+    const uint32_t n = c::tile_polygon<c::ExactP>(tt, rect, poly, overflow);
+    const g::ConvexPolygon gp = g::clip_to_rect(g::ConvexPolygon::from_triangle(g::Point{v0.x, v0.y}, g::Point{v1.x, v1.y},
+                                                                                g::Point{v2.x, v2.y}),
+                                                g::Rect{rect.x0, rect.y0, rect.x1, rect.y1});
+    ASSERT_EQ(n, gp.size());
+    if (n == 0) continue;
+    for (uint32_t i = 0; i < n; ++i) {
+      ASSERT_EQ(gline(poly[i].line), gp.line(i));
+      ASSERT_EQ(poly[i].start.x, gp.vertex(i).x);
+      ASSERT_EQ(poly[i].start.w, gp.vertex(i).w);
+    }
+    const c::ILine l = c::ILine::through({coord(lim), coord(lim)}, {coord(lim), coord(lim)});
+    bool pos, neg;
+    c::line_sides<c::ExactP>(poly, n, l, pos, neg);
+    ASSERT_EQ(pos && neg, g::classify(gp, gline(l)) == g::LineRelation::crosses);
+    if (!pos || !neg) continue;
+    E in_e[16], out_e[16];
+    c::PolyOut<c::ExactP> in{in_e, 0, 16, false}, out{out_e, 0, 16, false};
+    c::split<c::ExactP>(poly, n, l, in, out);
+    const auto gs = g::split(gp, gline(l));
+    ASSERT_EQ(in.n, gs.inside.size());
+    ASSERT_EQ(out.n, gs.outside.size());
+    for (uint32_t i = 0; i < in.n; ++i) {
+      ASSERT_EQ(gline(in_e[i].line), gs.inside.line(i));
+      ASSERT_EQ(in_e[i].start.y, gs.inside.vertex(i).y);
+      ASSERT_EQ(in_e[i].start.w, gs.inside.vertex(i).w);
+    }
+    for (uint32_t i = 0; i < out.n; ++i) {
+      ASSERT_EQ(gline(out_e[i].line), gs.outside.line(i));
+      ASSERT_EQ(out_e[i].start.x, gs.outside.vertex(i).x);
+    }
+    ASSERT_EQ(c::doubled_area<c::ExactP>(in_e, in.n), g::doubled_area(gs.inside));
+    const c::Rect b = c::bounding_box<c::ExactP>(out_e, out.n);
+    const g::Rect gb = g::bounding_box(gs.outside);
+    ASSERT_EQ(b.x0, gb.x0);
+    ASSERT_EQ(b.y1, gb.y1);
+  }
+}
+
+}  // namespace

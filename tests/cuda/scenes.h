@@ -1,0 +1,39 @@
+// Small test frames built in-process, without the scene generator (so the cuda tests also
+// build in TILEVIS_MINIMAL configurations on GPU machines): boxes, spheres, quads and a ground
+// plane through a perspective camera, as clip-space trace draws.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "tilevis/trace.h"
+
+namespace tilevis::cudatest {
+
+struct Mat4 {
+  float m[16];  // column-major, OpenGL conventions
+};
+
+Mat4 look_at_perspective(const float eye[3], const float target[3], float fov_y_deg, float aspect, float near, float far);
+
+struct MeshBuilder {
+  std::vector<float> pos;        // xyz
+  std::vector<uint32_t> index;   // counter-clockwise seen from outside
+  void box(const float c[3], const float half[3], float rot_y_deg);
+  void sphere(const float c[3], float r, int segments, int rings);
+  void quad(const float c[3], float w, float h);  // facing +z
+  void plane(float y, float half, int subdivisions);  // facing +y
+};
+
+trace::Draw make_draw(const std::string& name, const MeshBuilder& m, const Mat4& mvp, uint32_t flags = 0);
+
+// Named test scenes (320x240 unless said otherwise). Each exercises something:
+//   "cubes"      boxes, a sphere and cards over a floor (clips, occlusion, silhouettes)
+//   "ground"     a ground plane through the near plane (clip-space clipping, fans, boundaries)
+//   "stack"      cards one behind another, back to front (many edges per tile, the test-6 break)
+//   "mixed"      a blended draw, a depth-writing draw and a soup draw among opaque ones
+//   "coplanar"   two coplanar overlapping cards (equal-depth ties: the earlier triangle wins)
+trace::Frame scene(const std::string& name, uint32_t samples = 1);
+std::vector<std::string> scene_names();
+
+}  // namespace tilevis::cudatest
