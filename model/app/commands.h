@@ -17,6 +17,7 @@ Command add_trace_command(CLI::App& app);
 Command add_info_command(CLI::App& app);
 Command add_compare_command(CLI::App& app);
 Command add_golden_command(CLI::App& app);
+Command add_sim_command(CLI::App& app);
 Command add_cuda_command(CLI::App& app);
 
 // Parses "WxH" or "N" (square).

@@ -13,6 +13,7 @@ int main(int argc, char** argv) {
       tilevis::app::add_trace_command(app),
       tilevis::app::add_info_command(app),
       tilevis::app::add_golden_command(app),
+      tilevis::app::add_sim_command(app),
       tilevis::app::add_compare_command(app),
       tilevis::app::add_cuda_command(app),
   };

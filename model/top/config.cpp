@@ -1,0 +1,276 @@
+#include "top/config.h"
+
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <map>
+#include <sstream>
+
+namespace tilevis::sim {
+namespace {
+
+struct Param {
+  std::string name, unit, help;
+  std::function<nlohmann::json(const TilerConfig&)> get;
+  // Sets the value or returns what was expected.
+  std::function<std::string(TilerConfig&, const nlohmann::json&)> set;
+};
+
+template <typename T>
+std::string fmt_range(T lo, T hi) {
+  std::ostringstream os;
+  os << "[" << lo << ", " << hi << "]";
+  return os.str();
+}
+
+class Registry {
+ public:
+  static const Registry& get() {
+    static const Registry r;
+    return r;
+  }
+  const Param* find(const std::string& name) const {
+    auto it = m_index.find(name);
+    return it == m_index.end() ? nullptr : &m_params[it->second];
+  }
+  const std::vector<Param>& params() const { return m_params; }
+
+ private:
+  template <typename T>
+  void add_uint(std::string name, std::string unit, std::string help, uint64_t lo, uint64_t hi,
+                T& (*field)(TilerConfig&)) {
+    const std::string expect = "an integer in " + fmt_range(lo, hi);
+    m_params.push_back({name, unit, help, [field](const TilerConfig& c) { return nlohmann::json(field(const_cast<TilerConfig&>(c))); },
+                        [field, lo, hi, expect](TilerConfig& c, const nlohmann::json& v) -> std::string {
+                          if (!v.is_number_integer() && !v.is_number_unsigned()) return expect;
+                          if (v.is_number_integer() && v.get<int64_t>() < 0) return expect;
+                          const uint64_t x = v.get<uint64_t>();
+                          if (x < lo || x > hi) return expect;
+                          field(c) = T(x);
+                          return {};
+                        }});
+    m_index[name] = m_params.size() - 1;
+  }
+  void add_real(std::string name, std::string unit, std::string help, double lo, double hi,
+                double& (*field)(TilerConfig&)) {
+    const std::string expect = "a number in " + fmt_range(lo, hi);
+    m_params.push_back({name, unit, help, [field](const TilerConfig& c) { return nlohmann::json(field(const_cast<TilerConfig&>(c))); },
+                        [field, lo, hi, expect](TilerConfig& c, const nlohmann::json& v) -> std::string {
+                          if (!v.is_number()) return expect;
+                          const double x = v.get<double>();
+                          if (!(x >= lo && x <= hi)) return expect;
+                          field(c) = x;
+                          return {};
+                        }});
+    m_index[name] = m_params.size() - 1;
+  }
+  template <typename E>
+  void add_enum(std::string name, std::string help, std::vector<E> values, E& (*field)(TilerConfig&)) {
+    std::string expect = "one of";
+    for (size_t i = 0; i < values.size(); ++i) expect += std::string(i ? ", " : " ") + to_string(values[i]);
+    m_params.push_back({name, "", help, [field](const TilerConfig& c) { return nlohmann::json(to_string(field(const_cast<TilerConfig&>(c)))); },
+                        [field, values, expect](TilerConfig& c, const nlohmann::json& v) -> std::string {
+                          if (!v.is_string()) return expect;
+                          for (E e : values)
+                            if (v.get<std::string>() == to_string(e)) {
+                              field(c) = e;
+                              return {};
+                            }
+                          return expect;
+                        }});
+    m_index[name] = m_params.size() - 1;
+  }
+
+  Registry();
+  std::vector<Param> m_params;
+  std::map<std::string, size_t> m_index;
+};
+
+constexpr uint64_t kMaxU32 = std::numeric_limits<uint32_t>::max();
+
+#define TV_UINT(name, field, unit, lo, hi, help) \
+  add_uint(name, unit, help, lo, hi, +[](TilerConfig& c) -> auto& { return c.field; })
+#define TV_REAL(name, field, unit, lo, hi, help) \
+  add_real(name, unit, help, lo, hi, +[](TilerConfig& c) -> double& { return c.field; })
+
+Registry::Registry() {
+  add_enum<Fidelity>("sim.fidelity", "analytic: closed form per tile; tile: one transaction per tile per unit; "
+                     "primitive: per-primitive transactions, FIFO back-pressure, memory contention",
+                     {Fidelity::analytic, Fidelity::tile, Fidelity::primitive},
+                     +[](TilerConfig& c) -> Fidelity& { return c.sim.fidelity; });
+  add_enum<Mode>("sim.mode", "visibility: analytic (EVU), hsr (per-pixel HSR unit), early_z, none",
+                 {Mode::analytic, Mode::hsr, Mode::early_z, Mode::none}, +[](TilerConfig& c) -> Mode& { return c.sim.mode; });
+  TV_UINT("sim.tile_width", sim.tile_width, "pixels", 4, 256, "tile width");
+  TV_UINT("sim.tile_height", sim.tile_height, "pixels", 4, 256, "tile height");
+  TV_UINT("sim.depth_bits", sim.depth_bits, "bits", 1, 24, "bits of snapped depth");
+  TV_REAL("sim.clock_mhz", sim.clock_mhz, "MHz", 1.0, 10000.0, "GPU clock; every latency below is in its cycles");
+  TV_UINT("sim.batch_triangles", sim.batch_triangles, "triangles", 1, kMaxU32, "geometry transaction size at fidelity tile");
+  TV_UINT("sim.fifo_tiles", sim.fifo_tiles, "tiles", 1, 1024, "queue depth between render units at fidelity tile");
+  TV_UINT("sim.fifo_primitives", sim.fifo_primitives, "items", 1, 1u << 20, "queue depth between units at fidelity primitive");
+
+  TV_UINT("memory.bytes_per_cycle", memory.bytes_per_cycle, "bytes/cycle", 1, 4096, "DRAM data bus bandwidth");
+  TV_UINT("memory.latency_cycles", memory.latency_cycles, "cycles", 0, 100000, "DRAM read latency");
+  TV_UINT("framebuffer.colour_bytes", framebuffer.colour_bytes, "bytes", 1, 16, "colour per sample");
+  TV_UINT("framebuffer.depth_bytes", framebuffer.depth_bytes, "bytes", 1, 8, "depth/stencil per sample");
+
+  TV_UINT("front_end.vertex_cache_entries", front_end.vertex_cache_entries, "vertices", 1, 1u << 20, "post-transform vertex cache (FIFO)");
+  TV_UINT("front_end.index_bytes", front_end.index_bytes, "bytes", 1, 8, "bytes per index");
+  TV_UINT("front_end.position_bytes", front_end.position_bytes, "bytes", 1, 64, "bytes per fetched clip-space position");
+  TV_UINT("front_end.vertices_per_clock", front_end.vertices_per_clock, "vertices/cycle", 1, 64, "vertex fetch rate");
+  TV_UINT("front_end.latency_cycles", front_end.latency_cycles, "cycles", 0, 100000, "pipeline depth, once per segment");
+
+  TV_UINT("setup.triangles_per_clock", setup.triangles_per_clock, "triangles/cycle", 1, 64, "setup rate");
+  TV_UINT("setup.clip_cycles", setup.clip_cycles, "cycles", 0, 100000, "extra cycles per triangle a clip plane cuts");
+  TV_UINT("setup.latency_cycles", setup.latency_cycles, "cycles", 0, 100000, "pipeline depth, once per segment");
+
+  TV_UINT("silhouette.hash_entries", silhouette.hash_entries, "entries", 1, 1u << 28, "on-chip edge hash capacity; beyond it entries spill to memory");
+  TV_UINT("silhouette.entry_bytes", silhouette.entry_bytes, "bytes", 1, 256, "bytes per spilled entry");
+  TV_UINT("silhouette.edges_per_clock", silhouette.edges_per_clock, "edges/cycle", 1, 64, "hash look-up rate");
+  TV_UINT("silhouette.latency_cycles", silhouette.latency_cycles, "cycles", 0, 100000, "pipeline depth, once per segment");
+
+  TV_UINT("tiling.tile_tests_per_clock", tiling.tile_tests_per_clock, "tests/cycle", 1, 1024, "exact primitive/tile overlap tests");
+  TV_UINT("tiling.latency_cycles", tiling.latency_cycles, "cycles", 0, 100000, "pipeline depth, once per segment");
+
+  TV_UINT("pb.capacity_bytes", pb.capacity_bytes, "bytes", 1, uint64_t(1) << 40, "parameter buffer size; a full buffer forces a partial render");
+  TV_UINT("pb.triangle_bytes", pb.triangle_bytes, "bytes", 1, 1024, "primitive block entry per triangle");
+  TV_UINT("pb.vertex_bytes", pb.vertex_bytes, "bytes", 1, 1024, "screen-space vertex (plus the draw's varyings)");
+  TV_UINT("pb.reference_bytes", pb.reference_bytes, "bytes", 1, 64, "control-stream entry per tile per primitive");
+  TV_UINT("pb.edge_bytes", pb.edge_bytes, "bytes", 1, 1024, "silhouette edge record");
+
+  TV_UINT("fetch.primitives_per_clock", fetch.primitives_per_clock, "primitives/cycle", 1, 64, "records parsed per clock");
+  TV_UINT("fetch.edges_per_clock", fetch.edges_per_clock, "edges/cycle", 1, 64, "edge records per clock");
+  TV_UINT("fetch.latency_cycles", fetch.latency_cycles, "cycles", 0, 100000, "per tile");
+
+  TV_UINT("evu.reject.lanes", evu.reject.lanes, "lanes", 1, 1024, "pair tests issued together");
+  TV_UINT("evu.reject.ii", evu.reject.ii, "cycles", 1, 1024, "initiation interval");
+  TV_UINT("evu.reject.latency_cycles", evu.reject.latency_cycles, "cycles", 0, 100000, "pipeline depth, per tile");
+  TV_UINT("evu.clip.lanes", evu.clip.lanes, "lanes", 1, 1024, "splits issued together");
+  TV_UINT("evu.clip.ii", evu.clip.ii, "cycles", 1, 1024, "initiation interval");
+  TV_UINT("evu.clip.latency_cycles", evu.clip.latency_cycles, "cycles", 0, 100000, "pipeline depth, per tile");
+  TV_UINT("evu.occlude.lanes", evu.occlude.lanes, "lanes", 1, 1024, "containment tests issued together");
+  TV_UINT("evu.occlude.ii", evu.occlude.ii, "cycles", 1, 1024, "initiation interval");
+  TV_UINT("evu.occlude.latency_cycles", evu.occlude.latency_cycles, "cycles", 0, 100000, "pipeline depth, per tile");
+  TV_UINT("evu.triangle_list_entries", evu.triangle_list_entries, "triangles", 1, 1u << 24, "on-chip triangle list; longer lists take passes");
+  TV_UINT("evu.edge_list_entries", evu.edge_list_entries, "edges", 1, 1u << 24, "on-chip edge list; longer lists take passes");
+  TV_UINT("evu.pass_overhead_cycles", evu.pass_overhead_cycles, "cycles", 0, 100000, "pipeline refill per extra pass");
+
+  TV_UINT("hsr.samples_per_clock", hsr.samples_per_clock, "samples/cycle", 1, 4096, "depth tests per clock");
+  TV_UINT("hsr.triangles_per_clock", hsr.triangles_per_clock, "triangles/cycle", 1, 64, "triangle setup rate");
+  TV_UINT("hsr.latency_cycles", hsr.latency_cycles, "cycles", 0, 100000, "per tile");
+
+  TV_UINT("fragment.raster_samples_per_clock", fragment.raster_samples_per_clock, "samples/cycle", 1, 4096, "rasteriser output");
+  TV_UINT("fragment.depth_tests_per_clock", fragment.depth_tests_per_clock, "samples/cycle", 1, 4096, "early depth tests");
+  TV_UINT("fragment.shader_lanes", fragment.shader_lanes, "lanes", 1, 65536, "shader ALU lanes (trace cycles per fragment are per lane)");
+  TV_REAL("fragment.texture_hit_rate", fragment.texture_hit_rate, "ratio", 0.0, 1.0, "texture bytes served by the texture cache");
+  TV_UINT("fragment.latency_cycles", fragment.latency_cycles, "cycles", 0, 100000, "per tile");
+
+  TV_UINT("writer.pixels_per_clock", writer.pixels_per_clock, "pixels/cycle", 1, 4096, "tile write-out rate");
+  TV_UINT("writer.latency_cycles", writer.latency_cycles, "cycles", 0, 100000, "per tile");
+}
+
+#undef TV_UINT
+#undef TV_REAL
+
+// Nested objects flatten to dotted keys: {"evu": {"reject": {"lanes": 8}}} -> evu.reject.lanes.
+void flatten(const nlohmann::json& j, const std::string& prefix, std::vector<std::pair<std::string, nlohmann::json>>& out) {
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    const std::string key = prefix.empty() ? it.key() : prefix + "." + it.key();
+    if (it->is_object()) flatten(*it, key, out);
+    else out.emplace_back(key, *it);
+  }
+}
+
+size_t distance(const std::string& a, const std::string& b) {
+  std::vector<size_t> d(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) d[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t prev = d[0];
+    d[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const size_t cur = d[j];
+      d[j] = std::min({d[j] + 1, d[j - 1] + 1, prev + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      prev = cur;
+    }
+  }
+  return d[b.size()];
+}
+
+std::string unknown(const std::string& key) {
+  std::string best;
+  size_t best_d = 4;
+  for (const Param& p : Registry::get().params()) {
+    const size_t d = distance(key, p.name);
+    if (d < best_d) best_d = d, best = p.name;
+  }
+  return "unknown parameter" + (best.empty() ? std::string(" (see --list-params)") : " (did you mean " + best + "?)");
+}
+
+void apply(TilerConfig& c, const std::string& where, const std::string& key, const nlohmann::json& v) {
+  const Param* p = Registry::get().find(key);
+  if (!p) throw ConfigError(where + ": " + key + ": " + unknown(key));
+  const std::string expected = p->set(c, v);
+  if (!expected.empty()) throw ConfigError(where + ": " + key + ": expected " + expected + ", got " + v.dump());
+}
+
+}  // namespace
+
+TilerConfig load_config(const std::string& file, const std::vector<std::string>& overrides) {
+  TilerConfig c;
+  if (!file.empty()) {
+    std::ifstream in(file);
+    if (!in) throw ConfigError(file + ": cannot open");
+    nlohmann::json j;
+    try {
+      j = nlohmann::json::parse(in);
+    } catch (const nlohmann::json::parse_error& e) {
+      throw ConfigError(file + ": byte " + std::to_string(e.byte) + ": expected JSON (" + e.what() + ")");
+    }
+    if (!j.is_object()) throw ConfigError(file + ": $: expected an object of parameters");
+    std::vector<std::pair<std::string, nlohmann::json>> flat;
+    flatten(j, "", flat);
+    for (const auto& [k, v] : flat) apply(c, file + ": $", k, v);
+  }
+  for (const std::string& o : overrides) {
+    const size_t eq = o.find('=');
+    if (eq == std::string::npos || eq == 0) throw ConfigError("-p " + o + ": expected key=value");
+    const std::string key = o.substr(0, eq), text = o.substr(eq + 1);
+    nlohmann::json v = nlohmann::json::parse(text, nullptr, false);
+    if (v.is_discarded()) v = text;  // bare words: enum values
+    apply(c, "-p " + o, key, v);
+  }
+  return c;
+}
+
+nlohmann::json to_json(const TilerConfig& c) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const Param& p : Registry::get().params()) {
+    nlohmann::json* node = &j;
+    std::string rest = p.name;
+    for (size_t dot; (dot = rest.find('.')) != std::string::npos; rest = rest.substr(dot + 1))
+      node = &(*node)[rest.substr(0, dot)];
+    (*node)[rest] = p.get(c);
+  }
+  return j;
+}
+
+std::string list_params() {
+  const TilerConfig defaults;
+  std::ostringstream os;
+  size_t w = 0;
+  for (const Param& p : Registry::get().params()) w = std::max(w, p.name.size());
+  for (const Param& p : Registry::get().params()) {
+    std::string def = p.get(defaults).dump();
+    if (def.size() > 2 && def.front() == '"') def = def.substr(1, def.size() - 2);
+    os << p.name << std::string(w + 2 - p.name.size(), ' ') << def << std::string(def.size() < 12 ? 12 - def.size() : 1, ' ')
+       << (p.unit.empty() ? "-" : p.unit) << "  " << p.help << '\n';
+  }
+  return os.str();
+}
+
+std::vector<std::string> param_names() {
+  std::vector<std::string> v;
+  for (const Param& p : Registry::get().params()) v.push_back(p.name);
+  return v;
+}
+
+}  // namespace tilevis::sim

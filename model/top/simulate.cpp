@@ -1,0 +1,143 @@
+#include "top/simulate.h"
+
+#include <chrono>
+#include <cstdlib>
+#include <fstream>
+
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfOutputFile.h>
+
+#include "top/tiler.h"
+
+namespace tilevis::sim {
+namespace {
+
+std::vector<std::string>* g_reports = nullptr;
+
+// Every warning or error SystemC raises is kept (tests fail on any); errors still throw.
+void report_handler(const sc_core::sc_report& r, const sc_core::sc_actions& actions) {
+  if (r.get_severity() >= sc_core::SC_WARNING && g_reports)
+    g_reports->push_back(std::string(r.get_msg_type()) + ": " + r.get_msg());
+  sc_core::sc_report_handler::default_handler(r, actions & ~sc_core::SC_DISPLAY);
+}
+
+nlohmann::json units_json(const Tiler& t) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const StatsGroup* g : t.stats_groups()) {
+    std::string name = g->name();
+    if (name.rfind("tiler.", 0) == 0) name = name.substr(6);
+    j[name] = g->to_json();
+  }
+  return j;
+}
+
+}  // namespace
+
+SimOutput simulate(const trace::Frame& frame, const TilerConfig& config, const SimOptions& options) {
+  SimOutput out;
+  const auto t0 = std::chrono::steady_clock::now();
+  setenv("SYSTEMC_DISABLE_COPYRIGHT_MESSAGE", "1", 1);
+  g_reports = &out.systemc_reports;
+  sc_core::sc_report_handler::set_handler(report_handler);
+
+  FrameWorkConfig fc;
+  fc.mode = config.sim.mode;
+  fc.tile_w = config.sim.tile_width;
+  fc.tile_h = config.sim.tile_height;
+  fc.depth_bits = config.sim.depth_bits;
+  fc.evu_triangle_entries = config.evu.triangle_list_entries;
+  fc.evu_edge_entries = config.evu.edge_list_entries;
+  FrameWork work(frame, fc);
+  const bool event_driven = config.sim.fidelity != Fidelity::analytic;
+  Tiler tiler("tiler", config, work, event_driven && !options.vcd.empty());
+  tiler.prepare();
+
+  if (event_driven) {
+    sc_core::sc_trace_file* tf = nullptr;
+    if (!options.vcd.empty()) {
+      std::string base = options.vcd;
+      if (base.size() > 4 && base.substr(base.size() - 4) == ".vcd") base.resize(base.size() - 4);
+      tf = sc_core::sc_create_vcd_trace_file(base.c_str());
+      tf->set_time_unit(1, sc_core::SC_PS);
+      tiler.trace(tf);
+    }
+    sc_core::sc_start();
+    if (tf) sc_core::sc_close_vcd_trace_file(tf);
+    if (!tiler.frame_done())
+      throw std::logic_error("the simulation ran out of events before the frame was written (a deadlock in the model)");
+    out.cycles = tiler.simulated_cycles();
+  } else {
+    out.cycles = tiler.run_analytic();
+  }
+  work.finish();
+  g_reports = nullptr;
+  out.host_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  outputs::Result& r = out.result;
+  r.width = frame.width;
+  r.height = frame.height;
+  r.samples = uint32_t(frame.samples.size());
+  r.ids = work.ids();
+  r.visible_area = work.visible_area();
+  r.tiles = work.tile_table();
+  nlohmann::json totals = work.totals();
+  totals["cycles"] = out.cycles;
+  totals["param_buffer_bytes"] = tiler.param_buffer_bytes();
+  totals["param_buffer_peak_bytes"] = tiler.param_buffer_peak();
+  totals["dram_bytes"] = tiler.dram_bytes();
+  totals["evu_busy_cycles"] = tiler.evu_busy_cycles();
+  const double seconds = double(out.cycles) / (config.sim.clock_mhz * 1e6);
+  r.stats = {{"tool", "sim"},
+             {"trace", options.trace_name},
+             {"frame", options.frame_index},
+             {"fidelity", to_string(config.sim.fidelity)},
+             {"mode", to_string(config.sim.mode)},
+             {"config", to_json(config)},
+             {"totals", totals},
+             {"frame_seconds_at_clock", seconds},
+             {"units", units_json(tiler)},
+             {"triangles", work.triangle_accounts()},
+             {"systemc_reports", out.systemc_reports},
+             {"host_seconds", out.host_seconds}};
+  return out;
+}
+
+void write_sim_outputs(const SimOutput& out, const std::filesystem::path& dir) {
+  std::filesystem::create_directories(dir);
+  std::filesystem::remove(dir / "stats.json");
+  {
+    std::ofstream c(dir / "config.json");
+    c << out.result.stats.at("config").dump(2) << '\n';
+    if (!c) throw std::runtime_error((dir / "config.json").string() + ": write failed");
+  }
+  // Per-tile cycles heatmap: one pixel per tile, a FLOAT channel per cycles column.
+  const outputs::TileTable& t = out.result.tiles;
+  if (!t.rows.empty()) {
+    std::vector<size_t> cols;
+    for (size_t c = 0; c < t.columns.size(); ++c)
+      if (t.columns[c].rfind("cycles_", 0) == 0 || t.columns[c] == "tile_cycles") cols.push_back(c);
+    std::vector<std::vector<float>> planes(cols.size(), std::vector<float>(t.rows.size()));
+    for (size_t i = 0; i < cols.size(); ++i)
+      for (size_t r = 0; r < t.rows.size(); ++r) planes[i][r] = float(t.rows[r][cols[i]]);
+    Imf::Header header(int(t.tiles_x), int(t.tiles_y));
+    header.compression() = Imf::ZIP_COMPRESSION;
+    Imf::FrameBuffer fb;
+    for (size_t i = 0; i < cols.size(); ++i) {
+      header.channels().insert(t.columns[cols[i]], Imf::Channel(Imf::FLOAT));
+      fb.insert(t.columns[cols[i]], Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(planes[i].data()), sizeof(float),
+                                               sizeof(float) * t.tiles_x));
+    }
+    const std::filesystem::path file = dir / "tile_cycles.exr", tmp = dir / "tile_cycles.exr.tmp";
+    {
+      Imf::OutputFile o(tmp.c_str(), header);
+      o.setFrameBuffer(fb);
+      o.writePixels(int(t.tiles_y));
+    }
+    std::filesystem::rename(tmp, file);
+  }
+  outputs::write_result(out.result, dir);  // stats.json last: the directory is complete
+}
+
+}  // namespace tilevis::sim

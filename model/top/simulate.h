@@ -1,0 +1,38 @@
+// One frame through the tiler model: elaboration, the functional steps, one sc_start()
+// (or the closed form at fidelity analytic), and the canonical outputs plus the model's
+// own (DESIGN.md "Canonical outputs"): stats.json with cycles, param_buffer_bytes,
+// dram_bytes, per-unit groups and triangle accounts; tiles.csv with cycle columns;
+// config.json; tile_cycles.exr (per-tile cycles heatmap, one pixel per tile).
+// A process can simulate once (SystemC allows one elaboration per process).
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "tilevis/outputs.h"
+#include "tilevis/trace.h"
+#include "top/config.h"
+
+namespace tilevis::sim {
+
+struct SimOptions {
+  std::string trace_name;   // for stats.json
+  uint32_t frame_index = 0;
+  std::string vcd;          // VCD of unit busy and queue occupancy; empty: none
+};
+
+struct SimOutput {
+  outputs::Result result;               // canonical outputs, stats.json included
+  uint64_t cycles = 0;
+  double host_seconds = 0;
+  std::vector<std::string> systemc_reports;  // warnings and errors SystemC raised
+};
+
+SimOutput simulate(const trace::Frame& frame, const TilerConfig& config, const SimOptions& options = {});
+// Canonical outputs, config.json and tile_cycles.exr into `dir`.
+void write_sim_outputs(const SimOutput& out, const std::filesystem::path& dir);
+
+}  // namespace tilevis::sim

@@ -1,0 +1,635 @@
+#include "units/common/frame_work.h"
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
+namespace tilevis::sim {
+
+const char* to_string(Mode m) {
+  switch (m) {
+    case Mode::analytic: return "analytic";
+    case Mode::hsr: return "hsr";
+    case Mode::early_z: return "early_z";
+    case Mode::none: return "none";
+  }
+  return "?";
+}
+
+const char* to_string(Fidelity f) {
+  switch (f) {
+    case Fidelity::analytic: return "analytic";
+    case Fidelity::tile: return "tile";
+    case Fidelity::primitive: return "primitive";
+  }
+  return "?";
+}
+
+const char* column_name(TileUnit u) {
+  switch (u) {
+    case TileUnit::fetch: return "cycles_tile_fetch";
+    case TileUnit::reject: return "cycles_evu_reject";
+    case TileUnit::clip: return "cycles_evu_clip";
+    case TileUnit::occlude: return "cycles_evu_occlude";
+    case TileUnit::hsr: return "cycles_hsr";
+    case TileUnit::fragment: return "cycles_fragment";
+    case TileUnit::writer: return "cycles_tile_writer";
+    case TileUnit::count: break;
+  }
+  return "?";
+}
+
+namespace {
+
+bool unit_present(TileUnit u, Mode m) {
+  switch (u) {
+    case TileUnit::reject:
+    case TileUnit::clip:
+    case TileUnit::occlude: return m == Mode::analytic;
+    case TileUnit::hsr: return m == Mode::hsr;
+    default: return true;
+  }
+}
+
+// Closed sub-pixel bounding box to the tiles it touches, clamped to the screen (the same
+// rule as the golden binner's).
+void bbox_tiles(int64_t x0, int64_t y0, int64_t x1, int64_t y1, int64_t tw, int64_t th, uint32_t tiles_x,
+                uint32_t tiles_y, int64_t& tx0, int64_t& ty0, int64_t& tx1, int64_t& ty1) {
+  auto floor_div = [](int64_t a, int64_t d) { return a >= 0 ? a / d : -((-a + d - 1) / d); };
+  tx0 = std::max<int64_t>(0, floor_div(x0, tw));
+  tx1 = std::min<int64_t>(int64_t(tiles_x) - 1, floor_div(x1, tw));
+  ty0 = std::max<int64_t>(0, floor_div(y0, th));
+  ty1 = std::min<int64_t>(int64_t(tiles_y) - 1, floor_div(y1, th));
+}
+
+uint32_t tiles_in(int64_t tx0, int64_t ty0, int64_t tx1, int64_t ty1) {
+  return tx1 < tx0 || ty1 < ty0 ? 0u : uint32_t((tx1 - tx0 + 1) * (ty1 - ty0 + 1));
+}
+
+struct EdgeKey {
+  uint32_t draw;
+  geom::Vertex a, b;  // a < b lexicographically
+  bool operator==(const EdgeKey&) const = default;
+};
+struct EdgeKeyHash {
+  size_t operator()(const EdgeKey& k) const {
+    uint64_t h = k.draw * 0x9e3779b97f4a7c15ull;
+    for (int32_t v : {k.a.x, k.a.y, int32_t(k.a.z), k.b.x, k.b.y, int32_t(k.b.z)})
+      h = (h ^ uint32_t(v)) * 0x100000001b3ull;
+    return size_t(h);
+  }
+};
+EdgeKey edge_key(uint32_t draw, geom::Vertex a, geom::Vertex b) {
+  auto less = [](const geom::Vertex& p, const geom::Vertex& q) {
+    return p.x != q.x ? p.x < q.x : p.y != q.y ? p.y < q.y : p.z < q.z;
+  };
+  if (less(b, a)) std::swap(a, b);
+  return {draw, a, b};
+}
+
+}  // namespace
+
+// One segment's functional state. With one segment it borrows the frame's golden tiler.
+struct FrameWork::Segment {
+  uint32_t index = 0;
+  uint32_t setup_first = 0, setup_end = 0;  // range of the frame's setup triangles
+  std::unique_ptr<vis::Setup> setup;        // own setup (analytic, several segments)
+  std::unique_ptr<vis::GoldenResult> result;
+  std::unique_ptr<vis::GoldenTiler> tiler;
+  const vis::Setup* s = nullptr;            // the setup the tile lists index
+  vis::GoldenTiler* golden = nullptr;       // analytic mode
+  std::vector<std::vector<uint32_t>> lists; // per-pixel modes: per tile, frame setup indices
+  std::vector<std::unique_ptr<TileWork>> open;
+};
+
+FrameWork::FrameWork(const trace::Frame& frame, const FrameWorkConfig& config) : m_frame(frame), m_cfg(config) {
+  m_trace_triangles = uint32_t(frame.triangle_count());
+  m_gcfg.tile_w = config.tile_w;
+  m_gcfg.tile_h = config.tile_h;
+  m_tiles_x = (frame.width + config.tile_w - 1) / config.tile_w;
+  m_tiles_y = (frame.height + config.tile_h - 1) / config.tile_h;
+  if (m_cfg.mode == Mode::analytic) {
+    m_columns = vis::golden_tile_columns();
+    for (const char* c : {"fragments_shaded", "depth_tests", "passes", "segments"}) m_columns.push_back(c);
+  } else {
+    m_columns = {"triangles", "fragments_generated", "samples_covered", "fragments_shaded", "depth_tests", "segments"};
+  }
+  m_cycles_col = m_columns.size();
+  for (size_t u = 0; u < size_t(TileUnit::count); ++u)
+    if (unit_present(TileUnit(u), m_cfg.mode)) m_columns.push_back(column_name(TileUnit(u)));
+  m_columns.push_back("tile_cycles");
+  m_rows.assign(size_t(m_tiles_x) * m_tiles_y, std::vector<int64_t>(m_columns.size(), 0));
+  m_stored.assign(m_rows.size(), false);
+}
+
+FrameWork::~FrameWork() = default;
+
+void FrameWork::run_setup() {
+  m_setup = vis::primitive_setup(m_frame, {m_cfg.depth_bits});
+  m_setup_begin.assign(size_t(m_trace_triangles) + 1, 0);
+  for (const vis::SetupTriangle& t : m_setup.triangles) ++m_setup_begin[t.id + 1];
+  for (size_t i = 1; i < m_setup_begin.size(); ++i) m_setup_begin[i] += m_setup_begin[i - 1];
+}
+
+void FrameWork::run_binning() {
+  m_full.width = m_setup.width;
+  m_full.height = m_setup.height;
+  m_full.samples = samples();
+  m_full_tiler = std::make_unique<vis::GoldenTiler>(m_setup, m_gcfg, m_full);
+  m_full_tiler->bin();
+  const size_t n_tris = m_setup.triangles.size(), n_edges = m_setup.silhouettes.size();
+  m_tri_refs.assign(n_tris, 0);
+  m_tri_tests.assign(n_tris, 0);
+  m_edge_refs.assign(n_edges, 0);
+  m_edge_tests.assign(n_edges, 0);
+  for (uint32_t tile = 0; tile < tile_count(); ++tile) {
+    for (uint32_t s : m_full_tiler->tile_triangles(tile)) ++m_tri_refs[s];
+    for (uint32_t e : m_full_tiler->tile_edges(tile)) ++m_edge_refs[e];
+  }
+  const int64_t tw = int64_t(m_cfg.tile_w) << m_setup.subpixel_bits, th = int64_t(m_cfg.tile_h) << m_setup.subpixel_bits;
+  int64_t tx0, ty0, tx1, ty1;
+  for (size_t i = 0; i < n_tris; ++i) {
+    const auto& v = m_setup.triangles[i].v;
+    if (!m_setup.triangles[i].front) continue;  // culled before the tiling engine
+    bbox_tiles(std::min({v[0].x, v[1].x, v[2].x}), std::min({v[0].y, v[1].y, v[2].y}), std::max({v[0].x, v[1].x, v[2].x}),
+               std::max({v[0].y, v[1].y, v[2].y}), tw, th, m_tiles_x, m_tiles_y, tx0, ty0, tx1, ty1);
+    m_tri_tests[i] = tiles_in(tx0, ty0, tx1, ty1);
+  }
+  for (size_t i = 0; i < n_edges; ++i) {
+    const auto& e = m_setup.silhouettes[i];
+    bbox_tiles(std::min(e.a.x, e.b.x), std::min(e.a.y, e.b.y), std::max(e.a.x, e.b.x), std::max(e.a.y, e.b.y), tw, th,
+               m_tiles_x, m_tiles_y, tx0, ty0, tx1, ty1);
+    m_edge_tests[i] = tiles_in(tx0, ty0, tx1, ty1);
+  }
+
+  // Edge owners: the first front-facing triangle of the draw with the edge as one of its own.
+  std::vector<uint32_t> owner(n_edges, kNone);
+  if (m_cfg.mode == Mode::analytic && n_edges > 0) {
+    std::unordered_map<EdgeKey, uint32_t, EdgeKeyHash> by_key;
+    by_key.reserve(n_edges * 2);
+    for (uint32_t e = 0; e < n_edges; ++e) {
+      const auto& se = m_setup.silhouettes[e];
+      by_key.emplace(edge_key(se.draw, se.a, se.b), e);
+    }
+    for (const vis::SetupTriangle& t : m_setup.triangles) {
+      if (!t.front) continue;
+      for (int k = 0; k < 3; ++k) {
+        auto it = by_key.find(edge_key(t.draw, t.v[k], t.v[(k + 1) % 3]));
+        if (it != by_key.end() && owner[it->second] == kNone) owner[it->second] = t.id;
+      }
+    }
+    // An edge no front triangle claims (none expected: a silhouette has a front triangle)
+    // rides with the last triangle of its draw.
+    std::vector<uint32_t> draw_last(m_frame.draws.size(), 0);
+    for (uint32_t id = 0; id < m_trace_triangles; ++id) draw_last[m_setup.triangle_draw[id]] = id;
+    for (uint32_t e = 0; e < n_edges; ++e)
+      if (owner[e] == kNone) owner[e] = draw_last[m_setup.silhouettes[e].draw];
+  }
+  m_owned_begin.assign(size_t(m_trace_triangles) + 1, 0);
+  for (uint32_t o : owner)
+    if (o != kNone) ++m_owned_begin[o + 1];
+  for (size_t i = 1; i < m_owned_begin.size(); ++i) m_owned_begin[i] += m_owned_begin[i - 1];
+  m_owned.assign(m_owned_begin.back(), 0);
+  std::vector<uint32_t> fill(m_owned_begin.begin(), m_owned_begin.end() - 1);
+  for (uint32_t e = 0; e < n_edges; ++e)
+    if (owner[e] != kNone) m_owned[fill[owner[e]]++] = e;
+}
+
+void FrameWork::set_segments(std::vector<uint32_t> first_ids) {
+  if (first_ids.empty() || first_ids[0] != 0) throw std::logic_error("segment plan must start at triangle 0");
+  for (size_t i = 1; i < first_ids.size(); ++i)
+    if (first_ids[i] <= first_ids[i - 1] || first_ids[i] >= m_trace_triangles)
+      throw std::logic_error("segment plan must be strictly ascending inside the frame");
+  m_seg_first = std::move(first_ids);
+  m_seg_front.assign(m_seg_first.size(), 0);
+  if (segment_count() > 1 && m_owner.empty())
+    m_owner.assign(size_t(m_frame.width) * m_frame.height * samples(), kNone);
+  if (m_cfg.mode != Mode::analytic && m_owner.empty())
+    m_owner.assign(size_t(m_frame.width) * m_frame.height * samples(), kNone);
+}
+
+// A segment's own setup: the frame's draws cut to the segment's triangles. Snapping and
+// clipping are per triangle, so its triangles are the frame's, bit for bit (checked);
+// silhouettes are the segment's own.
+static std::unique_ptr<vis::Setup> segment_setup(const trace::Frame& f, const vis::Setup& full, uint32_t first,
+                                                 uint32_t end, uint32_t depth_bits, uint32_t setup_first,
+                                                 uint32_t setup_end) {
+  trace::Frame sub;
+  sub.width = f.width;
+  sub.height = f.height;
+  sub.depth_near = f.depth_near;
+  sub.depth_far = f.depth_far;
+  sub.subpixel_bits = f.subpixel_bits;
+  sub.samples = f.samples;
+  std::vector<uint32_t> draw_map;
+  uint32_t id = 0;
+  for (uint32_t d = 0; d < f.draws.size(); ++d) {
+    const trace::Draw& draw = f.draws[d];
+    const uint32_t n = uint32_t(draw.triangle_count());
+    const uint32_t lo = std::max(first, id), hi = std::min(end, id + n);
+    if (lo < hi) {
+      trace::Draw c;
+      c.name = draw.name;
+      c.flags = draw.flags;
+      c.shader_cycles_per_fragment = draw.shader_cycles_per_fragment;
+      c.varying_bytes_per_vertex = draw.varying_bytes_per_vertex;
+      c.texture_bytes_per_fragment = draw.texture_bytes_per_fragment;
+      c.vertices = draw.vertices;
+      c.indices.assign(draw.indices.begin() + 3 * size_t(lo - id), draw.indices.begin() + 3 * size_t(hi - id));
+      sub.draws.push_back(std::move(c));
+      draw_map.push_back(d);
+    }
+    id += n;
+  }
+  auto s = std::make_unique<vis::Setup>(vis::primitive_setup(sub, {depth_bits}));
+  for (auto& t : s->triangles) {
+    t.id += first;
+    t.draw = draw_map[t.draw];
+  }
+  for (auto& e : s->silhouettes) e.draw = draw_map[e.draw];
+  s->triangle_draw = full.triangle_draw;
+  if (s->triangles.size() != setup_end - setup_first)
+    throw std::logic_error("segment setup differs from the frame's in triangle count");
+  for (size_t i = 0; i < s->triangles.size(); ++i) {
+    const auto &a = s->triangles[i], &b = full.triangles[setup_first + i];
+    if (a.id != b.id || a.front != b.front || !(a.v[0] == b.v[0]) || !(a.v[1] == b.v[1]) || !(a.v[2] == b.v[2]))
+      throw std::logic_error("segment setup differs from the frame's at triangle " + std::to_string(b.id));
+  }
+  return s;
+}
+
+void FrameWork::prepare_segment(uint32_t k) {
+  if (m_seg) throw std::logic_error("prepare_segment: the previous segment is not finished");
+  if (k >= segment_count()) throw std::logic_error("prepare_segment: no such segment");
+  m_seg = std::make_unique<Segment>();
+  Segment& sg = *m_seg;
+  sg.index = k;
+  sg.setup_first = m_setup_begin[segment_first(k)];
+  sg.setup_end = m_setup_begin[segment_end(k)];
+  sg.open.resize(tile_count());
+  for (uint32_t i = sg.setup_first; i < sg.setup_end; ++i) m_seg_front[k] += m_setup.triangles[i].front;
+
+  const size_t c_tri = 0, c_seg = m_cycles_col - 1;
+  const size_t c_edges = m_cfg.mode == Mode::analytic ? 1 : SIZE_MAX;
+  m_seg_tiles.clear();
+  if (m_cfg.mode == Mode::analytic) {
+    if (segment_count() == 1) {
+      sg.s = &m_setup;
+      sg.golden = m_full_tiler.get();
+    } else {
+      sg.setup = segment_setup(m_frame, m_setup, segment_first(k), segment_end(k), m_cfg.depth_bits, sg.setup_first,
+                               sg.setup_end);
+      sg.result = std::make_unique<vis::GoldenResult>();
+      sg.result->width = m_setup.width;
+      sg.result->height = m_setup.height;
+      sg.result->samples = samples();
+      sg.tiler = std::make_unique<vis::GoldenTiler>(*sg.setup, m_gcfg, *sg.result);
+      sg.tiler->bin();
+      sg.s = sg.setup.get();
+      sg.golden = sg.tiler.get();
+    }
+    for (uint32_t tile = 0; tile < tile_count(); ++tile) {
+      const size_t n = sg.golden->tile_triangle_count(tile);
+      m_rows[tile][c_tri] += int64_t(n);
+      m_rows[tile][c_edges] += int64_t(sg.golden->tile_edges(tile).size());
+      if (n) m_seg_tiles.push_back(tile);
+    }
+  } else {
+    sg.s = &m_setup;
+    sg.lists.resize(tile_count());
+    for (uint32_t tile = 0; tile < tile_count(); ++tile) {
+      for (uint32_t s : m_full_tiler->tile_triangles(tile))
+        if (s >= sg.setup_first && s < sg.setup_end) sg.lists[tile].push_back(s);
+      m_rows[tile][c_tri] += int64_t(sg.lists[tile].size());
+      if (!sg.lists[tile].empty()) m_seg_tiles.push_back(tile);
+    }
+  }
+  for (uint32_t tile : m_seg_tiles) ++m_rows[tile][c_seg];
+}
+
+TileWork* FrameWork::open_tile(uint32_t tile) {
+  Segment& sg = *m_seg;
+  auto w = std::make_unique<TileWork>();
+  w->segment = sg.index;
+  w->tile = tile;
+  w->tx = tile % m_tiles_x;
+  w->ty = tile / m_tiles_x;
+  const uint32_t x0 = w->tx * m_cfg.tile_w, y0 = w->ty * m_cfg.tile_h;
+  w->pixels = (std::min(m_frame.width, x0 + m_cfg.tile_w) - x0) * (std::min(m_frame.height, y0 + m_cfg.tile_h) - y0);
+  std::vector<uint32_t> list = m_cfg.mode == Mode::analytic ? sg.golden->tile_triangles(tile) : sg.lists[tile];
+  w->draws.reserve(list.size());
+  for (uint32_t s : list) {
+    const vis::SetupTriangle& t = sg.s->triangles[s];
+    w->draws.push_back(t.draw);
+    w->opaque += t.opaque;
+  }
+  if (m_cfg.mode == Mode::analytic) {
+    w->edges = uint32_t(sg.golden->tile_edges(tile).size());
+    // SVGPU needs a tile's whole edge list beside each triangle: a list over the on-chip
+    // capacity is streamed in passes (triangles in chunks, edges and occluders re-read).
+    const uint32_t tp = (w->triangles() + m_cfg.evu_triangle_entries - 1) / m_cfg.evu_triangle_entries;
+    const uint32_t ep = (w->edges + m_cfg.evu_edge_entries - 1) / m_cfg.evu_edge_entries;
+    w->passes = std::max<uint32_t>(1, std::max(tp, ep));
+  }
+  w->reload = m_stored[tile];
+  w->store = sg.index + 1 < segment_count();
+  m_stored[tile] = m_stored[tile] || w->store;
+  sg.open[tile] = std::move(w);
+  return sg.open[tile].get();
+}
+
+geom::Point FrameWork::sample_point(int64_t px, int64_t py, uint32_t k) const {
+  const int32_t sb = int32_t(m_setup.subpixel_bits);
+  return {int32_t((px << sb) + m_frame.samples[k].x), int32_t((py << sb) + m_frame.samples[k].y)};
+}
+
+const FrameWork::Raster& FrameWork::raster(uint32_t s) {
+  auto it = m_raster_cache.find(s);
+  if (it != m_raster_cache.end()) return it->second;
+  const vis::SetupTriangle& t = m_setup.triangles[s];
+  const geom::Triangle tri{{t.v[0], t.v[1], t.v[2]}};
+  return m_raster_cache.emplace(s, Raster{geom::TriangleEdges::from(tri), geom::DepthPlane::from(tri)}).first->second;
+}
+
+uint32_t FrameWork::covering_fan(uint32_t id, geom::Point p) {
+  for (uint32_t s = m_setup_begin[id]; s < m_setup_begin[id + 1]; ++s)
+    if (m_setup.triangles[s].front && raster(s).edges.covers(p)) return s;
+  throw std::logic_error("no setup triangle of triangle " + std::to_string(id) + " covers a sample it owns");
+}
+
+void FrameWork::resolve_tile(TileWork& w) {
+  if (w.resolved) return;
+  m_raster_cache.clear();
+  if (m_cfg.mode == Mode::analytic) resolve_analytic(w);
+  else resolve_pixels(w);
+  w.resolved = true;
+}
+
+void FrameWork::resolve_analytic(TileWork& w) {
+  Segment& sg = *m_seg;
+  m_per_tri.clear();
+  sg.golden->process_tile(w.tile, &m_per_tri);
+  w.tris.resize(m_per_tri.size());
+  for (size_t i = 0; i < m_per_tri.size(); ++i) {
+    const auto& rec = m_per_tri[i];
+    const vis::SetupTriangle& t = sg.s->triangles[rec.triangle];
+    TriangleWork& tw = w.tris[i];
+    tw.id = t.id;
+    tw.draw = t.draw;
+    tw.pair_tests = uint32_t(rec.counters[0]);
+    tw.candidate_pairs = uint32_t(rec.counters[1]);
+    tw.clip_polygons = uint32_t(rec.counters[2]);
+    tw.pieces = uint32_t(rec.counters[3]);
+    tw.visible_pieces = uint32_t(rec.counters[4]);
+    tw.occlusion_tests = uint32_t(rec.counters[5]);
+    tw.visible_samples = uint32_t(rec.counters[6]);
+    tw.fragments_generated = uint32_t(rec.counters[7]);
+    tw.fragments_shaded = tw.visible_samples;
+  }
+  if (segment_count() == 1) return;
+
+  // Merge into the stored depth of earlier partial renders: a visible sample of this
+  // segment is shaded, and takes the sample, where it is strictly nearer.
+  std::unordered_map<uint32_t, size_t> first_of_id;
+  for (size_t i = 0; i < w.tris.size(); ++i) {
+    first_of_id.emplace(w.tris[i].id, i);
+    w.tris[i].fragments_shaded = 0;
+  }
+  const uint32_t ns = samples();
+  const uint32_t x0 = w.tx * m_cfg.tile_w, y0 = w.ty * m_cfg.tile_h;
+  const uint32_t x1 = std::min(m_frame.width, x0 + m_cfg.tile_w), y1 = std::min(m_frame.height, y0 + m_cfg.tile_h);
+  for (uint32_t py = y0; py < y1; ++py)
+    for (uint32_t px = x0; px < x1; ++px)
+      for (uint32_t k = 0; k < ns; ++k) {
+        const size_t idx = (size_t(py) * m_frame.width + px) * ns + k;
+        const int32_t sid = sg.result->ids[idx];
+        if (sid < 0) continue;
+        const geom::Point p = sample_point(px, py, k);
+        const uint32_t fan = covering_fan(uint32_t(sid), p);
+        TriangleWork& tw = w.tris[first_of_id.at(uint32_t(sid))];
+        const uint32_t old = m_owner[idx];
+        if (old != kNone) {
+          ++tw.depth_tests;
+          if (geom::depth_order(raster(fan).plane, raster(old).plane, p) >= 0) continue;
+        }
+        m_owner[idx] = fan;
+        ++tw.fragments_shaded;
+      }
+}
+
+void FrameWork::resolve_pixels(TileWork& w) {
+  Segment& sg = *m_seg;
+  const std::vector<uint32_t>& list = sg.lists[w.tile];
+  const uint32_t ns = samples(), sb = m_setup.subpixel_bits;
+  const uint32_t x0 = w.tx * m_cfg.tile_w, y0 = w.ty * m_cfg.tile_h;
+  const uint32_t x1 = std::min(m_frame.width, x0 + m_cfg.tile_w), y1 = std::min(m_frame.height, y0 + m_cfg.tile_h);
+  std::unordered_map<uint32_t, size_t> local;
+  w.tris.resize(list.size());
+  for (size_t i = 0; i < list.size(); ++i) {
+    const vis::SetupTriangle& t = m_setup.triangles[list[i]];
+    w.tris[i].id = t.id;
+    w.tris[i].draw = t.draw;
+    local.emplace(list[i], i);
+  }
+  // Rasterise in submission order with an exact less-than depth test against the tile's
+  // depth (equal depth keeps the earlier triangle, as the z-buffer truth does).
+  auto visit = [&](size_t i, auto&& fn) {
+    const vis::SetupTriangle& t = m_setup.triangles[list[i]];
+    const int64_t bx0 = std::max<int64_t>(x0, std::min({t.v[0].x, t.v[1].x, t.v[2].x}) >> sb);
+    const int64_t bx1 = std::min<int64_t>(int64_t(x1) - 1, std::max({t.v[0].x, t.v[1].x, t.v[2].x}) >> sb);
+    const int64_t by0 = std::max<int64_t>(y0, std::min({t.v[0].y, t.v[1].y, t.v[2].y}) >> sb);
+    const int64_t by1 = std::min<int64_t>(int64_t(y1) - 1, std::max({t.v[0].y, t.v[1].y, t.v[2].y}) >> sb);
+    const Raster& r = raster(list[i]);
+    for (int64_t py = by0; py <= by1; ++py)
+      for (int64_t px = bx0; px <= bx1; ++px)
+        for (uint32_t k = 0; k < ns; ++k) {
+          const geom::Point p = sample_point(px, py, k);
+          if (r.edges.covers(p)) fn((size_t(py) * m_frame.width + size_t(px)) * ns + k, p, r);
+        }
+  };
+  for (size_t i = 0; i < list.size(); ++i) {
+    TriangleWork& tw = w.tris[i];
+    const bool opaque = m_setup.triangles[list[i]].opaque;
+    visit(i, [&](size_t idx, geom::Point p, const Raster& r) {
+      ++tw.fragments_generated;
+      const uint32_t old = m_owner[idx];
+      const bool pass = old == kNone || geom::depth_order(r.plane, raster(old).plane, p) < 0;
+      if (m_cfg.mode != Mode::none) ++tw.depth_tests;  // one test per covered sample
+      if (m_cfg.mode == Mode::none || (m_cfg.mode == Mode::early_z && pass)) ++tw.fragments_shaded;
+      if (pass && opaque) m_owner[idx] = list[i];
+    });
+  }
+  // Samples the tile's triangles own now; HSR shades exactly those (the tag buffer), then
+  // translucent fragments in front of them.
+  for (uint32_t py = y0; py < y1; ++py)
+    for (uint32_t px = x0; px < x1; ++px)
+      for (uint32_t k = 0; k < ns; ++k) {
+        const uint32_t o = m_owner[(size_t(py) * m_frame.width + px) * ns + k];
+        if (o == kNone) continue;
+        auto it = local.find(o);
+        if (it == local.end()) continue;
+        ++w.tris[it->second].visible_samples;
+        if (m_cfg.mode == Mode::hsr) ++w.tris[it->second].fragments_shaded;
+      }
+  if (m_cfg.mode == Mode::hsr)
+    for (size_t i = 0; i < list.size(); ++i) {
+      if (m_setup.triangles[list[i]].opaque) continue;
+      visit(i, [&](size_t idx, geom::Point p, const Raster& r) {
+        const uint32_t o = m_owner[idx];
+        if (o == kNone || geom::depth_order(r.plane, raster(o).plane, p) < 0) ++w.tris[i].fragments_shaded;
+      });
+    }
+}
+
+void FrameWork::close_tile(TileWork* w) {
+  Segment& sg = *m_seg;
+  auto& row = m_rows[w->tile];
+  uint64_t shaded = 0, tests = 0;
+  for (const TriangleWork& t : w->tris) {
+    shaded += t.fragments_shaded;
+    tests += t.depth_tests;
+  }
+  if (m_cfg.mode == Mode::analytic) {
+    for (const TriangleWork& t : w->tris) {
+      row[2] += t.pair_tests;
+      row[3] += t.candidate_pairs;
+      row[4] += t.clip_polygons;
+      row[5] += t.pieces;
+      row[6] += t.visible_pieces;
+      row[7] += t.occlusion_tests;
+      row[8] += t.visible_samples;
+      row[9] += t.fragments_generated;
+    }
+    row[10] += int64_t(shaded);
+    row[11] += int64_t(tests);
+    row[12] += w->passes;
+    m_passes_extra += w->passes - 1;
+  } else {
+    for (const TriangleWork& t : w->tris) row[1] += t.fragments_generated;
+    row[3] += int64_t(shaded);
+    row[4] += int64_t(tests);
+  }
+  m_shaded += shaded;
+  m_depth_tests += tests;
+  ++m_tiles_rendered;
+  size_t c = m_cycles_col;
+  uint64_t bottleneck = 0;
+  for (size_t u = 0; u < size_t(TileUnit::count); ++u) {
+    if (!unit_present(TileUnit(u), m_cfg.mode)) continue;
+    row[c++] += int64_t(w->cycles[u]);
+    bottleneck = std::max(bottleneck, w->cycles[u]);
+  }
+  row[c] += int64_t(bottleneck);
+  sg.open[w->tile].reset();
+}
+
+void FrameWork::finish_segment() {
+  if (!m_seg) throw std::logic_error("finish_segment: no segment");
+  for (const auto& w : m_seg->open)
+    if (w) throw std::logic_error("finish_segment: tile " + std::to_string(w->tile) + " was never closed");
+  m_seg.reset();
+}
+
+void FrameWork::finish() {
+  if (m_seg) throw std::logic_error("finish: a segment is still open");
+  const uint32_t ns = samples();
+  const bool from_owner = !m_owner.empty();
+  if (!from_owner) {
+    m_ids = m_full.ids;
+    m_visible_area = m_full.visible_area;
+    vis::sum_golden_totals(m_full);
+  } else {
+    m_ids.assign(m_owner.size(), -1);
+    for (size_t i = 0; i < m_owner.size(); ++i)
+      if (m_owner[i] != kNone) m_ids[i] = int32_t(m_setup.triangles[m_owner[i]].id);
+    // samples_covered per tile: what is visible at the end of the frame.
+    const size_t c_cov = m_cfg.mode == Mode::analytic ? 8 : 2;
+    for (auto& row : m_rows) row[c_cov] = 0;
+    for (uint32_t py = 0; py < m_frame.height; ++py)
+      for (uint32_t px = 0; px < m_frame.width; ++px)
+        for (uint32_t k = 0; k < ns; ++k)
+          if (m_owner[(size_t(py) * m_frame.width + px) * ns + k] != kNone)
+            ++m_rows[(py / m_cfg.tile_h) * m_tiles_x + px / m_cfg.tile_w][c_cov];
+  }
+  m_finished = true;
+}
+
+outputs::TileTable FrameWork::tile_table() const {
+  outputs::TileTable t;
+  t.resize(m_cfg.tile_w, m_cfg.tile_h, m_frame.width, m_frame.height, m_columns);
+  t.rows = m_rows;
+  return t;
+}
+
+nlohmann::json FrameWork::totals() const {
+  const auto& st = m_setup.stats;
+  nlohmann::json j = {{"triangles_in", st.triangles_in},
+                      {"triangles_front", st.front_facing},
+                      {"triangles_back", st.back_facing},
+                      {"triangles_degenerate", st.degenerate},
+                      {"triangles_clipped", st.clipped},
+                      {"triangles_frustum_culled", st.frustum_culled},
+                      {"silhouette_edges", m_cfg.mode == Mode::analytic ? st.silhouette_edges : 0}};
+  auto sum = [&](const std::string& name) {
+    const auto it = std::find(m_columns.begin(), m_columns.end(), name);
+    if (it == m_columns.end()) return uint64_t{0};
+    const size_t c = size_t(it - m_columns.begin());
+    uint64_t s = 0;
+    for (const auto& row : m_rows) s += uint64_t(row[c]);
+    return s;
+  };
+  if (m_cfg.mode == Mode::analytic) {
+    j["pair_tests"] = sum("pair_tests");
+    j["candidate_pairs"] = sum("candidate_pairs");
+    j["clip_polygons"] = sum("clip_polygons");
+    j["pieces"] = sum("pieces");
+    j["visible_pieces"] = sum("visible_pieces");
+    j["occlusion_tests"] = sum("occlusion_tests");
+    if (m_owner.empty()) j["visible_triangles"] = m_full.visible_triangles;
+  } else {
+    for (const char* k : {"candidate_pairs", "clip_polygons", "visible_pieces"}) j[k] = 0;
+  }
+  j["samples_covered"] = sum("samples_covered");
+  j["fragments_generated"] = sum("fragments_generated");
+  j["fragments_shaded"] = m_shaded;
+  j["depth_tests"] = m_depth_tests;
+  j["partial_renders"] = segment_count() - 1;
+  j["tiles_rendered"] = m_tiles_rendered;
+  j["evu_extra_passes"] = m_passes_extra;
+  return j;
+}
+
+nlohmann::json FrameWork::triangle_accounts() const {
+  const auto& st = m_setup.stats;
+  uint64_t ids_with_setup = 0, binned = 0, off_screen = 0, refs = 0;
+  for (uint32_t id = 0; id < m_trace_triangles; ++id) ids_with_setup += m_setup_begin[id + 1] > m_setup_begin[id];
+  for (size_t i = 0; i < m_setup.triangles.size(); ++i) {
+    if (!m_setup.triangles[i].front) continue;
+    (m_tri_refs[i] ? binned : off_screen) += 1;
+    refs += m_tri_refs[i];
+  }
+  uint64_t seg_front = 0;
+  for (uint64_t f : m_seg_front) seg_front += f;
+  const bool balanced = st.triangles_in == st.frustum_culled + ids_with_setup &&
+                        st.setup_triangles == st.front_facing + st.back_facing + st.degenerate &&
+                        st.front_facing == binned + off_screen && seg_front == st.front_facing;
+  if (!balanced) throw std::logic_error("triangle accounting does not balance");
+  return {{"help", "every trace triangle, step by step: in = frustum_culled + reaching setup; setup triangles "
+                   "(fans of clipped ones) = front + back + degenerate; front = binned + off_screen; front = sum over "
+                   "segments"},
+          {"triangles_in", st.triangles_in},
+          {"frustum_culled", st.frustum_culled},
+          {"reaching_setup", ids_with_setup},
+          {"clipped_into_fans", st.clipped},
+          {"setup_triangles", st.setup_triangles},
+          {"back_facing", st.back_facing},
+          {"degenerate", st.degenerate},
+          {"front_facing", st.front_facing},
+          {"front_binned", binned},
+          {"front_off_screen", off_screen},
+          {"tile_references", refs},
+          {"front_per_segment", m_seg_front},
+          {"balanced", balanced}};
+}
+
+}  // namespace tilevis::sim

@@ -1,0 +1,147 @@
+// The functional side of the tiler model: one frame's setup, binning, parameter-buffer
+// segments and per-tile visibility results, computed by calling model/visibility and
+// model/geom. Units own the steps (PrimitiveSetup calls run_setup(), TilingEngine
+// run_binning() and prepare_segment(), the visibility stage resolve_tile(), ...) and add
+// time; the results are the golden pipeline's, bit for bit, whatever the fidelity level.
+//
+// Partial renders (a parameter buffer too small for the frame) split the frame into
+// segments of consecutive trace triangles. In analytic mode each segment is resolved by
+// the golden pipeline on its own triangles (its own silhouettes: edges whose neighbour is
+// in another segment become boundaries) and merged per sample into the depth stored by the
+// earlier partial renders, as a TBDR does after a flush: ties keep the earlier (lower id)
+// triangle, golden's rule. The per-pixel modes keep the stored depth across segments too.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <unordered_map>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "geom/depth.h"
+#include "geom/predicates.h"
+#include "tilevis/outputs.h"
+#include "tilevis/trace.h"
+#include "units/common/work.h"
+#include "visibility/golden.h"
+#include "visibility/setup.h"
+
+namespace tilevis::sim {
+
+struct FrameWorkConfig {
+  Mode mode = Mode::analytic;
+  uint32_t tile_w = 32, tile_h = 32;
+  uint32_t depth_bits = 24;
+  // EVU on-chip list capacities: a tile with more triangles or edges takes several passes.
+  uint32_t evu_triangle_entries = 512, evu_edge_entries = 256;
+};
+
+class FrameWork {
+ public:
+  static constexpr uint32_t kNone = 0xffffffffu;
+
+  FrameWork(const trace::Frame& frame, const FrameWorkConfig& config);
+  ~FrameWork();
+  FrameWork(const FrameWork&) = delete;
+  FrameWork& operator=(const FrameWork&) = delete;
+
+  const trace::Frame& frame() const { return m_frame; }
+  const FrameWorkConfig& config() const { return m_cfg; }
+  Mode mode() const { return m_cfg.mode; }
+  uint32_t trace_triangles() const { return m_trace_triangles; }
+  uint32_t samples() const { return uint32_t(m_frame.samples.size()); }
+
+  // --- PrimitiveSetup: clipping, snapping, facing and silhouettes of the whole frame.
+  void run_setup();
+  const vis::Setup& setup() const { return m_setup; }
+  // First setup triangle of trace triangle `id` (id == trace_triangles(): the end).
+  uint32_t setup_begin(uint32_t id) const { return m_setup_begin[id]; }
+  uint32_t draw_of(uint32_t id) const { return m_setup.triangle_draw[id]; }
+
+  // --- TilingEngine: exact binning of the whole frame.
+  void run_binning();
+  uint32_t tiles_x() const { return m_tiles_x; }
+  uint32_t tiles_y() const { return m_tiles_y; }
+  uint32_t tile_count() const { return m_tiles_x * m_tiles_y; }
+  uint32_t tile_refs(uint32_t setup_triangle) const { return m_tri_refs[setup_triangle]; }
+  uint32_t tile_tests(uint32_t setup_triangle) const { return m_tri_tests[setup_triangle]; }
+  uint32_t edge_refs(uint32_t edge) const { return m_edge_refs[edge]; }
+  uint32_t edge_tests(uint32_t edge) const { return m_edge_tests[edge]; }
+  // Silhouette edges carried into the parameter buffer with trace triangle `id` (the
+  // first front-facing triangle of the edge's draw that has it as an edge).
+  std::pair<const uint32_t*, const uint32_t*> owned_edges(uint32_t id) const {
+    return {m_owned.data() + m_owned_begin[id], m_owned.data() + m_owned_begin[id + 1]};
+  }
+
+  // --- ParameterBuffer: the flush plan. first_ids[0] == 0, ascending.
+  void set_segments(std::vector<uint32_t> first_ids);
+  uint32_t segment_count() const { return uint32_t(m_seg_first.size()); }
+  uint32_t segment_first(uint32_t k) const { return m_seg_first[k]; }
+  uint32_t segment_end(uint32_t k) const {
+    return k + 1 < m_seg_first.size() ? m_seg_first[k + 1] : m_trace_triangles;
+  }
+
+  // --- Render of one segment (one at a time, in order).
+  void prepare_segment(uint32_t k);                          // binning of the segment
+  const std::vector<uint32_t>& segment_tiles() const { return m_seg_tiles; }  // non-empty, row-major
+  TileWork* open_tile(uint32_t tile);                        // TileFetch
+  void resolve_tile(TileWork& w);                            // the mode's visibility step
+  void close_tile(TileWork* w);                              // TileWriter: results kept, work freed
+  void finish_segment();
+
+  // --- Results, after finish().
+  void finish();
+  const std::vector<int32_t>& ids() const { return m_ids; }
+  const std::vector<double>& visible_area() const { return m_visible_area; }  // empty after partial renders
+  outputs::TileTable tile_table() const;
+  nlohmann::json totals() const;        // canonical totals (DESIGN.md "Canonical outputs")
+  nlohmann::json triangle_accounts() const;  // every trace triangle, step by step
+  uint64_t fragments_shaded() const { return m_shaded; }
+
+ private:
+  struct Segment;
+  struct Raster {
+    geom::TriangleEdges edges;
+    geom::DepthPlane plane;
+  };
+  const Raster& raster(uint32_t setup_triangle);
+  uint32_t covering_fan(uint32_t id, geom::Point p);
+  void resolve_analytic(TileWork& w);
+  void resolve_pixels(TileWork& w);
+  geom::Point sample_point(int64_t px, int64_t py, uint32_t k) const;
+
+  trace::Frame m_frame;
+  FrameWorkConfig m_cfg;
+  uint32_t m_trace_triangles = 0;
+  vis::Setup m_setup;
+  std::vector<uint32_t> m_setup_begin;
+
+  vis::GoldenConfig m_gcfg;
+  vis::GoldenResult m_full;  // the whole frame's golden result (one segment: the output)
+  std::unique_ptr<vis::GoldenTiler> m_full_tiler;
+  uint32_t m_tiles_x = 0, m_tiles_y = 0;
+  std::vector<uint32_t> m_tri_refs, m_tri_tests, m_edge_refs, m_edge_tests;
+  std::vector<uint32_t> m_owned_begin, m_owned;
+
+  std::vector<uint32_t> m_seg_first;
+  std::unique_ptr<Segment> m_seg;
+  std::vector<uint32_t> m_seg_tiles;
+  std::vector<bool> m_stored;            // per tile: a partial render stored its depth/colour
+  std::vector<uint32_t> m_owner;         // per sample: setup triangle in front (stored depth), kNone
+  std::unordered_map<uint32_t, Raster> m_raster_cache;  // per tile
+  std::vector<vis::TileTriangleWork> m_per_tri;
+
+  // Accumulated results.
+  std::vector<std::vector<int64_t>> m_rows;  // per tile: functional counters then cycles
+  std::vector<std::string> m_columns;
+  size_t m_cycles_col = 0;
+  std::vector<int32_t> m_ids;
+  std::vector<double> m_visible_area;
+  uint64_t m_shaded = 0, m_depth_tests = 0, m_tiles_rendered = 0, m_passes_extra = 0;
+  std::vector<uint64_t> m_seg_front;     // front-facing triangles per segment
+  uint64_t m_visible_triangles = 0;
+  bool m_finished = false;
+};
+
+}  // namespace tilevis::sim

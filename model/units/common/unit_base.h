@@ -1,0 +1,104 @@
+// What every SystemC unit of the tiler shares: its clock period (latencies are cycles in
+// the unit's config, turned into sc_time once, here), its stats group (busy, stall,
+// items, bytes), the busy signal traced to VCD, and the three ways a unit spends time:
+// its own work, a memory transfer beside it, and a full output FIFO.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include <systemc>
+#include <tlm>
+#include <tlm_utils/simple_initiator_socket.h>
+
+#include "units/common/frame_work.h"
+#include "units/common/stats.h"
+#include "units/common/work.h"
+
+namespace tilevis::sim {
+
+struct UnitEnv {
+  FrameWork* work = nullptr;
+  sc_core::sc_time period;      // one cycle of the GPU clock
+  bool trace = false;           // drive busy/occupancy signals (VCD)
+  sc_core::sc_time memory_latency;  // what a prefetched or latency-tolerant read does not wait for
+};
+
+// An sc_fifo that counts its occupancy for the VCD (sc_fifo traces contents, not fill).
+template <typename T>
+class OccupancyFifo : public sc_core::sc_fifo<T> {
+ public:
+  OccupancyFifo(const char* name, int depth, bool trace)
+      : sc_core::sc_fifo<T>(name, depth), occupancy((std::string(name) + "_occupancy").c_str()), m_trace(trace) {}
+  void write(const T& v) override {
+    sc_core::sc_fifo<T>::write(v);
+    if (m_trace) occupancy.write(++m_count);
+  }
+  void read(T& v) override {
+    sc_core::sc_fifo<T>::read(v);
+    if (m_trace) occupancy.write(--m_count);
+  }
+  T read() override {
+    T v;
+    read(v);
+    return v;
+  }
+  sc_core::sc_signal<int> occupancy;
+
+ private:
+  bool m_trace;
+  int m_count = 0;
+};
+
+class UnitBase : public sc_core::sc_module {
+ public:
+  StatsGroup& stats() { return m_stats; }
+  const StatsGroup& stats() const { return m_stats; }
+  uint64_t busy_cycles() const { return uint64_t(m_busy.value); }
+  sc_core::sc_signal<bool> busy;  // high while the unit works (VCD)
+
+  // A parent (the EVU) counts as busy while any of its sub-units is.
+  void set_parent(UnitBase* parent) { m_parent = parent; }
+
+ protected:
+  UnitBase(const sc_core::sc_module_name& name, const UnitEnv& env, const std::string& help);
+
+  uint64_t cycles(const sc_core::sc_time& t) const { return uint64_t(t.value() / m_period.value()); }
+  sc_core::sc_time time(uint64_t cycles) const { return sc_core::sc_time::from_value(m_period.value() * cycles); }
+
+  // Works for `cycles` while a memory transfer taking `memory` runs beside it (streamed in
+  // or out as the work proceeds): the unit is done at the later of the two; memory time
+  // beyond the work is a stall. `tile`, when given, is charged the work cycles.
+  void spend(uint64_t cycles, const sc_core::sc_time& memory, TileWork* tile, TileUnit column);
+  void spend(uint64_t cycles) { spend(cycles, sc_core::SC_ZERO_TIME, nullptr, TileUnit::count); }
+  // Writes to an output FIFO; time blocked on a full FIFO is a stall.
+  void push(sc_core::sc_fifo_out<Item>& out, const Item& item);
+  // One TLM-2.0 transaction of `bytes` (timing only: the model moves no data, the payload
+  // points at a one-byte dummy). Returns the delay the target annotated; time the target
+  // held the call (a full parameter buffer) counts as a stall. A read whose address was
+  // known ahead (prefetched from a control stream) or whose latency the unit hides (shader
+  // threads waiting on texture) waits for the bus only, not the DRAM latency.
+  sc_core::sc_time transfer(tlm_utils::simple_initiator_socket<UnitBase>& socket, tlm::tlm_command cmd,
+                            uint64_t bytes, bool latency_hidden = false);
+
+  void enter_busy();
+  void leave_busy();
+
+  FrameWork& m_work;
+  const sc_core::sc_time m_period;
+  const sc_core::sc_time m_memory_latency;
+  const bool m_trace;
+  StatsGroup m_stats;
+  Stat& m_busy;
+  Stat& m_stall;
+  Stat& m_items;
+  Stat& m_bytes;
+
+ private:
+  UnitBase* m_parent = nullptr;
+  int m_active = 0;
+  sc_core::sc_time m_active_since;
+  unsigned char m_dummy = 0;
+};
+
+}  // namespace tilevis::sim

@@ -1,0 +1,97 @@
+#include "units/early_visibility_unit/early_visibility_unit.h"
+
+namespace tilevis::sim {
+namespace {
+
+// A triangle with no operations for the sub-unit passes through in one cycle.
+uint64_t issue_cycles(uint64_t ops, const EvuStageConfig& s) { return ops ? ceil_div(ops, s.lanes) * s.ii : 1; }
+
+}  // namespace
+
+EvuReject::EvuReject(const sc_core::sc_module_name& name, const UnitEnv& env, const EarlyVisibilityConfig& config)
+    : Stage(name, env, "EVU reject: SVGPU tests 1-6 on triangle x silhouette-edge pairs", TileUnit::reject, true),
+      m_cfg(config) {}
+
+Cost EvuReject::cost(const Item& it) const {
+  Cost c;
+  const TileWork& w = *it.tile;
+  for (uint32_t i = it.first; i < it.first + it.count; ++i) c.cycles += issue_cycles(w.tris[i].pair_tests, m_cfg.reject);
+  if (it.first_of_tile) c.cycles += uint64_t(w.passes - 1) * m_cfg.pass_overhead_cycles;
+  if (it.last) c.cycles += m_cfg.reject.latency_cycles;
+  return c;
+}
+
+EvuClip::EvuClip(const sc_core::sc_module_name& name, const UnitEnv& env, const EarlyVisibilityConfig& config)
+    : Stage(name, env, "EVU clip: splits by candidate edges, both sides kept, re-checked (SVGPU 3.2.2)",
+            TileUnit::clip, false),
+      m_cfg(config) {}
+
+Cost EvuClip::cost(const Item& it) const {
+  Cost c;
+  const TileWork& w = *it.tile;
+  for (uint32_t i = it.first; i < it.first + it.count; ++i)
+    c.cycles += issue_cycles(uint64_t(w.tris[i].candidate_pairs) + w.tris[i].clip_polygons, m_cfg.clip);
+  if (it.last) c.cycles += m_cfg.clip.latency_cycles;
+  return c;
+}
+
+EvuOcclude::EvuOcclude(const sc_core::sc_module_name& name, const UnitEnv& env, const EarlyVisibilityConfig& config)
+    : Stage(name, env, "EVU occlude: interior point of each piece against the tile's opaque triangles (SVGPU 3.3)",
+            TileUnit::occlude, false),
+      m_cfg(config) {}
+
+Cost EvuOcclude::cost(const Item& it) const {
+  Cost c;
+  const TileWork& w = *it.tile;
+  for (uint32_t i = it.first; i < it.first + it.count; ++i)
+    c.cycles += issue_cycles(uint64_t(w.tris[i].pieces) + w.tris[i].occlusion_tests, m_cfg.occlude);
+  if (it.last) c.cycles += m_cfg.occlude.latency_cycles;
+  return c;
+}
+
+EarlyVisibilityUnit::EarlyVisibilityUnit(const sc_core::sc_module_name& name, const UnitEnv& env,
+                                         const EarlyVisibilityConfig& config, int fifo_depth)
+    : UnitBase(name, env, "early-visibility unit: busy while any sub-unit is"),
+      in("in"),
+      out("out"),
+      m_cfg(config),
+      m_pairs(m_stats.add("pair_tests", "pairs", "triangle x edge pairs examined")),
+      m_candidates(m_stats.add("candidate_pairs", "pairs", "pairs surviving tests 1-6")),
+      m_clips(m_stats.add("clip_polygons", "splits", "polygon splits")),
+      m_pieces(m_stats.add("pieces", "polygons", "pieces after clipping")),
+      m_visible(m_stats.add("visible_pieces", "polygons", "pieces not occluded")),
+      m_occlusion_tests(m_stats.add("occlusion_tests", "tests", "piece x occluder containment tests")),
+      m_tiles(m_stats.add("tiles", "tiles", "tiles resolved")),
+      m_multi_pass(m_stats.add("multi_pass_tiles", "tiles", "tiles over the on-chip list capacity")) {
+  m_reject = std::make_unique<EvuReject>("reject", env, m_cfg);
+  m_clip = std::make_unique<EvuClip>("clip", env, m_cfg);
+  m_occlude = std::make_unique<EvuOcclude>("occlude", env, m_cfg);
+  m_reject_to_clip = std::make_unique<OccupancyFifo<Item>>("reject_to_clip", fifo_depth, env.trace);
+  m_clip_to_occlude = std::make_unique<OccupancyFifo<Item>>("clip_to_occlude", fifo_depth, env.trace);
+  m_reject->in(in);
+  m_reject->out(*m_reject_to_clip);
+  m_clip->in(*m_reject_to_clip);
+  m_clip->out(*m_clip_to_occlude);
+  m_occlude->in(*m_clip_to_occlude);
+  m_occlude->out(out);
+  for (UnitBase* u : {static_cast<UnitBase*>(m_reject.get()), static_cast<UnitBase*>(m_clip.get()),
+                      static_cast<UnitBase*>(m_occlude.get())})
+    u->set_parent(this);
+  m_occlude->on_tile_done([this](const TileWork& w) { count_tile(w); });
+}
+
+void EarlyVisibilityUnit::count_tile(const TileWork& w) {
+  for (const TriangleWork& t : w.tris) {
+    m_pairs.value += t.pair_tests;
+    m_candidates.value += t.candidate_pairs;
+    m_clips.value += t.clip_polygons;
+    m_pieces.value += t.pieces;
+    m_visible.value += t.visible_pieces;
+    m_occlusion_tests.value += t.occlusion_tests;
+  }
+  m_tiles.value += 1;
+  m_multi_pass.value += w.passes > 1;
+  m_items.value += 1;
+}
+
+}  // namespace tilevis::sim

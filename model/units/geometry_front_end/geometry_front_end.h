@@ -1,0 +1,51 @@
+// Geometry front end: index and vertex fetch of the trace's draws (DESIGN.md pipeline,
+// first stage). The trace holds post-vertex-shader clip-space positions, so the unit
+// models the fetch and a post-transform vertex cache, not vertex shading.
+#pragma once
+
+#include <vector>
+
+#include "units/common/stage.h"
+
+namespace tilevis::sim {
+
+struct GeometryFrontEndConfig {
+  // Post-transform vertex cache: 32 entries, FIFO replacement (assumption: the size
+  // Forsyth's "Linear-Speed Vertex Cache Optimisation" (2006) designs for; PowerVR's is
+  // not public).
+  uint32_t vertex_cache_entries = 32;
+  uint32_t index_bytes = 4;            // 32-bit indices (trace format)
+  uint32_t position_bytes = 16;        // clip-space float4 per vertex (trace format)
+  uint32_t vertices_per_clock = 1;     // vertex fetch rate (assumption)
+  uint32_t latency_cycles = 16;        // fetch pipeline depth, once per segment (assumption)
+};
+
+class GeometryFrontEnd : public UnitBase {
+ public:
+  sc_core::sc_fifo_out<Item> out;
+  tlm_utils::simple_initiator_socket<UnitBase> mem;
+
+  SC_HAS_PROCESS(GeometryFrontEnd);
+  GeometryFrontEnd(const sc_core::sc_module_name& name, const UnitEnv& env, const GeometryFrontEndConfig& config,
+                   uint32_t batch_triangles);
+
+  // Runs the vertex cache over the frame (after setup: culled triangles are fetched too).
+  void prepare();
+  Cost cost(const Item& item) const;
+  void account(const Item& item, const Cost& c);
+  // Vertices trace triangle `id` missed in the cache (new vertices the parameter buffer stores).
+  uint32_t vertex_misses(uint32_t id) const { return m_misses[id]; }
+  // The batches the unit issues, in order (what the analytic level also walks).
+  std::vector<Item> batches() const;
+
+ private:
+  void run();
+  GeometryFrontEndConfig m_cfg;
+  uint32_t m_batch;
+  std::vector<uint32_t> m_misses;
+  std::vector<uint64_t> m_cycles, m_bytes_prefix;  // prefix sums over trace triangles
+  Stat& m_triangles;
+  Stat& m_vertex_misses;
+};
+
+}  // namespace tilevis::sim
