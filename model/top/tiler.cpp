@@ -30,7 +30,7 @@ Tiler::Tiler(const sc_core::sc_module_name& name, const TilerConfig& config, Fra
   m_writer = std::make_unique<TileWriter>("writer", m_env, config.writer, config.framebuffer);
 
   auto fifo = [&](const char* n, int depth) {
-    m_fifos.push_back(std::make_unique<OccupancyFifo<Item>>(n, depth, trace_signals));
+    m_fifos.push_back(std::make_unique<OccupancyFifo<Item>>(n, depth));
     return m_fifos.back().get();
   };
   m_front_end->out(*fifo("front_end_to_setup", geometry_depth));
@@ -186,10 +186,10 @@ void Tiler::trace(sc_core::sc_trace_file* tf) const {
   }
   if (m_hsr) units.push_back(m_hsr.get());
   for (const UnitBase* u : units) sc_core::sc_trace(tf, u->busy, std::string(u->name()) + ".busy");
-  for (const auto& f : m_fifos) sc_core::sc_trace(tf, f->occupancy, f->name());
+  for (const auto& f : m_fifos) sc_core::sc_trace(tf, f->occupancy, std::string(f->name()) + ".occupancy");
   if (m_evu) {
-    sc_core::sc_trace(tf, m_evu->reject_to_clip().occupancy, m_evu->reject_to_clip().name());
-    sc_core::sc_trace(tf, m_evu->clip_to_occlude().occupancy, m_evu->clip_to_occlude().name());
+    sc_core::sc_trace(tf, m_evu->reject_to_clip().occupancy, std::string(m_evu->reject_to_clip().name()) + ".occupancy");
+    sc_core::sc_trace(tf, m_evu->clip_to_occlude().occupancy, std::string(m_evu->clip_to_occlude().name()) + ".occupancy");
   }
 }
 

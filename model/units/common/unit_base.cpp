@@ -4,7 +4,6 @@ namespace tilevis::sim {
 
 UnitBase::UnitBase(const sc_core::sc_module_name& name, const UnitEnv& env, const std::string& help)
     : sc_core::sc_module(name),
-      busy("busy"),
       m_work(*env.work),
       m_period(env.period),
       m_memory_latency(env.memory_latency),
@@ -32,10 +31,10 @@ void UnitBase::spend(uint64_t n, const sc_core::sc_time& memory, TileWork* tile,
   if (total == sc_core::SC_ZERO_TIME) return;
   m_stall.value += double(cycles(total - work));
   if (m_parent) m_parent->enter_busy();
-  if (m_trace) busy.write(true);
+  busy = true;
   sc_core::wait(work);
   m_busy.value += double(n);
-  if (m_trace) busy.write(false);
+  busy = false;
   if (total > work) sc_core::wait(total - work);
   if (m_parent) m_parent->leave_busy();
 }

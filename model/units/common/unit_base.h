@@ -25,29 +25,25 @@ struct UnitEnv {
 };
 
 // An sc_fifo that counts its occupancy for the VCD (sc_fifo traces contents, not fill).
+// A plain variable, traced by reference: a signal would have two drivers (both ends).
 template <typename T>
 class OccupancyFifo : public sc_core::sc_fifo<T> {
  public:
-  OccupancyFifo(const char* name, int depth, bool trace)
-      : sc_core::sc_fifo<T>(name, depth), occupancy((std::string(name) + "_occupancy").c_str()), m_trace(trace) {}
+  OccupancyFifo(const char* name, int depth) : sc_core::sc_fifo<T>(name, depth) {}
   void write(const T& v) override {
     sc_core::sc_fifo<T>::write(v);
-    if (m_trace) occupancy.write(++m_count);
+    ++occupancy;
   }
   void read(T& v) override {
     sc_core::sc_fifo<T>::read(v);
-    if (m_trace) occupancy.write(--m_count);
+    --occupancy;
   }
   T read() override {
     T v;
     read(v);
     return v;
   }
-  sc_core::sc_signal<int> occupancy;
-
- private:
-  bool m_trace;
-  int m_count = 0;
+  int occupancy = 0;
 };
 
 class UnitBase : public sc_core::sc_module {
@@ -55,7 +51,7 @@ class UnitBase : public sc_core::sc_module {
   StatsGroup& stats() { return m_stats; }
   const StatsGroup& stats() const { return m_stats; }
   uint64_t busy_cycles() const { return uint64_t(m_busy.value); }
-  sc_core::sc_signal<bool> busy;  // high while the unit works (VCD)
+  bool busy = false;  // true while the unit works (traced to the VCD by reference)
 
   // A parent (the EVU) counts as busy while any of its sub-units is.
   void set_parent(UnitBase* parent) { m_parent = parent; }

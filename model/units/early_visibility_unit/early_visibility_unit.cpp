@@ -66,8 +66,8 @@ EarlyVisibilityUnit::EarlyVisibilityUnit(const sc_core::sc_module_name& name, co
   m_reject = std::make_unique<EvuReject>("reject", env, m_cfg);
   m_clip = std::make_unique<EvuClip>("clip", env, m_cfg);
   m_occlude = std::make_unique<EvuOcclude>("occlude", env, m_cfg);
-  m_reject_to_clip = std::make_unique<OccupancyFifo<Item>>("reject_to_clip", fifo_depth, env.trace);
-  m_clip_to_occlude = std::make_unique<OccupancyFifo<Item>>("clip_to_occlude", fifo_depth, env.trace);
+  m_reject_to_clip = std::make_unique<OccupancyFifo<Item>>("reject_to_clip", fifo_depth);
+  m_clip_to_occlude = std::make_unique<OccupancyFifo<Item>>("clip_to_occlude", fifo_depth);
   m_reject->in(in);
   m_reject->out(*m_reject_to_clip);
   m_clip->in(*m_reject_to_clip);

@@ -1,0 +1,85 @@
+// The configuration layers: unknown keys and bad values are one-line errors naming the
+// place and the expectation; files (nested or dotted) and -p overrides apply; the
+// effective config reads back to itself; --list-params covers every parameter.
+#include <filesystem>
+#include <fstream>
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include "top/config.h"
+
+using namespace tilevis::sim;
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string error_of(const std::string& file, const std::vector<std::string>& overrides) {
+  try {
+    load_config(file, overrides);
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+fs::path write_temp(const std::string& name, const std::string& text) {
+  const fs::path dir = fs::temp_directory_path() / ("tilevis_sim_config_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  std::ofstream(dir / name) << text;
+  return dir / name;
+}
+
+}  // namespace
+
+TEST(Config, DefaultsResembleAPowerVRClassGpu) {
+  const TilerConfig c = load_config("", {});
+  EXPECT_EQ(c.sim.tile_width, 32u);
+  EXPECT_EQ(c.sim.tile_height, 32u);
+  EXPECT_EQ(c.sim.fidelity, Fidelity::tile);
+  EXPECT_EQ(c.sim.mode, Mode::analytic);
+  EXPECT_EQ(c.pb.capacity_bytes, 256ull << 20);
+  EXPECT_EQ(c.writer.pixels_per_clock, 4u);
+}
+
+TEST(Config, UnknownKeyIsAOneLineErrorWithASuggestion) {
+  const std::string e = error_of("", {"evu.reject.lanez=16"});
+  EXPECT_NE(e.find("-p evu.reject.lanez=16: evu.reject.lanez: unknown parameter"), std::string::npos) << e;
+  EXPECT_NE(e.find("did you mean evu.reject.lanes"), std::string::npos) << e;
+  EXPECT_EQ(e.find('\n'), std::string::npos);
+  const fs::path f = write_temp("unknown.json", R"({"evu": {"reject": {"lanes": 16}}, "memory": {"speed": 3}})");
+  const std::string ef = error_of(f.string(), {});
+  EXPECT_NE(ef.find(f.string() + ": $: memory.speed: unknown parameter"), std::string::npos) << ef;
+}
+
+TEST(Config, OutOfRangeAndWrongTypeNameTheExpectation) {
+  EXPECT_NE(error_of("", {"evu.reject.lanes=0"}).find("expected an integer in [1, 1024], got 0"), std::string::npos);
+  EXPECT_NE(error_of("", {"sim.mode=magic"}).find("expected one of analytic, hsr, early_z, none"), std::string::npos);
+  EXPECT_NE(error_of("", {"fragment.texture_hit_rate=1.5"}).find("expected a number in [0, 1]"), std::string::npos);
+  EXPECT_NE(error_of("", {"sim.tile_width"}).find("expected key=value"), std::string::npos);
+  const fs::path f = write_temp("broken.json", R"({"sim": {"tile_width": 32,})");
+  EXPECT_NE(error_of(f.string(), {}).find(f.string() + ": byte"), std::string::npos);
+}
+
+TEST(Config, FileThenOverridesApply) {
+  const fs::path f = write_temp("layers.json", R"({"evu": {"reject": {"lanes": 16}}, "sim.mode": "hsr", "pb.capacity_bytes": 1000})");
+  const TilerConfig c = load_config(f.string(), {"evu.reject.lanes=32", "sim.fidelity=primitive"});
+  EXPECT_EQ(c.evu.reject.lanes, 32u);  // -p wins over the file
+  EXPECT_EQ(c.sim.mode, Mode::hsr);
+  EXPECT_EQ(c.pb.capacity_bytes, 1000u);
+  EXPECT_EQ(c.sim.fidelity, Fidelity::primitive);
+}
+
+TEST(Config, EffectiveConfigReadsBackToItself) {
+  const TilerConfig c = load_config("", {"evu.clip.lanes=5", "sim.mode=early_z", "sim.clock_mhz=650.5"});
+  const fs::path f = write_temp("effective.json", to_json(c).dump(2));
+  EXPECT_EQ(to_json(load_config(f.string(), {})), to_json(c));
+}
+
+TEST(Config, ListParamsNamesEveryParameterWithDefaultAndUnit) {
+  const std::string list = list_params();
+  for (const std::string& name : param_names()) EXPECT_NE(list.find(name + " "), std::string::npos) << name;
+  EXPECT_NE(list.find("evu.reject.lanes"), std::string::npos);
+  EXPECT_NE(list.find("bytes/cycle"), std::string::npos);
+  EXPECT_GT(param_names().size(), 50u);
+}
