@@ -273,6 +273,7 @@ bool stage_clip(Pipeline<P>& p) {
   if (ex.where == Where::cpu) {
     ex.launch_dyn(k_clip_items<P>, clip_item_host<P>, p.counters.get() + kClipItems, ni, a);
   } else {
+    ++ex.queued;
     k_clip_items<P><<<ex.grid_blocks * 2, 128, 0, ex.stream>>>(a, p.counters.get() + kClipItems, ni);
     TV_CUDA(cudaGetLastError());
   }

@@ -111,6 +111,8 @@ class Exec {
   void* alloc(size_t bytes);
   void release(void* p, size_t bytes);
   uint64_t live_bytes() const { return m_live; }
+  // Work queued and host round trips since the last reset (per-run accounting).
+  uint32_t queued = 0, syncs = 0;
   uint64_t peak_bytes() const { return m_peak; }
 
   void upload(void* dst, const void* src, size_t bytes);
@@ -133,6 +135,7 @@ class Exec {
   void launch(void (*kernel)(Args, uint64_t), void (*body)(const Args&, uint64_t), uint64_t n, const Args& args,
               uint32_t block = 256) {
     if (n == 0) return;
+    ++queued;
     if (where == Where::cpu) {
       for (uint64_t k = 0; k < n; ++k) body(args, host_index(k, n));
       return;
@@ -146,6 +149,7 @@ class Exec {
   template <class Args>
   void launch_dyn(void (*kernel)(Args, const uint64_t*, uint64_t), void (*body)(const Args&, uint64_t),
                   const uint64_t* count, uint64_t cap, const Args& args, uint32_t block = 256) {
+    ++queued;
     if (where == Where::cpu) {
       uint64_t n = *count < cap ? *count : cap;
       for (uint64_t k = 0; k < n; ++k) body(args, host_index(k, n));

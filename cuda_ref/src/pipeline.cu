@@ -67,6 +67,7 @@ void Exec::upload(void* dst, const void* src, size_t bytes) {
 
 void Exec::download(void* dst, const void* src, size_t bytes) {
   if (bytes == 0) return;
+  ++syncs;
   if (where == Where::cpu) {
     std::memcpy(dst, src, bytes);
     return;
@@ -77,12 +78,14 @@ void Exec::download(void* dst, const void* src, size_t bytes) {
 
 void Exec::zero(void* p, size_t bytes) {
   if (bytes == 0) return;
+  ++queued;
   if (where == Where::cpu) std::memset(p, 0, bytes);
   else TV_CUDA(cudaMemsetAsync(p, 0, bytes, stream));
 }
 
 void Exec::fill_ones(void* p, size_t bytes) {
   if (bytes == 0) return;
+  ++queued;
   if (where == Where::cpu) std::memset(p, 0xff, bytes);
   else TV_CUDA(cudaMemsetAsync(p, 0xff, bytes, stream));
 }
@@ -126,6 +129,7 @@ __global__ void k_scan_total(const uint32_t* in, T* out, uint64_t n) {
 }  // namespace
 
 void Exec::exclusive_scan(const uint32_t* in, uint64_t* out, uint64_t n) {
+  queued += 2;
   if (where == Where::cpu) {
     uint64_t s = 0;
     for (uint64_t i = 0; i < n; ++i) {
@@ -147,6 +151,7 @@ void Exec::exclusive_scan(const uint32_t* in, uint64_t* out, uint64_t n) {
 }
 
 void Exec::exclusive_scan(const uint32_t* in, uint32_t* out, uint64_t n) {
+  queued += 2;
   if (where == Where::cpu) {
     uint32_t s = 0;
     for (uint64_t i = 0; i < n; ++i) {
@@ -170,6 +175,7 @@ void Exec::exclusive_scan(const uint32_t* in, uint32_t* out, uint64_t n) {
 void Exec::sort_pairs(const uint64_t* keys_in, uint64_t* keys_out, const uint32_t* vals_in, uint32_t* vals_out,
                       uint64_t n, int end_bit) {
   if (n == 0) return;
+  ++queued;
   if (end_bit < 1) end_bit = 1;
   if (where == Where::cpu) {
     std::vector<uint64_t> order(n);
@@ -235,6 +241,7 @@ double median(std::vector<double> v) {
 
 template <class P>
 bool run_once(Pipeline<P>& p, Timer& t) {
+  p.ex.queued = p.ex.syncs = 0;
   p.ex.zero(p.counters.get(), kCounterCount * 8);
   t.mark(0);
   stage_setup(p);
@@ -253,6 +260,39 @@ bool run_once(Pipeline<P>& p, Timer& t) {
   t.mark(7);
   p.ex.sync();
   return true;
+}
+
+__global__ void k_empty(uint64_t* p) {
+  if (p && threadIdx.x == 1024) *p = 0;  // never: keeps the launch from being optimised away
+}
+
+// Launch and round-trip costs of this device, for the lower bound of a run.
+void measure_launch_costs(Exec& ex, CudaResult& r) {
+  uint64_t* d = static_cast<uint64_t*>(ex.alloc(8));
+  uint64_t h = 0;
+  cudaEvent_t a, b;
+  TV_CUDA(cudaEventCreate(&a));
+  TV_CUDA(cudaEventCreate(&b));
+  for (int k = 0; k < 100; ++k) k_empty<<<1, 32, 0, ex.stream>>>(d);
+  TV_CUDA(cudaEventRecord(a, ex.stream));
+  constexpr int kLaunches = 2000;
+  for (int k = 0; k < kLaunches; ++k) k_empty<<<1, 32, 0, ex.stream>>>(d);
+  TV_CUDA(cudaEventRecord(b, ex.stream));
+  TV_CUDA(cudaEventSynchronize(b));
+  float ms = 0;
+  TV_CUDA(cudaEventElapsedTime(&ms, a, b));
+  r.launch_us = 1000.0 * ms / kLaunches;
+  constexpr int kTrips = 200;
+  const auto t0 = std::chrono::steady_clock::now();
+  for (int k = 0; k < kTrips; ++k) {
+    k_empty<<<1, 32, 0, ex.stream>>>(d);
+    TV_CUDA(cudaMemcpyAsync(&h, d, 8, cudaMemcpyDeviceToHost, ex.stream));
+    TV_CUDA(cudaStreamSynchronize(ex.stream));
+  }
+  r.round_trip_us = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count() / kTrips;
+  cudaEventDestroy(a);
+  cudaEventDestroy(b);
+  ex.release(d, 8);
 }
 
 template <class P>
@@ -289,6 +329,8 @@ CudaResult run(const trace::Frame& frame, const CudaConfig& cfg) {
       ++r.retries;
       continue;
     }
+    r.queued_operations = ex.queued;
+    r.host_syncs = ex.syncs;
     for (int s = 0; s < kStageCount; ++s) stage[s].push_back(timer.ms(s, s + 1));
     total.push_back(timer.ms(0, kStageCount));
     ++k;
@@ -345,6 +387,14 @@ CudaResult run(const trace::Frame& frame, const CudaConfig& cfg) {
   r.max_tile_pieces = c[kMaxTilePieces];
   r.float_anomalies = c[kFloatAnomalies];
   r.peak_device_bytes = ex.peak_bytes();
+  r.min_dram_bytes = p.f.n_vertices * 16 + p.f.n_triangles * 12 + n_samples * 4;
+  if (ex.where == Where::gpu) {
+    int khz = 0, bus_bits = 0;
+    if (cudaDeviceGetAttribute(&khz, cudaDevAttrMemoryClockRate, 0) == cudaSuccess &&
+        cudaDeviceGetAttribute(&bus_bits, cudaDevAttrGlobalMemoryBusWidth, 0) == cudaSuccess)
+      r.dram_bandwidth_gbs = 2.0 * khz * 1e3 * (bus_bits / 8.0) / 1e9;  // double data rate
+    measure_launch_costs(ex, r);
+  }
   return r;
 }
 

@@ -104,6 +104,12 @@ int run(const CudaArgs& a, const trace::Frame& frame, uint32_t tw, uint32_t th) 
                {"download_ms", r.download_ms},
                {"retries", r.retries},
                {"peak_device_bytes", r.peak_device_bytes},
+               {"queued_operations", r.queued_operations},
+               {"host_syncs", r.host_syncs},
+               {"min_dram_bytes", r.min_dram_bytes},
+               {"dram_bandwidth_gbs", r.dram_bandwidth_gbs},
+               {"launch_us", r.launch_us},
+               {"round_trip_us", r.round_trip_us},
                {"host_seconds", secs}};
   outputs::write_result(out, a.out);
   fmt::print("cuda {} frame {} at {}x{} tiles, {} on {}: {} triangles, {} silhouette edges, {} candidate pairs, "

@@ -63,6 +63,15 @@ struct CudaResult {
   uint32_t retries = 0;             // grow-and-retry rounds (first run)
   uint64_t peak_device_bytes = 0;
   std::string device_name;
+  // For lower bounds: work queued on the stream per run (kernels, CUB calls, memsets, copies),
+  // host round trips per run, the least DRAM traffic of any implementation (read the trace's
+  // vertices and indices, write the id raster) and the device's peak DRAM bandwidth.
+  uint32_t queued_operations = 0, host_syncs = 0;
+  uint64_t min_dram_bytes = 0;
+  double dram_bandwidth_gbs = 0;
+  // Measured on the device with an empty kernel: microseconds per back-to-back launch and per
+  // launch + 8-byte copy back + wait (a host round trip).
+  double launch_us = 0, round_trip_us = 0;
 };
 
 // Whether a CUDA device is usable; `why` says what is missing otherwise.

@@ -1,0 +1,183 @@
+#!/usr/bin/env bash
+# The cuda_ref cross-check on a GPU machine (Ubuntu 24.04, CUDA 13, CMake, Ninja, g++; no OpenEXR,
+# SystemC, GLM, assimp, CGAL, Boost, no network). Run from the repository root with .gpu/ carried
+# along (made here-and-now by cuda_ref/prepare_gpu_run.sh on a full build machine):
+#
+#   bash cuda_ref/gpu_run.sh [all | build | test | cross | sanitize | report]...
+#
+#   build     unpack .gpu/debs into /tmp/sysroot (dpkg -x), configure a TILEVIS_MINIMAL Release
+#             build with Ninja in build-gpu pointed at it, build, unpack .gpu/traces.tar.xz
+#   test      ctest: cuda_ref's GPU tests (label gpu; they must run, not skip) and its host tests
+#   cross     every scene at tiles 16, 32, 64: golden on the CPU (in parallel, first), then
+#             tilevis cuda exact and float on the GPU one at a time (--runs 20 after warm-up),
+#             tilevis compare of each against golden and of float against exact
+#   sanitize  compute-sanitizer memcheck and racecheck on a small trace, both precisions
+#   report    $OUT/<device>.json and .md (reports/cuda/ without $OUT), the table printed last
+#
+# $OUT receives <device>.json, <device>.md, work_json.tar.xz (every run's stats.json and
+# compare.json) and logs.tar.xz. Phases resume: results already in build-gpu/work are kept, so a run cut short by a time limit
+# continues where it stopped. Environment: OUT, TILEVIS_GPU_SCENES (names, default: all),
+# TILEVIS_GPU_TILES (default "16 32 64"), TILEVIS_GPU_RUNS (default 20), JOBS (default nproc),
+# TILEVIS_GPU_DEVICE=cpu (the host emulation: tries the script on a machine without a GPU).
+set -euo pipefail
+
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$ROOT"
+BUILD="$ROOT/build-gpu"
+WORK="$BUILD/work"
+TRACES="$BUILD/gpu_traces"
+SYSROOT=/tmp/sysroot
+REPORT_DIR="${OUT:-$ROOT/reports/cuda}"
+LOGS="$BUILD/logs"
+TILES="${TILEVIS_GPU_TILES:-16 32 64}"
+RUNS="${TILEVIS_GPU_RUNS:-20}"
+JOBS="${JOBS:-$(nproc)}"
+DEVICE="${TILEVIS_GPU_DEVICE:-gpu}"  # cpu: the host emulation, to try this script without a GPU
+BIN="$BUILD/model/app/tilevis"
+export PATH="/usr/local/cuda/bin:/usr/local/cuda/compute-sanitizer:$PATH"
+export LD_LIBRARY_PATH="$SYSROOT/usr/lib/x86_64-linux-gnu:$SYSROOT/lib/x86_64-linux-gnu${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+mkdir -p "$LOGS" "$WORK/meta" "$REPORT_DIR"
+# What comes back is few files: the report, the per-run JSON and the logs, each one archive.
+pack_logs() { tar -C "$LOGS" -cf - . 2>/dev/null | xz -6 >"$REPORT_DIR/logs.tar.xz" || true; }
+trap pack_logs EXIT
+
+say() { printf '\033[1mgpu_run:\033[0m %s\n' "$*" >&2; }
+die() { say "error: $*"; exit 1; }
+t_start=$SECONDS
+elapsed() { echo "$((SECONDS - t_start)) s"; }
+
+phase_build() {
+  [ -d .gpu/debs ] && [ -f .gpu/traces.tar.xz ] || die ".gpu/ missing: run cuda_ref/prepare_gpu_run.sh on a build machine and carry .gpu"
+  mkdir -p "$SYSROOT"
+  for d in .gpu/debs/*.deb; do dpkg -x "$d" "$SYSROOT"; done
+  # Debian's libz.so is an absolute link into /lib: name the library and headers explicitly.
+  local zinc=/usr/include zlib=""
+  [ -f /usr/include/zlib.h ] || zinc="$SYSROOT/usr/include"
+  for z in /usr/lib/x86_64-linux-gnu/libz.so /usr/lib/x86_64-linux-gnu/libz.so.1 /lib/x86_64-linux-gnu/libz.so.1 \
+           "$SYSROOT"/lib/x86_64-linux-gnu/libz.so.1; do
+    if [ -e "$z" ]; then zlib="$z"; break; fi
+  done
+  [ -n "$zlib" ] || die "no libz.so.1 found"
+  say "configure (TILEVIS_MINIMAL, OpenEXR from $SYSROOT, zlib $zlib)"
+  cmake -S "$ROOT" -B "$BUILD" -G Ninja -DCMAKE_BUILD_TYPE=Release -DTILEVIS_MINIMAL=ON \
+        -DCMAKE_PREFIX_PATH="$SYSROOT/usr" -DZLIB_INCLUDE_DIR="$zinc" -DZLIB_LIBRARY="$zlib" \
+        -DCMAKE_CUDA_COMPILER=/usr/local/cuda/bin/nvcc >"$LOGS/configure.log" 2>&1 ||
+    { tail -n 30 "$LOGS/configure.log" >&2; die "configure failed"; }
+  say "build ($JOBS jobs)"
+  cmake --build "$BUILD" -j "$JOBS" >"$LOGS/build.log" 2>&1 || { grep -E "error|FAILED" "$LOGS/build.log" | head -n 30 >&2; die "build failed"; }
+  [ -x "$BIN" ] || die "no $BIN after the build"
+  "$BIN" cuda --help | grep -q precision || die "tilevis has no cuda command"
+  if [ ! -f "$TRACES/bunny.tvt" ]; then
+    say "unpack traces"
+    mkdir -p "$TRACES" && tar -C "$TRACES" --strip-components=1 -xJf .gpu/traces.tar.xz
+  fi
+  say "build done ($(elapsed))"
+}
+
+phase_test() {
+  say "ctest: cuda_ref GPU and host tests"
+  local log="$LOGS/ctest.log" rc=0
+  ctest --test-dir "$BUILD" -L 'gpu|cuda' -j 4 --output-on-failure >"$log" 2>&1 || rc=$?
+  local summary skipped
+  summary="$(grep -E "tests passed|tests failed" "$log" | tail -n 1 || true)"
+  skipped="$(grep -c "Skipped" "$log" || true)"
+  echo "$summary; $skipped skipped (exit $rc)" >"$WORK/meta/gpu_tests.txt"
+  say "ctest: $summary; $skipped skipped"
+  [ "$rc" -eq 0 ] || { grep -E "Failed|\*\*\*" "$log" | head -n 20 >&2; say "tests FAILED (continuing: see $log)"; }
+  [ "$skipped" -eq 0 ] || say "warning: GPU tests skipped: is the GPU visible? (nvidia-smi)"
+}
+
+scenes() {
+  if [ -n "${TILEVIS_GPU_SCENES:-}" ]; then echo "$TILEVIS_GPU_SCENES"; return; fi
+  for t in "$TRACES"/*.tvt; do basename "$t" .tvt; done
+}
+
+phase_cross() {
+  [ -x "$BIN" ] || die "not built: run the build phase first"
+  local s t jobs=()
+  # Golden (CPU) first and all at once, so that no CPU load overlaps the timed GPU runs.
+  for s in $(scenes); do
+    for t in $TILES; do
+      [ -f "$WORK/$s/t$t/golden/stats.json" ] || jobs+=("$s $t")
+    done
+  done
+  if [ ${#jobs[@]} -gt 0 ]; then
+    say "golden: ${#jobs[@]} runs on $JOBS cores"
+    printf '%s\n' "${jobs[@]}" | xargs -P "$JOBS" -L 1 bash -c \
+      '"$0" golden "$1/$4.tvt" --tile "$5" -o "$2/$4/t$5/golden" >"$3/golden_$4_$5.log" 2>&1 || echo "golden $4 $5 failed" >&2' \
+      "$BIN" "$TRACES" "$WORK" "$LOGS" 2>&1 | tee -a "$LOGS/errors.log" >&2 || true
+  fi
+  say "golden done ($(elapsed))"
+  for s in $(scenes); do
+    for t in $TILES; do
+      local d="$WORK/$s/t$t"
+      for p in exact float; do
+        if [ ! -f "$d/$p/stats.json" ]; then
+          "$BIN" cuda "$TRACES/$s.tvt" --tile "$t" --precision "$p" --runs "$RUNS" --device "$DEVICE" -o "$d/$p" \
+            >"$LOGS/cuda_${s}_${t}_$p.log" 2>&1 || { say "cuda $s $t $p failed: $(tail -n 1 "$LOGS/cuda_${s}_${t}_$p.log")"; continue; }
+        fi
+        if [ -f "$d/golden/stats.json" ] && [ ! -f "$d/cmp_$p/compare.json" ]; then
+          "$BIN" compare "$d/golden" "$d/$p" -o "$d/cmp_$p" >"$LOGS/compare_${s}_${t}_$p.log" 2>&1 || say "compare $s $t $p failed"
+        fi
+      done
+      if [ -f "$d/exact/stats.json" ] && [ -f "$d/float/stats.json" ] && [ ! -f "$d/cmp_float_exact/compare.json" ]; then
+        "$BIN" compare "$d/exact" "$d/float" -o "$d/cmp_float_exact" >/dev/null 2>&1 || say "compare $s $t float/exact failed"
+      fi
+      # An exact mismatch is a bug: say where, with the cause of every mismatched sample.
+      if grep -qE '"(mismatched_samples|tile_counter_mismatches)": [1-9]' "$d/cmp_exact/compare.json" 2>/dev/null; then
+        say "MISMATCH: $s at $t (exact vs golden): explaining"
+        "$BIN" compare "$d/golden" "$d/exact" --explain "$TRACES/$s.tvt" -o "$d/cmp_exact_explain" \
+          >"$LOGS/explain_${s}_$t.txt" 2>&1 || true
+      fi
+      say "$s at $t done ($(elapsed))"
+    done
+  done
+}
+
+phase_sanitize() {
+  [ -x "$BIN" ] || die "not built: run the build phase first"
+  local small="$TRACES/small/dragon_320x240.tvt" tool p
+  command -v compute-sanitizer >/dev/null || { echo "compute-sanitizer not found" >"$WORK/meta/sanitizer.txt"; return; }
+  : >"$WORK/meta/sanitizer.txt.tmp"
+  for tool in memcheck racecheck; do
+    for p in exact float; do
+      local log="$LOGS/sanitizer_${tool}_$p.log" rc=0
+      compute-sanitizer --tool "$tool" --error-exitcode 3 "$BIN" cuda "$small" --tile 32 --precision "$p" --runs 1 \
+        -o "$WORK/sanitize/${tool}_$p" >"$log" 2>&1 || rc=$?
+      local line
+      line="$(grep -E "ERROR SUMMARY|RACECHECK SUMMARY" "$log" | tail -n 1 || true)"
+      echo "$tool $p: ${line:-no summary} (exit $rc)" >>"$WORK/meta/sanitizer.txt.tmp"
+      say "$tool $p: ${line:-no summary} (exit $rc)"
+    done
+  done
+  paste -sd ';' "$WORK/meta/sanitizer.txt.tmp" >"$WORK/meta/sanitizer.txt"
+  rm -f "$WORK/meta/sanitizer.txt.tmp"
+}
+
+phase_report() {
+  local device commit
+  device="$(nvidia-smi --query-gpu=name --format=csv,noheader 2>/dev/null | head -n 1 || true)"
+  [ -n "$device" ] || device="$(grep -h '^  "device":' "$WORK"/*/t*/exact/stats.json 2>/dev/null | head -n 1 | sed 's/.*"device": "\(.*\)".*/\1/')"
+  [ -n "$device" ] || device=unknown-gpu
+  commit="$(git rev-parse HEAD 2>/dev/null || cat .gpu/commit.txt 2>/dev/null || echo unknown)"
+  nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.max.sm,clocks.max.mem --format=csv,noheader \
+    >"$WORK/meta/nvidia_smi.txt" 2>/dev/null || true
+  nvcc --version | tail -n 1 >"$WORK/meta/nvcc.txt" 2>/dev/null || true
+  # Small per-run files for whoever reads the report (no images: they stay on the machine).
+  (cd "$WORK" && find . -name '*.json' -not -path './sanitize/*' | tar -cf - -T - | xz -6 >"$REPORT_DIR/work_json.tar.xz") || true
+  "$BUILD/cuda_ref/cuda_gpu_report" "$WORK" "$REPORT_DIR" "$device" "$commit"
+}
+
+phases=("$@")
+[ ${#phases[@]} -gt 0 ] || phases=(all)
+for ph in "${phases[@]}"; do
+  case "$ph" in
+    all) phase_build; phase_test; phase_cross; phase_sanitize; phase_report ;;
+    build) phase_build ;;
+    test) phase_test ;;
+    cross) phase_cross ;;
+    sanitize) phase_sanitize ;;
+    report) phase_report ;;
+    *) die "unknown phase $ph (all, build, test, cross, sanitize, report)" ;;
+  esac
+done

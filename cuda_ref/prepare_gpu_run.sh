@@ -1,0 +1,59 @@
+#!/usr/bin/env bash
+# Run HERE (a Debian 12 build machine with the full TileVis build): gathers into .gpu/ (git-ignored)
+# what cuda_ref/gpu_run.sh needs on a GPU machine that has CUDA, CMake and a compiler but no
+# OpenEXR/Imath and none of the scene generator's dependencies:
+#
+#   .gpu/debs/*.deb       OpenEXR 3.1 and Imath 3.1 (runtime + dev) and zlib (Ubuntu 24.04 ships
+#                         none of them by default; these are unpacked, not installed, there)
+#   .gpu/traces.tar.xz    every traces/scenes/*.json as a trace (`tilevis trace`), plus
+#                         small/dragon_320x240.tvt for compute-sanitizer
+#   .gpu/commit.txt       the commit the traces were made at
+#
+#   bash cuda_ref/prepare_gpu_run.sh            (TILEVIS_BIN=path/to/tilevis to pick the binary)
+#
+# Then, on the GPU machine, from the repository root with .gpu carried along:
+#   bash cuda_ref/gpu_run.sh
+set -euo pipefail
+
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$ROOT"
+say() { printf 'prepare_gpu_run: %s\n' "$*" >&2; }
+die() { say "error: $*"; exit 1; }
+
+BIN="${TILEVIS_BIN:-}"
+if [ -z "$BIN" ]; then
+  for b in build/model/app/tilevis build-cuda/model/app/tilevis; do
+    if [ -x "$b" ] && "$b" trace --help 2>/dev/null | grep -q "Scene file"; then BIN="$b"; break; fi
+  done
+fi
+[ -n "$BIN" ] && [ -x "$BIN" ] || die "no tilevis binary with the scene generator (build one: ./tilevis info, or set TILEVIS_BIN)"
+LIMIT_MIB=40
+
+# Debian 12 packages: OpenEXR, Imath and zlib headers (OpenEXRConfig.cmake asks for ZLIB).
+DEBS=(libopenexr-3-1-30 libopenexr-dev libimath-3-1-29 libimath-dev zlib1g zlib1g-dev)
+rm -rf .gpu/debs && mkdir -p .gpu/debs
+say "downloading ${DEBS[*]}"
+(cd .gpu/debs && apt-get download -q "${DEBS[@]}" >/dev/null) || die "apt-get download failed (network? apt-get update?)"
+
+rm -rf .gpu/traces && mkdir -p .gpu/traces/small
+for scene in traces/scenes/*.json; do
+  name="$(basename "$scene" .json)"
+  say "trace $name"
+  "$BIN" trace "$scene" -q -o ".gpu/traces/$name.tvt" || die "tilevis trace $scene failed"
+done
+say "trace dragon at 320x240 (sanitizers)"
+"$BIN" trace traces/scenes/dragon.json --viewport 320x240 -q -o .gpu/traces/small/dragon_320x240.tvt
+
+commit="$(git rev-parse HEAD 2>/dev/null || echo unknown)"
+git diff --quiet HEAD -- cuda_ref model traces tests 2>/dev/null || commit="$commit+local-changes"
+echo "$commit" > .gpu/commit.txt
+
+say "compressing traces"
+rm -f .gpu/traces.tar.xz
+tar -C .gpu -cf - traces | xz -6 -T2 > .gpu/traces.tar.xz
+rm -rf .gpu/traces
+
+total=$(du -sb .gpu | cut -f1)
+say "$(du -sh .gpu/debs | cut -f1) of .debs, $(du -sh .gpu/traces.tar.xz | cut -f1) of traces; $((total / 1048576)) MiB in .gpu"
+[ "$total" -le $((LIMIT_MIB * 1048576)) ] || die ".gpu is over ${LIMIT_MIB} MiB"
+say "done: carry .gpu to the GPU machine and run bash cuda_ref/gpu_run.sh there"

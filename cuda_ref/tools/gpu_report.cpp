@@ -1,0 +1,198 @@
+// cuda_gpu_report WORK OUT DEVICE COMMIT: gathers the cross-check that cuda_ref/gpu_run.sh
+// left in WORK (WORK/<scene>/t<tile>/{golden,exact,float}/stats.json and the compare.json
+// of exact and float against golden and of float against exact, WORK/meta/*.txt) into
+// OUT/<device>.json and OUT/<device>.md, and prints a short table.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+json load(const fs::path& p) {
+  std::ifstream in(p);
+  if (!in) return nullptr;
+  try {
+    return json::parse(in);
+  } catch (const std::exception&) {
+    return nullptr;
+  }
+}
+
+std::string slug(const std::string& s) {
+  std::string r;
+  for (char c : s) r += std::isalnum(static_cast<unsigned char>(c)) ? char(std::tolower(static_cast<unsigned char>(c))) : '_';
+  while (r.find("__") != std::string::npos) r.replace(r.find("__"), 2, "_");
+  return r;
+}
+
+std::string fmt(double v, int prec = 3) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%.*f", prec, v);
+  return b;
+}
+
+double num(const json& j, const char* k, double d = NAN) { return j.is_object() && j.contains(k) && j[k].is_number() ? j[k].get<double>() : d; }
+
+// SVGPU Table 1 (GTX 980, 1,024 bins): silhouette hash, silhouette clip, occlusion, total (ms).
+const std::map<std::string, std::vector<double>> kSvgpu = {{"bunny", {1.2, 12, 2.3, 15.5}},
+                                                           {"armadillo", {3.8, 30, 18, 51.8}},
+                                                           {"dragon", {24, 42, 38, 105}},
+                                                           {"armadillo_box", {3, 175, 39, 217}},
+                                                           {"dragon_bunnies", {66, 249, 179, 527}},
+                                                           {"teapot_stadium", {0.19, 22, 2, 24.19}}};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 5) {
+    std::fprintf(stderr, "usage: cuda_gpu_report WORK OUT DEVICE COMMIT\n");
+    return 2;
+  }
+  const fs::path work = argv[1], out = argv[2];
+  const std::string device = argv[3], commit = argv[4];
+  json report = {{"device", device}, {"commit", commit}, {"entries", json::array()}, {"meta", json::object()}};
+  if (fs::exists(work / "meta"))
+    for (const auto& e : fs::directory_iterator(work / "meta")) {
+      std::ifstream in(e.path());
+      std::stringstream ss;
+      ss << in.rdbuf();
+      std::string text = ss.str();
+      while (!text.empty() && (text.back() == '\n' || text.back() == ' ')) text.pop_back();
+      report["meta"][e.path().stem().string()] = text;
+    }
+
+  std::vector<fs::path> scenes;
+  for (const auto& e : fs::directory_iterator(work))
+    if (e.is_directory() && e.path().filename() != "meta") scenes.push_back(e.path());
+  std::sort(scenes.begin(), scenes.end());
+  for (const auto& sd : scenes) {
+    std::vector<fs::path> tiles;
+    for (const auto& e : fs::directory_iterator(sd))
+      if (e.is_directory()) tiles.push_back(e.path());
+    std::sort(tiles.begin(), tiles.end(), [](const fs::path& a, const fs::path& b) {
+      return std::stoi(a.filename().string().substr(1)) < std::stoi(b.filename().string().substr(1));
+    });
+    for (const auto& td : tiles) {
+      const json golden = load(td / "golden/stats.json");
+      for (const char* prec : {"exact", "float"}) {
+        const json st = load(td / prec / "stats.json");
+        json e = {{"scene", sd.filename().string()},
+                  {"tile", std::stoi(td.filename().string().substr(1))},
+                  {"precision", prec}};
+        if (st.is_null()) {
+          e["error"] = "no result (see the log)";
+          report["entries"].push_back(e);
+          continue;
+        }
+        const json cmp = load(td / (std::string("cmp_") + prec) / "compare.json");
+        const double tris = num(st["totals"], "triangles_in", 0);
+        e["total_ms"] = st["total_ms"];
+        e["stage_ms"] = st["stage_ms"];
+        e["runs"] = st["runs"];
+        e["triangles_in"] = tris;
+        e["mtri_per_s"] = tris / (num(st, "total_ms") * 1e3);
+        e["sample_agreement_vs_golden"] = cmp.is_null() ? json(nullptr) : cmp["sample_agreement"];
+        e["mismatched_samples_vs_golden"] = cmp.is_null() ? json(nullptr) : cmp["mismatched_samples"];
+        e["tile_counter_mismatches"] = cmp.is_null() ? json(nullptr) : cmp["tile_counter_mismatches"];
+        e["area_mismatches"] = cmp.is_null() ? json(nullptr) : cmp["area_mismatches"];
+        e["max_area_rel_error"] = cmp.is_null() ? json(nullptr) : cmp["max_area_rel_error"];
+        e["peak_device_bytes"] = st["peak_device_bytes"];
+        e["retries"] = st["retries"];
+        e["upload_ms"] = st["upload_ms"];
+        e["golden_host_seconds"] = golden.is_null() ? json(nullptr) : golden["host_seconds"];
+        for (const char* k : {"candidate_pairs", "clip_polygons", "pieces", "visible_pieces", "pair_tests", "float_anomalies"})
+          e[k] = st["totals"].value(k, json(nullptr));
+        // Lower bounds: DRAM traffic no implementation avoids, and the launches and host
+        // round trips this implementation makes (at the device's measured costs).
+        const double bw = num(st, "dram_bandwidth_gbs", 0);
+        const double bw_ms = bw > 0 ? num(st, "min_dram_bytes", 0) / (bw * 1e6) : NAN;
+        const double launch_ms = (num(st, "queued_operations", 0) * num(st, "launch_us", 0) +
+                                  num(st, "host_syncs", 0) * num(st, "round_trip_us", 0)) / 1e3;
+        e["floor"] = {{"min_dram_bytes", st["min_dram_bytes"]},   {"dram_bandwidth_gbs", bw},
+                      {"bandwidth_ms", bw_ms},                    {"queued_operations", st["queued_operations"]},
+                      {"host_syncs", st["host_syncs"]},           {"launch_us", st["launch_us"]},
+                      {"round_trip_us", st["round_trip_us"]},     {"launch_and_sync_ms", launch_ms}};
+        if (std::string(prec) == "float") {
+          const json fe = load(td / "cmp_float_exact/compare.json");
+          if (!fe.is_null())
+            e["float_vs_exact"] = {{"sample_agreement", fe["sample_agreement"]},
+                                   {"mismatched_samples", fe["mismatched_samples"]},
+                                   {"tile_counter_mismatches", fe["tile_counter_mismatches"]},
+                                   {"max_area_rel_error", fe["max_area_rel_error"]}};
+        }
+        report["entries"].push_back(e);
+      }
+    }
+  }
+
+  fs::create_directories(out);
+  const std::string name = slug(device);
+  std::ofstream(out / (name + ".json")) << report.dump(2) << '\n';
+
+  std::ostringstream md;
+  md << "# cuda_ref on " << device << "\n\ncommit `" << commit << "`; times are CUDA-event medians, trace in device "
+     << "memory to id raster (upload and download excluded).\n\n";
+  for (const auto& [k, v] : report["meta"].items()) md << "- **" << k << "**: " << v.get<std::string>() << "\n";
+  md << "\n| scene | tile | precision | total ms | M tri/s | agreement vs golden | tile-counter mismatches | "
+        "float vs exact | peak MiB | floor ms (DRAM / launches) |\n|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const auto& e : report["entries"]) {
+    if (e.contains("error")) {
+      md << "| " << e["scene"].get<std::string>() << " | " << e["tile"] << " | " << e["precision"].get<std::string>()
+         << " | " << e["error"].get<std::string>() << " | | | | | | |\n";
+      continue;
+    }
+    const double agree = num(e, "sample_agreement_vs_golden");
+    std::string fve = "";
+    if (e.contains("float_vs_exact")) fve = fmt(100 * num(e["float_vs_exact"], "sample_agreement"), 4) + " %";
+    md << "| " << e["scene"].get<std::string>() << " | " << e["tile"] << " | " << e["precision"].get<std::string>()
+       << " | " << fmt(num(e, "total_ms")) << " | " << fmt(num(e, "mtri_per_s"), 1) << " | "
+       << (std::isnan(agree) ? "n/a" : fmt(100 * agree, 4) + " %") << " | " << e["tile_counter_mismatches"].dump()
+       << " | " << fve << " | " << fmt(num(e, "peak_device_bytes", 0) / 1048576.0, 1) << " | "
+       << fmt(num(e["floor"], "bandwidth_ms"), 4) << " / " << fmt(num(e["floor"], "launch_and_sync_ms"), 3) << " |\n";
+  }
+  md << "\n## Per stage at 32x32 tiles (ms) beside SVGPU Table 1 (GTX 980, 1,024 bins)\n\n"
+        "SVGPU's silhouette hash = `silhouettes`; its clip = `cull` + `clip`; its occlusion = `occlusion`.\n\n"
+        "| scene | precision | setup | silhouettes | binning | cull | clip | occlusion | raster | total | SVGPU hash / clip / "
+        "occlusion / total |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const auto& e : report["entries"]) {
+    if (e.contains("error") || e["tile"] != 32) continue;
+    md << "| " << e["scene"].get<std::string>() << " | " << e["precision"].get<std::string>();
+    for (const char* s : {"setup", "silhouettes", "binning", "cull", "clip", "occlusion", "raster"})
+      md << " | " << fmt(num(e["stage_ms"], s), 3);
+    md << " | " << fmt(num(e, "total_ms"), 3) << " | ";
+    const auto it = kSvgpu.find(e["scene"].get<std::string>());
+    if (it != kSvgpu.end())
+      md << it->second[0] << " / " << it->second[1] << " / " << it->second[2] << " / " << it->second[3];
+    md << " |\n";
+  }
+  std::ofstream(out / (name + ".md")) << md.str();
+
+  // The short table, last thing printed.
+  std::printf("\n%-16s %5s %-6s %10s %9s %12s %9s %11s\n", "scene", "tile", "prec", "total_ms", "Mtri/s", "agree_golden",
+              "tile_mism", "float_vs_ex");
+  for (const auto& e : report["entries"]) {
+    if (e.contains("error")) {
+      std::printf("%-16s %5d %-6s %s\n", e["scene"].get<std::string>().c_str(), e["tile"].get<int>(),
+                  e["precision"].get<std::string>().c_str(), "ERROR");
+      continue;
+    }
+    const double fv = e.contains("float_vs_exact") ? num(e["float_vs_exact"], "sample_agreement") : NAN;
+    std::printf("%-16s %5d %-6s %10.3f %9.1f %12.6f %9s %11s\n", e["scene"].get<std::string>().c_str(),
+                e["tile"].get<int>(), e["precision"].get<std::string>().c_str(), num(e, "total_ms"),
+                num(e, "mtri_per_s"), num(e, "sample_agreement_vs_golden"), e["tile_counter_mismatches"].dump().c_str(),
+                std::isnan(fv) ? "" : fmt(fv, 6).c_str());
+  }
+  std::printf("wrote %s and %s\n", (out / (name + ".json")).c_str(), (out / (name + ".md")).c_str());
+  return 0;
+}
