@@ -47,6 +47,8 @@ int run_sim(const SimArgs& a) {
     params.push_back(fmt::format("sim.tile_height={}", th));
   }
   const sim::TilerConfig cfg = sim::load_config(a.config, params);
+  if (!a.vcd.empty() && cfg.sim.fidelity == sim::Fidelity::analytic)
+    throw std::runtime_error("--vcd " + a.vcd + ": fidelity analytic simulates no events; use tile or primitive");
   trace::Trace t = trace::read(a.trace);
   if (a.frame >= t.frames.size())
     throw std::runtime_error(fmt::format("--frame {}: {} has {} frame(s)", a.frame, a.trace, t.frames.size()));
