@@ -76,7 +76,8 @@ class EarlyVisibilityUnit : public UnitBase {
   EvuOcclude& occlude() { return *m_occlude; }
   // Work counters of a resolved tile into the unit's group (both levels call it once per tile).
   void count_tile(const TileWork& w);
-  // The analytic level: union busy time is not simulated; the sum of the sub-units' is an upper bound.
+  // The analytic level: a tile keeps the EVU busy for its slowest sub-unit (the three
+  // pipeline over the tile's triangles); the event-driven levels measure the union.
   void account_analytic(uint64_t cycles) { m_busy.value += double(cycles); }
 
  private:
