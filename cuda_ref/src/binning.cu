@@ -107,6 +107,28 @@ TV_HD void tile_begin(const RangeArgs& a, uint64_t i) {
 }
 
 template <class P>
+struct BoxArgs {
+  const SilEdge<P>* edges;
+  const uint32_t* ids;
+  Rect* box;
+};
+template <class P>
+TV_HD void gather_box(const BoxArgs<P>& a, uint64_t k) { a.box[k] = a.edges[a.ids[k]].bbox; }
+
+template <class P>
+struct OccGatherArgs {
+  const TileTri<P>* tris;
+  const uint32_t* ids;
+  OccRec* rec;
+};
+template <class P>
+TV_HD void gather_occ(const OccGatherArgs<P>& a, uint64_t k) {
+  const uint32_t i = a.ids[k];
+  const TileTri<P>& t = a.tris[i];
+  a.rec[k] = {t.bbox, t.z_min, t.id, i, 0};
+}
+
+template <class P>
 struct AreaKeyArgs {
   const TileTri<P>* tris;
   const uint32_t* item_tri;
@@ -137,6 +159,14 @@ __global__ void k_bin_edge_emit(BinArgs<P> a, uint64_t n) {
 }
 __global__ void k_tile_begin(RangeArgs a, uint64_t n) {
   TV_GRID_LOOP(i, n) tile_begin(a, i);
+}
+template <class P>
+__global__ void k_gather_box(BoxArgs<P> a, uint64_t n) {
+  TV_GRID_LOOP(i, n) gather_box<P>(a, i);
+}
+template <class P>
+__global__ void k_gather_occ(OccGatherArgs<P> a, uint64_t n) {
+  TV_GRID_LOOP(i, n) gather_occ<P>(a, i);
 }
 template <class P>
 __global__ void k_area_key(AreaKeyArgs<P> a, uint64_t n) {
@@ -180,8 +210,7 @@ void stage_binning(Pipeline<P>& p) {
   ex.exclusive_scan(a.tri_tiles, p.tri_tiles_off.get(), p.n_tris);
   ex.exclusive_scan(a.edge_tiles, p.edge_tiles_off.get(), p.n_edges);
   // sync: the numbers of (tile, triangle) and (tile, edge) pairs.
-  p.n_items = ex.read(p.tri_tiles_off.get() + p.n_tris);
-  p.n_tile_edges = ex.read(p.edge_tiles_off.get() + p.n_edges);
+  ex.read_many({{&p.n_items, p.tri_tiles_off.get() + p.n_tris}, {&p.n_tile_edges, p.edge_tiles_off.get() + p.n_edges}});
   if (p.n_items >= 0xffffffffull) throw std::runtime_error("cuda: more than 2^32 - 2 (tile, triangle) pairs");
 
   const uint64_t ni = p.n_items, ne = p.n_tile_edges;
@@ -208,6 +237,8 @@ void stage_binning(Pipeline<P>& p) {
   ex.zero(edge_begin, tiles * 4ull);
   ex.launch(k_tile_begin, tile_begin, ni, RangeArgs{p.item_key_sorted.get(), 0, ni, item_begin});
   ex.launch(k_tile_begin, tile_begin, ne, RangeArgs{p.tedge_key_sorted.get(), uint32_t(d), ne, edge_begin});
+  ex.launch(k_gather_occ<P>, gather_occ<P>, ni, OccGatherArgs<P>{p.tris.get(), p.occ_tri_sorted.get(), p.occ_rec.need(ni + 1)});
+  ex.launch(k_gather_box<P>, gather_box<P>, ne, BoxArgs<P>{p.edges.get(), p.tedge_id_sorted.get(), p.tedge_box.need(ne + 1)});
 
   AreaKeyArgs<P> ak{p.tris.get(), p.item_tri_sorted.get(), p.area_key.need(ni + 1), p.area_item.need(ni + 1)};
   ex.launch(k_area_key<P>, area_key<P>, ni, ak);

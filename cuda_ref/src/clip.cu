@@ -74,6 +74,7 @@ struct ClipArgs {
   uint32_t* cand_edges;
   uint32_t* cand_sorted;
   uint64_t cand_cap;  // room in cand_edges / cand_sorted; offsets past it belong to an overflowed run
+  uint64_t deep_cap;
   uint32_t* clip_items;
   uint32_t* item_slot;
   uint64_t* slot_poly;  // edge offset << 32 | edge count
@@ -86,6 +87,13 @@ struct ClipArgs {
   uint64_t n_items;
 };
 
+// A run whose candidate list overflowed has per-item counts without all their records: it is
+// repeated with a larger list, and nothing here may read the incomplete one.
+template <class P>
+TV_HD inline bool candidates_overflowed(const ClipArgs<P>& a) {
+  return a.counters[kCandidates] > a.cand_cap || a.counters[kDeepPairs] > a.deep_cap;
+}
+
 template <class P>
 TV_HD void cand_scatter(const ClipArgs<P>& a, uint64_t k) {
   const uint64_t d = a.cands[k];
@@ -97,7 +105,7 @@ TV_HD void cand_scatter(const ClipArgs<P>& a, uint64_t k) {
 template <class P>
 TV_HD void clip_list(const ClipArgs<P>& a, uint64_t j) {
   if (a.cand_count[j] == 0) return;
-  a.clip_items[atomic_add(&a.counters[kClipItems], 1)] = uint32_t(j);
+  a.clip_items[bump_one(&a.counters[kClipItems], ~uint64_t{0})] = uint32_t(j);
 }
 
 // The most pieces c lines can cut a convex region into: 1 + c + c (c - 1) / 2.
@@ -110,7 +118,7 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team) {
   const uint32_t c = a.cand_count[j], off = a.cand_offset[j];
   const uint32_t tile = uint32_t(a.item_key[j]);
   const TileTri<P>& tt = a.tris[a.item_tri[j]];
-  if (uint64_t(off) + c > a.cand_cap) return;  // the candidate list overflowed: this run is repeated
+  if (candidates_overflowed(a) || uint64_t(off) + c > a.cand_cap) return;
 
   // Candidates in ascending silhouette id (the canonical order): each id's rank is its slot.
   for (uint32_t k = lane; k < c; k += Team::kSize) {
@@ -255,6 +263,7 @@ bool stage_clip(Pipeline<P>& p) {
   a.cand_edges = p.cand_edges.need(p.caps.candidates);
   a.cand_sorted = p.cand_scratch.need(p.caps.candidates);
   a.cand_cap = p.caps.candidates;
+  a.deep_cap = p.caps.deep_pairs;
   a.clip_items = p.clip_items.need(ni + 1);
   a.item_slot = p.item_slot.need(ni + 1);
   a.slot_poly = p.slot_poly.need(p.caps.clip_slots);
@@ -282,8 +291,9 @@ bool stage_clip(Pipeline<P>& p) {
 
   // sync: overflow counters and the piece count, in one copy.
   uint64_t c[kCounterCount];
+  ex.copy(p.counters.get() + kPieces, p.piece_offset.get() + ni, 8);
   ex.download(c, p.counters.get(), sizeof(c));
-  p.n_pieces = ex.read(p.piece_offset.get() + ni);
+  p.n_pieces = c[kPieces];
   bool ok = true;
   Capacities& caps = p.caps;
   auto grow = [&](uint64_t& cap, uint64_t used) {

@@ -1,10 +1,9 @@
-// Per-tile culling (SVGPU §3.2.1), flattened over (triangle, edge) pairs instead of one thread
-// per tile: the pair count of an item (tile, triangle) is the number of the tile's edges not
-// behind the triangle (test 6 on edges sorted by nearest depth: a binary search), a prefix
-// sum lays all pairs of the frame out in one index space, and threads take 32 consecutive
-// pairs each. The cheap tests (test 6, bounding boxes, test 4) run there; the survivors are
-// appended to a list (device counter, grown and retried on overflow) for the exact tests
-// 1-3 against the triangle's tile polygon, one thread per pair.
+// Per-tile culling (SVGPU §3.2.1), one thread per (tile, triangle) item rather than per tile:
+// the pairs of an item are the tile's edges not behind the triangle (test 6 on edges sorted
+// by nearest depth: a binary search gives the count). The cheap tests (test 6, bounding
+// boxes, test 4) run there; the survivors are appended to a list (device counter, grown and
+// retried on overflow) for the exact tests 1-3 against the triangle's tile polygon, one
+// thread per pair.
 #include "pipeline.cuh"
 
 namespace tilevis::cuda {
@@ -17,12 +16,11 @@ struct CullArgs {
   const uint32_t* item_tri;
   const uint64_t* tedge_key;  // tile << D | z_min
   const uint32_t* tedge_id;
+  const Rect* tedge_box;
   const uint32_t* edge_begin;
   int64_t* rows;
   TileGrid grid;
   uint32_t depth_bits;
-  uint32_t* pair_count;
-  const uint64_t* pair_offset;
   uint32_t* piece_count;
   uint64_t* deep;
   uint64_t deep_cap;
@@ -35,17 +33,25 @@ struct CullArgs {
 
 namespace {
 
+// One thread per item (tile, triangle). The items of a tile are neighbours, so the lanes of a
+// warp walk the same tile's edge list (edges by nearest depth) nearly in step: the loads of
+// the streamed edge boxes are shared. Pairs past the cheap tests go to the exact tests.
 template <class P>
 TV_HD void cull_item(const CullArgs<P>& a, uint64_t j) {
   const uint32_t tile = uint32_t(a.item_key[j]);
   const TileTri<P>& tt = a.tris[a.item_tri[j]];
-  PEdge<P> poly[kTileCap];
-  bool overflow = false;
-  const uint32_t n = tile_polygon<P>(tt, a.grid.rect(tile), poly, overflow);
-  if (overflow) atomic_add(&a.counters[kFloatAnomalies], 1);
   a.cand_count[j] = 0;
+  // Binning put the triangle here because its interior meets the tile's, so the exact tile
+  // polygon is never empty (golden's empty check cannot fire). Float arithmetic can make it
+  // empty, and then the item does nothing, as golden would with an empty polygon.
+  uint32_t n = 3;
+  if constexpr (!P::kExact) {
+    PEdge<P> poly[kTileCap];
+    bool overflow = false;
+    n = tile_polygon<P>(tt, a.grid.rect(tile), poly, overflow);
+    if (overflow) atomic_add(&a.counters[kFloatAnomalies], 1);
+  }
   if (n == 0) {
-    a.pair_count[j] = 0;
     a.piece_count[j] = 0;
     return;
   }
@@ -61,49 +67,24 @@ TV_HD void cull_item(const CullArgs<P>& a, uint64_t j) {
     if ((a.tedge_key[begin + mid] & zmask) <= tt.z_max) lo = mid + 1;
     else hi = mid;
   }
-  a.pair_count[j] = lo;
-  if (lo) atomic_add(&a.rows[uint64_t(tile) * kTileColumns + kColPairTests], int64_t(lo));
-}
-
-// Threads take 32 consecutive pairs: one binary search for the first pair's item, then a walk.
-inline constexpr uint32_t kPairChunk = 32;
-
-template <class P>
-TV_HD void cull_pairs(const CullArgs<P>& a, uint64_t chunk) {
-  const uint64_t total = a.pair_offset[a.n_items];
-  const uint64_t p0 = chunk * kPairChunk;
-  if (p0 >= total) return;
-  const uint64_t p1 = tmin<uint64_t>(total, p0 + kPairChunk);
-  uint64_t lo = 0, hi = a.n_items;  // last item whose offset <= p0
-  while (hi - lo > 1) {
-    const uint64_t mid = (lo + hi) / 2;
-    if (a.pair_offset[mid] <= p0) lo = mid;
-    else hi = mid;
-  }
-  uint64_t j = lo;
-  uint64_t next = a.pair_offset[j + 1];
-  const TileTri<P>* tt = &a.tris[a.item_tri[j]];
-  uint32_t begin = a.edge_begin[uint32_t(a.item_key[j])];
-  for (uint64_t p = p0; p < p1; ++p) {
-    while (p >= next) {
-      ++j;
-      next = a.pair_offset[j + 1];
-      tt = &a.tris[a.item_tri[j]];
-      begin = a.edge_begin[uint32_t(a.item_key[j])];
-    }
-    const uint32_t ei = a.tedge_id[begin + (p - a.pair_offset[j])];
+  if (lo == 0) return;
+  atomic_add(&a.rows[uint64_t(tile) * kTileColumns + kColPairTests], int64_t(lo));
+  const Rect tb = tt.bbox;
+  for (uint32_t k = begin; k < begin + lo; ++k) {
+    // Bounding boxes that at most touch: the segment cannot meet the interior (test 2). The
+    // boxes are streamed in the tile's order; the edge itself is read only past this test.
+    const Rect eb = a.tedge_box[k];
+    if (eb.x1 <= tb.x0 || eb.x0 >= tb.x1 || eb.y1 <= tb.y0 || eb.y0 >= tb.y1) continue;
+    const uint32_t ei = a.tedge_id[k];
     const SilEdge<P>& e = a.edges[ei];
-    // Bounding boxes that at most touch: the segment cannot meet the interior (test 2).
-    if (e.bbox.x1 <= tt->bbox.x0 || e.bbox.x0 >= tt->bbox.x1 || e.bbox.y1 <= tt->bbox.y0 || e.bbox.y0 >= tt->bbox.y1)
-      continue;
     // Test 4: the silhouette edge is an edge of the triangle.
     bool same = false;
-    for (int k = 0; k < 3; ++k) {
-      const Vtx &u = tt->v[k], &w = tt->v[(k + 1) % 3];
+    for (int q = 0; q < 3; ++q) {
+      const Vtx &u = tt.v[q], &w = tt.v[(q + 1) % 3];
       same |= (u == e.a && w == e.b) || (u == e.b && w == e.a);
     }
     if (same) continue;
-    const uint64_t at = bump(&a.counters[kDeepPairs], 1, a.deep_cap);
+    const uint64_t at = bump_one(&a.counters[kDeepPairs], a.deep_cap);
     if (at != ~uint64_t{0}) a.deep[at] = (j << 32) | ei;
   }
 }
@@ -120,19 +101,13 @@ TV_HD void cull_exact(const CullArgs<P>& a, uint64_t k) {
   if (!survives<P>(poly, n, tt, a.edges[ei])) return;
   atomic_add(&a.rows[uint64_t(tile) * kTileColumns + kColCandidates], 1);
   atomic_add(&a.cand_count[j], 1u);
-  const uint64_t at = bump(&a.counters[kCandidates], 1, a.cand_cap);
+  const uint64_t at = bump_one(&a.counters[kCandidates], a.cand_cap);
   if (at != ~uint64_t{0}) a.cands[at] = d;
 }
 
 template <class P>
 __global__ void k_cull_item(CullArgs<P> a, uint64_t n) {
   TV_GRID_LOOP(i, n) cull_item<P>(a, i);
-}
-template <class P>
-__global__ void k_cull_pairs(CullArgs<P> a, uint64_t n) {
-  const uint64_t chunks = (a.pair_offset[a.n_items] + kPairChunk - 1) / kPairChunk;
-  (void)n;
-  TV_GRID_LOOP(i, chunks) cull_pairs<P>(a, i);
 }
 template <class P>
 __global__ void k_cull_exact(CullArgs<P> a, const uint64_t* count, uint64_t cap) {
@@ -153,12 +128,11 @@ void stage_cull(Pipeline<P>& p) {
   a.item_tri = p.item_tri_sorted.get();
   a.tedge_key = p.tedge_key_sorted.get();
   a.tedge_id = p.tedge_id_sorted.get();
+  a.tedge_box = p.tedge_box.get();
   a.edge_begin = p.tile_edge_begin.get();
   a.rows = p.tile_rows.get();
   a.grid = p.grid;
   a.depth_bits = p.f.depth_bits;
-  a.pair_count = p.pair_count.need(ni + 1);
-  a.pair_offset = p.pair_offset.need(ni + 1);
   a.piece_count = p.piece_count.need(ni + 1);
   a.deep = p.deep.need(p.caps.deep_pairs);
   a.deep_cap = p.caps.deep_pairs;
@@ -168,13 +142,6 @@ void stage_cull(Pipeline<P>& p) {
   a.cand_cap = p.caps.candidates;
   a.n_items = ni;
   ex.launch(k_cull_item<P>, cull_item<P>, ni, a);
-  ex.exclusive_scan(a.pair_count, p.pair_offset.get(), ni);
-  if (ex.where == Where::cpu) {
-    const uint64_t chunks = (a.pair_offset[ni] + kPairChunk - 1) / kPairChunk;
-    for (uint64_t k = 0; k < chunks; ++k) cull_pairs<P>(a, ex.host_index(k, chunks));
-  } else {
-    ex.launch(k_cull_pairs<P>, cull_pairs<P>, uint64_t(ex.grid_blocks) * 256 * 4, a);
-  }
   ex.launch_dyn(k_cull_exact<P>, cull_exact<P>, p.counters.get() + kDeepPairs, p.caps.deep_pairs, a);
 }
 

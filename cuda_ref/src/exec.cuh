@@ -8,6 +8,8 @@
 
 #include <cstdint>
 #include <cstring>
+#include <initializer_list>
+#include <utility>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -93,6 +95,22 @@ TV_HD inline uint64_t bump(uint64_t* counter, uint64_t n, uint64_t cap) {
   return at + n <= cap ? at : ~uint64_t{0};
 }
 
+// One slot from a bump counter, the atomics of a warp's active lanes combined into one.
+TV_HD inline uint64_t bump_one(uint64_t* counter, uint64_t cap) {
+#if defined(__CUDA_ARCH__)
+  const unsigned mask = __activemask();
+  const unsigned lane = threadIdx.x & 31u;
+  const int leader = __ffs(mask) - 1;
+  unsigned long long base = 0;
+  if (int(lane) == leader) base = atomicAdd(reinterpret_cast<unsigned long long*>(counter), __popc(mask));
+  base = __shfl_sync(mask, base, leader);
+  const uint64_t at = base + __popc(mask & ((1u << lane) - 1u));
+  return at < cap ? at : ~uint64_t{0};
+#else
+  return bump(counter, 1, cap);
+#endif
+}
+
 enum class Where { gpu, cpu };
 
 class Exec {
@@ -118,6 +136,7 @@ class Exec {
   void upload(void* dst, const void* src, size_t bytes);
   void download(void* dst, const void* src, size_t bytes);
   void zero(void* p, size_t bytes);
+  void copy(void* dst, const void* src, size_t bytes);  // device to device, queued
   void fill_ones(void* p, size_t bytes);
   void sync();
   template <class T>
@@ -126,6 +145,8 @@ class Exec {
     download(&v, p, sizeof(T));
     return v;
   }
+  // Several device scalars with one host round trip.
+  void read_many(std::initializer_list<std::pair<uint64_t*, const uint64_t*>> items);
 
   // Visiting order of a host loop over n elements (identity, or scrambled when shuffling).
   uint64_t host_index(uint64_t k, uint64_t n) const;

@@ -10,7 +10,7 @@ namespace {
 template <class P>
 struct OccArgs {
   PieceSource<P> src;
-  const uint32_t* occ_tri;     // by (tile, not opaque, z_min)
+  const OccRec* occ;           // by (tile, not opaque, z_min)
   const uint32_t* item_begin;  // per tile, first entry in occ_tri
   const uint32_t* occ_count;   // per tile, opaque entries
   int64_t* rows;
@@ -28,7 +28,7 @@ TV_HD void occlude_piece(const OccArgs<P>& a, uint64_t p) {
   if (v.n < 3) return;  // a float polygon that degenerated: covers nothing
   const TileTri<P>& tt = a.src.tris[v.tri];
   uint32_t tests = 0;
-  const bool hidden = occluded<P>(v.e, tt, a.src.tris, a.occ_tri + a.item_begin[v.tile], a.occ_count[v.tile], tests);
+  const bool hidden = occluded<P>(v.e, tt, a.src.tris, a.occ + a.item_begin[v.tile], a.occ_count[v.tile], tests);
   int64_t* row = a.rows + uint64_t(v.tile) * kTileColumns;
   if (tests) atomic_add(&row[kColOcclusionTests], int64_t(tests));
   if (hidden) return;
@@ -49,7 +49,7 @@ template <class P>
 void stage_occlusion(Pipeline<P>& p) {
   OccArgs<P> a{};
   a.src = piece_source(p);
-  a.occ_tri = p.occ_tri_sorted.get();
+  a.occ = p.occ_rec.get();
   a.item_begin = p.tile_item_begin.get();
   a.occ_count = p.tile_occ_count.get();
   a.rows = p.tile_rows.get();

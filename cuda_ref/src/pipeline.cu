@@ -76,6 +76,21 @@ void Exec::download(void* dst, const void* src, size_t bytes) {
   TV_CUDA(cudaStreamSynchronize(stream));
 }
 
+void Exec::read_many(std::initializer_list<std::pair<uint64_t*, const uint64_t*>> items) {
+  ++syncs;
+  for (const auto& [dst, src] : items) {
+    if (where == Where::cpu) *dst = *src;
+    else TV_CUDA(cudaMemcpyAsync(dst, src, 8, cudaMemcpyDeviceToHost, stream));
+  }
+  if (where == Where::gpu) TV_CUDA(cudaStreamSynchronize(stream));
+}
+
+void Exec::copy(void* dst, const void* src, size_t bytes) {
+  ++queued;
+  if (where == Where::cpu) std::memcpy(dst, src, bytes);
+  else TV_CUDA(cudaMemcpyAsync(dst, src, bytes, cudaMemcpyDeviceToDevice, stream));
+}
+
 void Exec::zero(void* p, size_t bytes) {
   if (bytes == 0) return;
   ++queued;
@@ -386,6 +401,7 @@ CudaResult run(const trace::Frame& frame, const CudaConfig& cfg) {
   r.visible_triangles = c[kVisibleTriangles];
   r.max_tile_pieces = c[kMaxTilePieces];
   r.float_anomalies = c[kFloatAnomalies];
+  r.deep_pairs = c[kDeepPairs];
   r.peak_device_bytes = ex.peak_bytes();
   r.min_dram_bytes = p.f.n_vertices * 16 + p.f.n_triangles * 12 + n_samples * 4;
   if (ex.where == Where::gpu) {

@@ -42,7 +42,17 @@ enum Counter : uint32_t {
   kFloatAnomalies,  // float: polygons that outgrew their bound
   kVisibleTriangles,
   kMaxTilePieces,
+  kPieces,          // copy of the piece total, so one copy brings back every count
   kCounterCount
+};
+
+// The silhouette hash table (silhouettes.cu). A slot: the key + 1 (0: empty) and, in the same 16 bytes (one memory transaction),
+// uses (bits 0-15), front-facing uses (16-31) and the bitwise complement of the lowest use
+// index (32-63), so an all-zero slot is empty and the payload is updated by one CAS. The two
+// counts saturate at 65535 (the rule only asks for 0, 2 and whether they differ).
+struct alignas(16) HashSlot {
+  uint64_t key1;
+  uint64_t payload;
 };
 
 // A snapped setup triangle (canonical order: by trace triangle, then fan position).
@@ -104,9 +114,7 @@ struct Pipeline {
   uint64_t n_setup = 0;
 
   // Silhouettes.
-  Buf<uint64_t> hash_keys;
-  Buf<uint64_t> hash_counts;    // uses | front uses << 32
-  Buf<uint32_t> hash_first;     // lowest use index
+  Buf<HashSlot> hash_slots;
   uint64_t hash_cap = 0;
   Buf<uint32_t> sil_flag;
   Buf<uint64_t> sil_offset;
@@ -132,6 +140,8 @@ struct Pipeline {
   Buf<uint32_t> occ_tri, occ_tri_sorted;
   Buf<uint64_t> tedge_key, tedge_key_sorted;  // (tile, edge) pairs by (tile, z_min)
   Buf<uint32_t> tedge_id, tedge_id_sorted;
+  Buf<Rect> tedge_box;
+  Buf<OccRec> occ_rec;                        // the sorted occluder list as records (streamed by occlusion)                        // the sorted pairs' edge bounding boxes (streamed by cull)
   Buf<uint32_t> tile_item_begin, tile_edge_begin, tile_occ_count;  // n_tiles + 1 (begin of next = end)
   Buf<uint64_t> area_key, area_key_sorted;    // items by original id (visible-area fold order)
   Buf<uint32_t> area_item, area_item_sorted;
@@ -141,8 +151,6 @@ struct Pipeline {
   Buf<int64_t> tile_rows;
 
   // Cull and clip.
-  Buf<uint32_t> pair_count;
-  Buf<uint64_t> pair_offset;
   Buf<uint32_t> piece_count;       // per item
   Buf<uint32_t> cand_count, cand_cursor;
   Buf<uint32_t> cand_offset;       // scan of cand_count (n_items + 1)
@@ -167,18 +175,20 @@ struct Pipeline {
   Buf<double> area;                // per trace triangle
 
   explicit Pipeline(Exec& e) : ex(e) {
-    for (auto* b : {&fan_count, &weld, &weld_table, &hash_first, &sil_flag, &sil_use, &sil_use_sorted, &front_flag,
+    for (auto* b : {&fan_count, &weld, &weld_table, &sil_flag, &sil_use, &sil_use_sorted, &front_flag,
                     &tri_tiles, &edge_tiles, &item_tri, &item_tri_sorted, &occ_tri, &occ_tri_sorted, &tedge_id,
                     &tedge_id_sorted, &tile_item_begin, &tile_edge_begin, &tile_occ_count, &area_item,
-                    &area_item_sorted, &pair_count, &piece_count, &cand_count, &cand_cursor, &cand_offset,
+                    &area_item_sorted, &piece_count, &cand_count, &cand_cursor, &cand_offset,
                     &cand_edges, &cand_scratch, &clip_items, &item_slot, &winner, &indices, &tri_draw, &sample_xy})
       b->bind(&e);
-    for (auto* b : {&fan_offset, &use_key, &hash_keys, &hash_counts, &sil_offset, &sil_key, &sil_key_sorted,
+    for (auto* b : {&fan_offset, &use_key, &sil_offset, &sil_key, &sil_key_sorted,
                     &front_offset, &tri_tiles_off, &edge_tiles_off, &item_key, &item_key_sorted, &occ_key,
-                    &occ_key_sorted, &tedge_key, &tedge_key_sorted, &area_key, &area_key_sorted, &pair_offset,
-                    &deep, &cands, &slot_poly, &piece_offset, &counters})
+                    &occ_key_sorted, &tedge_key, &tedge_key_sorted, &area_key, &area_key_sorted, &deep, &cands, &slot_poly, &piece_offset, &counters})
       b->bind(&e);
     vertices.bind(&e);
+    tedge_box.bind(&e);
+    hash_slots.bind(&e);
+    occ_rec.bind(&e);
     draws.bind(&e);
     setup.bind(&e);
     edges.bind(&e);

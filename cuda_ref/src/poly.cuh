@@ -202,7 +202,11 @@ TV_HD inline uint32_t tile_polygon(const TileTri<P>& t, const Rect& r, PEdge<P>*
   cur[2] = {t.edge[2], P::vertex(p2)};
   uint32_t n = 3;
   const Pt c[4] = {{r.x0, r.y0}, {r.x1, r.y0}, {r.x1, r.y1}, {r.x0, r.y1}};
+  // A rectangle line with the triangle's bounding box on its inner side has every vertex of
+  // every part of the triangle on that side too: clip_to_rect would skip it, and so does this.
+  const bool inside[4] = {t.bbox.y0 >= r.y0, t.bbox.x1 <= r.x1, t.bbox.y1 <= r.y1, t.bbox.x0 >= r.x0};
   for (int k = 0; k < 4; ++k) {
+    if (inside[k]) continue;
     const typename P::Line l = P::line(c[k], c[(k + 1) & 3]);
     bool pos = false, neg = false;
     for (uint32_t i = 0; i < n; ++i) {
@@ -254,17 +258,19 @@ TV_HD inline void line_sides(const PEdge<P>* poly, uint32_t n, const typename P:
 template <class P>
 TV_HD inline bool survives(const PEdge<P>* poly, uint32_t n, const TileTri<P>& tt, const SilEdge<P>& e) {
   if (n == 0) return false;
-  // Test 1: the polygon lies on one side of the line (touching counts as one side).
-  bool pos, neg;
-  line_sides<P>(poly, n, e.line, pos, neg);
-  if (!pos || !neg) return false;
-  // Test 2 (exact form): AB misses the polygon's interior. Some polygon line has both ends
-  // on its outer side or on it; otherwise the separating axis along AB itself is ruled out
-  // by test 1, which just found vertices strictly on both sides of AB's line.
+  // The pair survives only if tests 1, 2 and 3 all pass, so they may run in any order: the
+  // cheap one first.
+  // Test 2 (exact form): AB misses the polygon's interior when some polygon line has both ends
+  // on its outer side or on it (int64 edge functions); otherwise the separating axis along AB
+  // itself is ruled out by test 1, which finds vertices strictly on both sides of AB's line.
   const Pt a = e.a.xy(), b = e.b.xy();
   if (a == b) return false;
   for (uint32_t i = 0; i < n; ++i)
     if (P::eval(poly[i].line, a) <= 0 && P::eval(poly[i].line, b) <= 0) return false;
+  // Test 1: the polygon lies on one side of the line (touching counts as one side).
+  bool pos, neg;
+  line_sides<P>(poly, n, e.line, pos, neg);
+  if (!pos || !neg) return false;
   // Test 3: the chord of AB's line through the polygon: `first` where the line's edge of the
   // inside part starts, `second` where it ends.
   typename P::V first = poly[0].start, second = poly[0].start;
@@ -314,18 +320,25 @@ TV_HD inline void split(const PEdge<P>* poly, uint32_t n, const typename P::Line
 // whose nearest point is behind the piece's farthest ends it too. `tests` counts exact
 // containment tests (the occluder's bounding box, widened by a margin far above the error of
 // the test point's doubles, rejects first).
+// An occluder as the occlusion loop streams it: what the cheap tests need (32 bytes); the
+// full triangle is read only past them.
+struct OccRec {
+  Rect bbox;
+  uint32_t z_min, id, tri, pad;
+};
+
 template <class P>
-TV_HD inline bool occluded(const PEdge<P>* piece, const TileTri<P>& tt, const TileTri<P>* tris, const uint32_t* occ,
+TV_HD inline bool occluded(const PEdge<P>* piece, const TileTri<P>& tt, const TileTri<P>* tris, const OccRec* occ,
                            uint32_t n_occ, uint32_t& tests) {
   const typename P::R q = P::interior(piece[0].start, piece[1].start, piece[2].start);
   const double qx = P::rx(q), qy = P::ry(q);
   for (uint32_t k = 0; k < n_occ; ++k) {
-    const TileTri<P>& u = tris[occ[k]];
-    if (u.z_min > tt.z_max) break;
-    if (u.id == tt.id) continue;
-    if (qx < u.bbox.x0 - 1.0 || qx > u.bbox.x1 + 1.0 || qy < u.bbox.y0 - 1.0 || qy > u.bbox.y1 + 1.0) continue;
+    const OccRec o = occ[k];
+    if (o.z_min > tt.z_max) break;
+    if (o.id == tt.id) continue;
+    if (qx < o.bbox.x0 - 1.0 || qx > o.bbox.x1 + 1.0 || qy < o.bbox.y0 - 1.0 || qy > o.bbox.y1 + 1.0) continue;
     ++tests;
-    if (orient2d(u.v[0].xy(), u.v[1].xy(), u.v[2].xy()) == 0) continue;
+    const TileTri<P>& u = tris[o.tri];
     if (!P::in_half(u.edge[0], q) || !P::in_half(u.edge[1], q) || !P::in_half(u.edge[2], q)) continue;
     const int order = P::depth(u.plane, tt.plane, q);
     if (order < 0 || (order == 0 && u.id < tt.id)) return true;

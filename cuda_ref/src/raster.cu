@@ -18,6 +18,41 @@ struct RasterArgs {
   uint32_t* winner;
 };
 
+// Exact coverage of an N-edge piece, row by row: edge functions stepped along a row,
+// e(x + 2^sb) = e(x) + a 2^sb, exact in int64 (|e| < 2^49, |a 2^sb| <= 2^32), so this is the
+// same integer test as covers(). N is a template parameter so that the arrays live in registers.
+template <int N, class P>
+TV_HD int64_t raster_rows(const RasterArgs<P>& a, const PieceView<P>& v, int64_t px0, int64_t px_end, int64_t py0,
+                          int64_t py1, bool vis) {
+  const uint32_t sb = a.src.grid.sb;
+  int64_t la[N], lb[N], lc[N], e[N];
+  bool own[N];
+  for (int i = 0; i < N; ++i) {
+    la[i] = v.e[i].line.a;
+    lb[i] = v.e[i].line.b;
+    lc[i] = v.e[i].line.c;
+    own[i] = v.e[i].line.owns_boundary();
+  }
+  int64_t covered = 0;
+  for (int64_t py = py0; py <= py1 && py < a.height; ++py)
+    for (uint32_t k = 0; k < a.n_samples; ++k) {
+      const uint32_t sxy = a.sample_xy[k];
+      const int64_t x = (px0 << sb) + (sxy & 0xffffu), y = (py << sb) + (sxy >> 16);
+      for (int i = 0; i < N; ++i) e[i] = la[i] * x + lb[i] * y + lc[i];
+      for (int64_t px = px0; px <= px_end; ++px) {
+        bool in = true;
+        for (int i = 0; i < N; ++i) {
+          in &= e[i] > 0 || (e[i] == 0 && own[i]);
+          e[i] += la[i] << sb;
+        }
+        if (!in) continue;
+        ++covered;
+        if (vis) atomic_max(&a.winner[(uint64_t(py) * a.width + uint64_t(px)) * a.n_samples + k], v.tri + 1);
+      }
+    }
+  return covered;
+}
+
 template <class P>
 TV_HD void raster_piece(const RasterArgs<P>& a, uint64_t p) {
   PEdge<P> local[kTileCap];
@@ -34,7 +69,20 @@ TV_HD void raster_piece(const RasterArgs<P>& a, uint64_t p) {
   const int64_t py0 = tmax<int64_t>(int64_t(ty) * g.tile_h, int64_t(b.y0) >> sb);
   const int64_t py1 = tmin<int64_t>(int64_t(ty + 1) * g.tile_h - 1, int64_t(b.y1) >> sb);
   int64_t covered = 0;
-  for (int64_t py = py0; py <= py1 && py < a.height; ++py)
+  const int64_t px_end = tmin<int64_t>(px1, int64_t(a.width) - 1);
+  bool done = false;
+  if constexpr (P::kExact) {
+    switch (v.n) {
+      case 3: covered = raster_rows<3>(a, v, px0, px_end, py0, py1, vis), done = true; break;
+      case 4: covered = raster_rows<4>(a, v, px0, px_end, py0, py1, vis), done = true; break;
+      case 5: covered = raster_rows<5>(a, v, px0, px_end, py0, py1, vis), done = true; break;
+      case 6: covered = raster_rows<6>(a, v, px0, px_end, py0, py1, vis), done = true; break;
+      case 7: covered = raster_rows<7>(a, v, px0, px_end, py0, py1, vis), done = true; break;
+      case 8: covered = raster_rows<8>(a, v, px0, px_end, py0, py1, vis), done = true; break;
+      default: break;
+    }
+  }
+  for (int64_t py = py0; !done && py <= py1 && py < a.height; ++py)
     for (int64_t px = px0; px <= px1 && px < a.width; ++px)
       for (uint32_t k = 0; k < a.n_samples; ++k) {
         const uint32_t sxy = a.sample_xy[k];

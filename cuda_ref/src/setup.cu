@@ -113,59 +113,93 @@ TV_HD inline Vtx snap(const FrameDev& f, const ClipV& v) {
   return s;
 }
 
-TV_HD void setup_count(const SetupArgs& a, uint64_t t) {
+// The common case: every vertex inside every plane, so clipping changes nothing (the polygon
+// stays the triangle's three vertices in order). Decided in registers, without the clipper.
+TV_HD inline bool load_inside(const SetupArgs& a, uint64_t t, ClipV* v) {
+  bool all = true;
+  for (int k = 0; k < 3; ++k) {
+    const uint32_t vi = a.indices[3 * t + k];
+    const float4 f = a.vertices[vi];
+    v[k] = {double(f.x), double(f.y), double(f.z), double(f.w), vi};
+    for (int p = 0; p < 6; ++p) all &= distance(p, a.gx, a.gy, v[k]) >= 0;
+  }
+  return all;
+}
+
+TV_HD __noinline__ uint32_t count_clipped(const SetupArgs& a, uint64_t t) {
   ClipV poly[kMaxClipVerts];
   bool cut = false;
   const uint32_t n = clip_triangle(a, t, poly, cut);
-  a.fan_count[t] = n ? n - 2 : 0;
   if (n == 0) atomic_add(&a.counters[kFrustumCulled], 1);
   else if (cut) atomic_add(&a.counters[kClippedTris], 1);
+  return n ? n - 2 : 0;
 }
 
-TV_HD void setup_emit(const SetupArgs& a, uint64_t t) {
+TV_HD void setup_count(const SetupArgs& a, uint64_t t) {
+  ClipV v[3];
+  a.fan_count[t] = load_inside(a, t, v) ? 1 : count_clipped(a, t);
+}
+
+// One setup triangle: facing after the snap, and its three edge keys for silhouettes.
+TV_HD inline void emit_one(const SetupArgs& a, uint64_t t, uint64_t out, const Vtx& v0, const Vtx& v1, const Vtx& v2,
+                           const uint32_t* idx, bool cut) {
+  const uint32_t d = a.tri_draw[t];
+  const DrawInfo& di = a.draws[d];
+  SetupTri st;
+  st.v[0] = v0;
+  st.v[1] = v1;
+  st.v[2] = v2;
+  st.id = uint32_t(t);
+  st.draw = d;
+  st.opaque = di.opaque;
+  st.cut = cut;
+  const int64_t area = orient2d(v0.xy(), v1.xy(), v2.xy());
+  // Counter-clockwise in NDC is clockwise in y-down window space: negative area.
+  st.front = area < 0;
+  atomic_add(&a.counters[area == 0 ? kDegenerate : area > 0 ? kBackFacing : kFrontFacing], 1);
+  a.setup[out] = st;
+  // Edges made by clipping have no neighbour: boundaries, sorted after the draw's keyed edges.
+  const uint64_t boundary = (uint64_t(di.vertex_offset + di.vertex_count - 1) << 32) | 0xffffffffu;
+  for (int e = 0; e < 3; ++e) {
+    uint64_t key;
+    if (!di.opaque) {
+      key = ~uint64_t{0};  // no silhouettes from non-opaque draws
+    } else if (cut) {
+      key = boundary;
+    } else {
+      uint32_t i0 = idx[e], i1 = idx[(e + 1) % 3];
+      if (di.soup) {
+        i0 = a.weld[i0];
+        i1 = a.weld[i1];
+      }
+      key = (uint64_t(i0 < i1 ? i0 : i1) << 32) | (i0 < i1 ? i1 : i0);
+    }
+    a.use_key[3 * out + e] = key;
+  }
+}
+
+TV_HD __noinline__ void emit_clipped(const SetupArgs& a, uint64_t t) {
   ClipV poly[kMaxClipVerts];
   bool cut = false;
   const uint32_t n = clip_triangle(a, t, poly, cut);
   if (n == 0) return;
-  const uint32_t d = a.tri_draw[t];
-  const DrawInfo& di = a.draws[d];
   Vtx sv[kMaxClipVerts];
   for (uint32_t k = 0; k < n; ++k) sv[k] = snap(a.f, poly[k]);
-  // Edges made by clipping have no neighbour: boundaries, sorted after the draw's keyed edges.
-  const uint64_t boundary = (uint64_t(di.vertex_offset + di.vertex_count - 1) << 32) | 0xffffffffu;
   uint64_t out = a.fan_offset[t];
   for (uint32_t k = 1; k + 1 < n; ++k, ++out) {
-    SetupTri st;
-    st.v[0] = sv[0];
-    st.v[1] = sv[k];
-    st.v[2] = sv[k + 1];
-    st.id = uint32_t(t);
-    st.draw = d;
-    st.opaque = di.opaque;
-    st.cut = cut;
-    const int64_t area = orient2d(st.v[0].xy(), st.v[1].xy(), st.v[2].xy());
-    // Counter-clockwise in NDC is clockwise in y-down window space: negative area.
-    st.front = area < 0;
-    atomic_add(&a.counters[area == 0 ? kDegenerate : area > 0 ? kBackFacing : kFrontFacing], 1);
-    a.setup[out] = st;
-    uint32_t idx[3] = {poly[0].index, poly[k].index, poly[k + 1].index};
-    for (int e = 0; e < 3; ++e) {
-      uint64_t key;
-      if (!di.opaque) {
-        key = ~uint64_t{0};  // no silhouettes from non-opaque draws
-      } else if (cut) {
-        key = boundary;
-      } else {
-        uint32_t i0 = idx[e], i1 = idx[(e + 1) % 3];
-        if (di.soup) {
-          i0 = a.weld[i0];
-          i1 = a.weld[i1];
-        }
-        key = (uint64_t(i0 < i1 ? i0 : i1) << 32) | (i0 < i1 ? i1 : i0);
-      }
-      a.use_key[3 * out + e] = key;
-    }
+    const uint32_t idx[3] = {poly[0].index, poly[k].index, poly[k + 1].index};
+    emit_one(a, t, out, sv[0], sv[k], sv[k + 1], idx, cut);
   }
+}
+
+TV_HD void setup_emit(const SetupArgs& a, uint64_t t) {
+  ClipV v[3];
+  if (!load_inside(a, t, v)) {
+    emit_clipped(a, t);
+    return;
+  }
+  const uint32_t idx[3] = {v[0].index, v[1].index, v[2].index};
+  emit_one(a, t, a.fan_offset[t], snap(a.f, v[0]), snap(a.f, v[1]), snap(a.f, v[2]), idx, false);
 }
 
 __global__ void k_setup_count(SetupArgs a, uint64_t n) {

@@ -26,9 +26,7 @@ TV_HD inline uint64_t hash64(uint64_t k) {
 struct HashArgs {
   const uint64_t* use_key;
   const SetupTri* setup;
-  uint64_t* keys;
-  uint64_t* counts;
-  uint32_t* first;
+  HashSlot* slots;
   uint64_t mask;
   uint32_t* flag;
   const uint64_t* offset;
@@ -37,11 +35,15 @@ struct HashArgs {
 };
 
 TV_HD inline uint64_t find_slot(const HashArgs& a, uint64_t key, bool insert) {
+  const uint64_t k1 = key + 1;  // keys are below 2^64 - 1 (their low half is a vertex index)
   uint64_t h = hash64(key) & a.mask;
   for (;;) {
-    uint64_t cur = a.keys[h];
-    if (cur == kSkip && insert) cur = atomic_cas(&a.keys[h], kSkip, key);
-    if (cur == key || (cur == kSkip && insert)) return h;
+    uint64_t cur = a.slots[h].key1;
+    if (cur == 0 && insert) {
+      cur = atomic_cas(&a.slots[h].key1, 0, k1);
+      if (cur == 0) return h;
+    }
+    if (cur == k1) return h;
     h = (h + 1) & a.mask;
   }
 }
@@ -50,8 +52,18 @@ TV_HD void hash_insert(const HashArgs& a, uint64_t u) {
   const uint64_t key = a.use_key[u];
   if (key == kSkip || is_boundary(key)) return;
   const uint64_t h = find_slot(a, key, true);
-  atomic_add(&a.counts[h], 1 | (uint64_t(a.setup[u / 3].front) << 32));
-  atomic_min(&a.first[h], uint32_t(u));
+  const uint64_t front = a.setup[u / 3].front;
+  uint64_t* p = &a.slots[h].payload;
+  uint64_t old = *p;
+  for (;;) {
+    const uint64_t count = tmin<uint64_t>((old & 0xffffu) + 1, 0xffffu);
+    const uint64_t fronts = tmin<uint64_t>(((old >> 16) & 0xffffu) + front, 0xffffu);
+    const uint64_t inv_first = tmax<uint64_t>(old >> 32, uint64_t(~uint32_t(u)));
+    const uint64_t next = count | fronts << 16 | inv_first << 32;
+    const uint64_t seen = atomic_cas(p, old, next);
+    if (seen == old) break;
+    old = seen;
+  }
 }
 
 TV_HD void hash_judge(const HashArgs& a, uint64_t u) {
@@ -62,10 +74,9 @@ TV_HD void hash_judge(const HashArgs& a, uint64_t u) {
   } else if (is_boundary(key)) {
     sil = a.setup[u / 3].front;
   } else {
-    const uint64_t h = find_slot(a, key, false);
-    if (a.first[h] == u) {
-      const uint64_t c = a.counts[h];
-      const uint64_t count = c & 0xffffffffu, front = c >> 32;
+    const uint64_t c = a.slots[find_slot(a, key, false)].payload;
+    if (~uint32_t(c >> 32) == uint32_t(u)) {
+      const uint64_t count = c & 0xffffu, front = (c >> 16) & 0xffffu;
       sil = front > 0 && (count != 2 || front != count);
     }
   }
@@ -144,12 +155,9 @@ void stage_silhouettes(Pipeline<P>& p) {
   uint64_t cap = 16;
   while (cap < 2 * uses) cap <<= 1;  // load factor <= 1/2
   p.hash_cap = cap;
-  HashArgs h{p.use_key.get(),        p.setup.get(), p.hash_keys.need(cap), p.hash_counts.need(cap),
-             p.hash_first.need(cap), cap - 1,       p.sil_flag.need(uses + 1), p.sil_offset.need(uses + 1),
-             nullptr,                nullptr};
-  ex.fill_ones(h.keys, cap * 8);
-  ex.zero(h.counts, cap * 8);
-  ex.fill_ones(h.first, cap * 4);
+  HashArgs h{p.use_key.get(),          p.setup.get(), p.hash_slots.need(cap), cap - 1, p.sil_flag.need(uses + 1),
+             p.sil_offset.need(uses + 1), nullptr,       nullptr};
+  ex.zero(h.slots, cap * sizeof(HashSlot));
   ex.launch(k_hash_insert, hash_insert, uses, h);
   ex.launch(k_hash_judge, hash_judge, uses, h);
   ex.exclusive_scan(h.flag, p.sil_offset.get(), uses);
@@ -160,10 +168,7 @@ void stage_silhouettes(Pipeline<P>& p) {
   ex.exclusive_scan(fa.flag, p.front_offset.get(), p.n_setup);
 
   // sync: silhouette and front-triangle counts size the tile stage.
-  uint64_t counts[2];
-  p.n_edges = ex.read(p.sil_offset.get() + uses);
-  p.n_tris = ex.read(p.front_offset.get() + p.n_setup);
-  (void)counts;
+  ex.read_many({{&p.n_edges, p.sil_offset.get() + uses}, {&p.n_tris, p.front_offset.get() + p.n_setup}});
 
   fa.tris = p.tris.need(p.n_tris + 1);
   ex.launch(k_front_build<P>, front_build<P>, p.n_setup, fa);

@@ -3,6 +3,7 @@
 // of exact and float against golden and of float against exact, WORK/meta/*.txt) into
 // OUT/<device>.json and OUT/<device>.md, and prints a short table.
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -72,14 +73,21 @@ int main(int argc, char** argv) {
       report["meta"][e.path().stem().string()] = text;
     }
 
+  // t<digits>/ folders are tile sizes.
+  const auto is_tile_dir = [](const fs::directory_entry& e) {
+    const std::string n = e.path().filename().string();
+    return e.is_directory() && n.size() > 1 && n[0] == 't' &&
+           std::all_of(n.begin() + 1, n.end(), [](char c) { return std::isdigit(static_cast<unsigned char>(c)) != 0; });
+  };
   std::vector<fs::path> scenes;
   for (const auto& e : fs::directory_iterator(work))
-    if (e.is_directory() && e.path().filename() != "meta") scenes.push_back(e.path());
+    if (e.is_directory() && std::any_of(fs::directory_iterator(e.path()), fs::directory_iterator(), is_tile_dir))
+      scenes.push_back(e.path());  // scene folders hold t<tile>/; meta/ and sanitize/ do not
   std::sort(scenes.begin(), scenes.end());
   for (const auto& sd : scenes) {
     std::vector<fs::path> tiles;
     for (const auto& e : fs::directory_iterator(sd))
-      if (e.is_directory()) tiles.push_back(e.path());
+      if (is_tile_dir(e)) tiles.push_back(e.path());
     std::sort(tiles.begin(), tiles.end(), [](const fs::path& a, const fs::path& b) {
       return std::stoi(a.filename().string().substr(1)) < std::stoi(b.filename().string().substr(1));
     });

@@ -17,7 +17,7 @@ namespace {
 
 struct CudaArgs {
   std::string trace, out, tile = "32", precision = "exact", device = "gpu";
-  uint32_t samples = 0, frame = 0, depth_bits = 24, runs = 20;
+  uint32_t samples = 0, frame = 0, depth_bits = 24, runs = 20, warmup = 2;
 };
 
 #if TILEVIS_HAVE_CUDA_REF
@@ -37,6 +37,7 @@ int run(const CudaArgs& a, const trace::Frame& frame, uint32_t tw, uint32_t th) 
   cfg.precision = a.precision == "float" ? cuda::Precision::floating : cuda::Precision::exact;
   cfg.device = a.device == "cpu" ? cuda::Device::cpu : cuda::Device::gpu;
   cfg.runs = a.runs;
+  cfg.warmup = a.warmup;
   if (cfg.device == cuda::Device::gpu) {
     std::string why;
     if (!cuda::cuda_available(&why)) {
@@ -81,6 +82,7 @@ int run(const CudaArgs& a, const trace::Frame& frame, uint32_t tw, uint32_t th) 
                            {"max_tile_triangles", r.max_tile_triangles},
                            {"max_tile_edges", r.max_tile_edges},
                            {"max_tile_pieces", r.max_tile_pieces},
+                           {"deep_pairs", r.deep_pairs},
                            {"float_anomalies", r.float_anomalies}};
   nlohmann::json stages = nlohmann::json::object();
   for (const auto& s : r.stage_ms) stages[s.name] = s.ms;
@@ -136,6 +138,9 @@ Command add_cuda_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--runs", a->runs, "Timed runs after warm-up (stage times are medians)")
       ->check(CLI::Range(1, 10000))
+      ->capture_default_str();
+  cmd->add_option("--warmup", a->warmup, "Untimed runs first (the first also grows the buffers)")
+      ->check(CLI::Range(1, 1000))
       ->capture_default_str();
   cmd->add_option("--frame", a->frame, "Frame of the trace")->capture_default_str();
   cmd->add_option("--depth-bits", a->depth_bits, "Bits of snapped depth")->check(CLI::Range(1, 24))->capture_default_str();
