@@ -159,7 +159,7 @@ phase_report() {
   device="$(nvidia-smi --query-gpu=name --format=csv,noheader 2>/dev/null | head -n 1 || true)"
   [ -n "$device" ] || device="$(grep -h '^  "device":' "$WORK"/*/t*/exact/stats.json 2>/dev/null | head -n 1 | sed 's/.*"device": "\(.*\)".*/\1/')"
   [ -n "$device" ] || device=unknown-gpu
-  commit="$(git rev-parse HEAD 2>/dev/null || cat .gpu/commit.txt 2>/dev/null || echo unknown)"
+  commit="$(git rev-parse --verify -q HEAD 2>/dev/null || cat .gpu/commit.txt 2>/dev/null || echo unknown)"
   nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.max.sm,clocks.max.mem --format=csv,noheader \
     >"$WORK/meta/nvidia_smi.txt" 2>/dev/null || true
   nvcc --version | tail -n 1 >"$WORK/meta/nvcc.txt" 2>/dev/null || true

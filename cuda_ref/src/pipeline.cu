@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdlib>
+#include <iterator>
 #include <numeric>
 
 #include <cub/device/device_radix_sort.cuh>
@@ -136,15 +137,28 @@ void* Exec::temp(size_t bytes) {
 }
 
 namespace {
-template <class T>
-__global__ void k_scan_total(const uint32_t* in, T* out, uint64_t n) {
-  out[n] = n ? out[n - 1] + T(in[n - 1]) : T(0);
-}
-
+// in[0..n) followed by one zero: an exclusive scan over n + 1 elements leaves the total in
+// out[n], with no extra kernel.
+struct ZeroPadded {
+  using iterator_category = std::random_access_iterator_tag;
+  using value_type = uint32_t;
+  using difference_type = std::ptrdiff_t;
+  using pointer = const uint32_t*;
+  using reference = uint32_t;
+  const uint32_t* in;
+  uint64_t n;
+  std::ptrdiff_t at = 0;
+  __host__ __device__ uint32_t operator[](std::ptrdiff_t i) const {
+    const uint64_t k = uint64_t(at + i);
+    return k < n ? in[k] : 0u;
+  }
+  __host__ __device__ uint32_t operator*() const { return (*this)[0]; }
+  __host__ __device__ ZeroPadded operator+(std::ptrdiff_t d) const { return {in, n, at + d}; }
+};
 }  // namespace
 
 void Exec::exclusive_scan(const uint32_t* in, uint64_t* out, uint64_t n) {
-  queued += 2;
+  ++queued;
   if (where == Where::cpu) {
     uint64_t s = 0;
     for (uint64_t i = 0; i < n; ++i) {
@@ -155,18 +169,15 @@ void Exec::exclusive_scan(const uint32_t* in, uint64_t* out, uint64_t n) {
     out[n] = s;
     return;
   }
-  if (n) {
-    size_t bytes = 0;
-    TV_CUDA(cub::DeviceScan::ExclusiveScan(nullptr, bytes, in, out, ::cuda::std::plus<uint64_t>{}, uint64_t{0}, n, stream));
-    void* t = temp(bytes);
-    TV_CUDA(cub::DeviceScan::ExclusiveScan(t, bytes, in, out, ::cuda::std::plus<uint64_t>{}, uint64_t{0}, n, stream));
-  }
-  k_scan_total<uint64_t><<<1, 1, 0, stream>>>(in, out, n);
-  TV_CUDA(cudaGetLastError());
+  const ZeroPadded padded{in, n};
+  size_t bytes = 0;
+  TV_CUDA(cub::DeviceScan::ExclusiveScan(nullptr, bytes, padded, out, ::cuda::std::plus<uint64_t>{}, uint64_t{0}, n + 1, stream));
+  void* t = temp(bytes);
+  TV_CUDA(cub::DeviceScan::ExclusiveScan(t, bytes, padded, out, ::cuda::std::plus<uint64_t>{}, uint64_t{0}, n + 1, stream));
 }
 
 void Exec::exclusive_scan(const uint32_t* in, uint32_t* out, uint64_t n) {
-  queued += 2;
+  ++queued;
   if (where == Where::cpu) {
     uint32_t s = 0;
     for (uint64_t i = 0; i < n; ++i) {
@@ -177,14 +188,11 @@ void Exec::exclusive_scan(const uint32_t* in, uint32_t* out, uint64_t n) {
     out[n] = s;
     return;
   }
-  if (n) {
-    size_t bytes = 0;
-    TV_CUDA(cub::DeviceScan::ExclusiveScan(nullptr, bytes, in, out, ::cuda::std::plus<uint32_t>{}, uint32_t{0}, n, stream));
-    void* t = temp(bytes);
-    TV_CUDA(cub::DeviceScan::ExclusiveScan(t, bytes, in, out, ::cuda::std::plus<uint32_t>{}, uint32_t{0}, n, stream));
-  }
-  k_scan_total<uint32_t><<<1, 1, 0, stream>>>(in, out, n);
-  TV_CUDA(cudaGetLastError());
+  const ZeroPadded padded{in, n};
+  size_t bytes = 0;
+  TV_CUDA(cub::DeviceScan::ExclusiveScan(nullptr, bytes, padded, out, ::cuda::std::plus<uint32_t>{}, uint32_t{0}, n + 1, stream));
+  void* t = temp(bytes);
+  TV_CUDA(cub::DeviceScan::ExclusiveScan(t, bytes, padded, out, ::cuda::std::plus<uint32_t>{}, uint32_t{0}, n + 1, stream));
 }
 
 void Exec::sort_pairs(const uint64_t* keys_in, uint64_t* keys_out, const uint32_t* vals_in, uint32_t* vals_out,

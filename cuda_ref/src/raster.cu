@@ -18,32 +18,34 @@ struct RasterArgs {
   uint32_t* winner;
 };
 
-// Exact coverage of an N-edge piece, row by row: edge functions stepped along a row,
-// e(x + 2^sb) = e(x) + a 2^sb, exact in int64 (|e| < 2^49, |a 2^sb| <= 2^32), so this is the
-// same integer test as covers(). N is a template parameter so that the arrays live in registers.
+// Coverage of an N-edge piece, row by row, N a template parameter so that the edge data
+// lives in registers. Exact: edge functions stepped along a row, e(x + 2^sb) = e(x) + a 2^sb,
+// exact in int64 (|e| < 2^49, |a 2^sb| <= 2^32), so this is the same integer test as covers().
+// Float: each sample evaluated as covers() does.
 template <int N, class P>
 TV_HD int64_t raster_rows(const RasterArgs<P>& a, const PieceView<P>& v, int64_t px0, int64_t px_end, int64_t py0,
                           int64_t py1, bool vis) {
   const uint32_t sb = a.src.grid.sb;
-  int64_t la[N], lb[N], lc[N], e[N];
-  bool own[N];
-  for (int i = 0; i < N; ++i) {
-    la[i] = v.e[i].line.a;
-    lb[i] = v.e[i].line.b;
-    lc[i] = v.e[i].line.c;
-    own[i] = v.e[i].line.owns_boundary();
-  }
+  typename P::Line l[N];
+  for (int i = 0; i < N; ++i) l[i] = v.e[i].line;
   int64_t covered = 0;
   for (int64_t py = py0; py <= py1 && py < a.height; ++py)
     for (uint32_t k = 0; k < a.n_samples; ++k) {
       const uint32_t sxy = a.sample_xy[k];
-      const int64_t x = (px0 << sb) + (sxy & 0xffffu), y = (py << sb) + (sxy >> 16);
-      for (int i = 0; i < N; ++i) e[i] = la[i] * x + lb[i] * y + lc[i];
+      const int64_t x0 = (px0 << sb) + (sxy & 0xffffu), y = (py << sb) + (sxy >> 16);
+      [[maybe_unused]] int64_t e[N];
+      if constexpr (P::kExact)
+        for (int i = 0; i < N; ++i) e[i] = l[i].a * x0 + l[i].b * y + l[i].c;
       for (int64_t px = px0; px <= px_end; ++px) {
         bool in = true;
-        for (int i = 0; i < N; ++i) {
-          in &= e[i] > 0 || (e[i] == 0 && own[i]);
-          e[i] += la[i] << sb;
+        if constexpr (P::kExact) {
+          for (int i = 0; i < N; ++i) {
+            in &= e[i] > 0 || (e[i] == 0 && l[i].owns_boundary());
+            e[i] += l[i].a << sb;
+          }
+        } else {
+          const Pt s{int32_t(x0 + ((px - px0) << sb)), int32_t(y)};
+          for (int i = 0; i < N; ++i) in &= P::in_half(l[i], s);
         }
         if (!in) continue;
         ++covered;
@@ -71,7 +73,7 @@ TV_HD void raster_piece(const RasterArgs<P>& a, uint64_t p) {
   int64_t covered = 0;
   const int64_t px_end = tmin<int64_t>(px1, int64_t(a.width) - 1);
   bool done = false;
-  if constexpr (P::kExact) {
+  {
     switch (v.n) {
       case 3: covered = raster_rows<3>(a, v, px0, px_end, py0, py1, vis), done = true; break;
       case 4: covered = raster_rows<4>(a, v, px0, px_end, py0, py1, vis), done = true; break;
