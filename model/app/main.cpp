@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
       tilevis::app::add_sim_command(app),
       tilevis::app::add_compare_command(app),
       tilevis::app::add_cuda_command(app),
+      tilevis::app::add_sweep_command(app),
   };
   try {
     app.parse(argc, argv);

@@ -1,115 +1,39 @@
 #include "json_node.h"
 
-#include <cmath>
-
-#include <fmt/format.h>
-
 #include "tilevis/scene.h"
 
 namespace tilevis::scene {
 
-void Node::fail(const std::string& expected) const {
-  throw SceneError(fmt::format("{}: {}: {}", m_file, m_path, expected));
+namespace {
+constexpr double kBig = 1e12;
 }
 
-void Node::expect_object() const {
-  if (!m_value.is_object()) fail("expected an object");
+void raise_scene_error(const std::string& message) { throw SceneError(message); }
+
+glm::dvec3 vec3(const Node& n) {
+  if (!n.is_array() || n.value().size() != 3) n.fail("expected an array of 3 numbers");
+  return {n.at(size_t{0}).number(-kBig, kBig), n.at(1).number(-kBig, kBig), n.at(2).number(-kBig, kBig)};
 }
 
-bool Node::has(const char* key) const {
-  expect_object();
-  return m_value.contains(key);
-}
-
-Node Node::at(const char* key) const {
-  expect_object();
-  auto it = m_value.find(key);
-  if (it == m_value.end()) fail(fmt::format("missing required member \"{}\"", key));
-  return Node(*it, m_path + "." + key, m_file);
-}
-
-size_t Node::array_size() const {
-  if (!m_value.is_array()) fail("expected an array");
-  return m_value.size();
-}
-
-Node Node::at(size_t index) const {
-  if (index >= array_size()) fail(fmt::format("expected at least {} elements", index + 1));
-  return Node(m_value[index], fmt::format("{}[{}]", m_path, index), m_file);
-}
-
-void Node::allow_only(std::initializer_list<const char*> keys) const {
-  expect_object();
-  for (const auto& [key, value] : m_value.items()) {
-    bool known = false;
-    for (const char* k : keys) known = known || key == k;
-    if (!known) {
-      std::string list;
-      for (const char* k : keys) list += (list.empty() ? "" : ", ") + std::string(k);
-      Node(value, m_path + "." + key, m_file).fail(fmt::format("unknown member (expected one of: {})", list));
-    }
-  }
-}
-
-double Node::number(double lo, double hi) const {
-  if (!m_value.is_number()) fail(fmt::format("expected a number in [{}, {}]", lo, hi));
-  double v = m_value.get<double>();
-  if (!std::isfinite(v) || v < lo || v > hi) fail(fmt::format("expected a number in [{}, {}], got {}", lo, hi, v));
-  return v;
-}
-
-uint32_t Node::integer(uint32_t lo, uint32_t hi) const {
-  if (!m_value.is_number_integer() && !m_value.is_number_unsigned())
-    fail(fmt::format("expected an integer in [{}, {}]", lo, hi));
-  int64_t v = m_value.get<int64_t>();
-  if (v < lo || v > hi) fail(fmt::format("expected an integer in [{}, {}], got {}", lo, hi, v));
-  return static_cast<uint32_t>(v);
-}
-
-bool Node::boolean() const {
-  if (!m_value.is_boolean()) fail("expected true or false");
-  return m_value.get<bool>();
-}
-
-std::string Node::string() const {
-  if (!m_value.is_string()) fail("expected a string");
-  return m_value.get<std::string>();
-}
-
-glm::dvec3 Node::vec3() const {
-  if (!m_value.is_array() || m_value.size() != 3) fail("expected an array of 3 numbers");
-  constexpr double kBig = 1e12;
-  return {at(size_t{0}).number(-kBig, kBig), at(1).number(-kBig, kBig), at(2).number(-kBig, kBig)};
-}
-
-glm::dvec3 Node::vec3_or_scalar() const {
-  if (m_value.is_number()) {
-    double s = number(-1e12, 1e12);
+glm::dvec3 vec3_or_scalar(const Node& n) {
+  if (n.is_number()) {
+    double s = n.number(-kBig, kBig);
     return {s, s, s};
   }
-  return vec3();
+  return vec3(n);
 }
 
-glm::dvec2 Node::vec2_or_scalar() const {
-  constexpr double kBig = 1e12;
-  if (m_value.is_number()) {
-    double s = number(-kBig, kBig);
+glm::dvec2 vec2_or_scalar(const Node& n) {
+  if (n.is_number()) {
+    double s = n.number(-kBig, kBig);
     return {s, s};
   }
-  if (!m_value.is_array() || m_value.size() != 2) fail("expected a number or an array of 2 numbers");
-  return {at(size_t{0}).number(-kBig, kBig), at(1).number(-kBig, kBig)};
+  if (!n.is_array() || n.value().size() != 2) n.fail("expected a number or an array of 2 numbers");
+  return {n.at(size_t{0}).number(-kBig, kBig), n.at(1).number(-kBig, kBig)};
 }
 
-double Node::number_or(const char* key, double fallback, double lo, double hi) const {
-  return has(key) ? at(key).number(lo, hi) : fallback;
-}
-
-uint32_t Node::integer_or(const char* key, uint32_t fallback, uint32_t lo, uint32_t hi) const {
-  return has(key) ? at(key).integer(lo, hi) : fallback;
-}
-
-glm::dvec3 Node::vec3_or(const char* key, glm::dvec3 fallback) const {
-  return has(key) ? at(key).vec3() : fallback;
+glm::dvec3 vec3_or(const Node& n, const char* key, glm::dvec3 fallback) {
+  return n.has(key) ? vec3(n.at(key)) : fallback;
 }
 
 }  // namespace tilevis::scene

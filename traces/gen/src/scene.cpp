@@ -41,9 +41,9 @@ struct Object {
 
 glm::dmat4 parse_transform(const Node& n) {
   n.allow_only({"translate", "rotate_deg", "scale"});
-  glm::dvec3 t = n.vec3_or("translate", {0, 0, 0});
-  glm::dvec3 r = n.vec3_or("rotate_deg", {0, 0, 0});
-  glm::dvec3 s = n.has("scale") ? n.at("scale").vec3_or_scalar() : glm::dvec3(1);
+  glm::dvec3 t = vec3_or(n, "translate", {0, 0, 0});
+  glm::dvec3 r = vec3_or(n, "rotate_deg", {0, 0, 0});
+  glm::dvec3 s = n.has("scale") ? vec3_or_scalar(n.at("scale")) : glm::dvec3(1);
   if (s.x == 0 || s.y == 0 || s.z == 0) n.at("scale").fail("expected a non-zero scale");
   glm::dmat4 m = glm::translate(glm::dmat4(1), t);
   m = glm::rotate(m, glm::radians(r.z), {0, 0, 1});
@@ -55,9 +55,9 @@ glm::dmat4 parse_transform(const Node& n) {
 Camera parse_camera(const Node& n) {
   n.allow_only({"eye", "target", "up", "fov_y_deg", "near", "far", "orbit"});
   Camera c;
-  c.eye = n.vec3_or("eye", c.eye);
-  c.target = n.vec3_or("target", c.target);
-  c.up = n.vec3_or("up", c.up);
+  c.eye = vec3_or(n, "eye", c.eye);
+  c.target = vec3_or(n, "target", c.target);
+  c.up = vec3_or(n, "up", c.up);
   c.fov_y_deg = n.number_or("fov_y_deg", c.fov_y_deg, 1, 179);
   c.near = n.number_or("near", c.near, 1e-6, kBig);
   c.far = n.number_or("far", c.far, 1e-6, kBig);
@@ -69,7 +69,7 @@ Camera parse_camera(const Node& n) {
     o.allow_only({"frames", "degrees", "axis"});
     c.orbit_frames = o.integer_or("frames", 1, 1, 10000);
     c.orbit_degrees = o.number_or("degrees", 360, -36000, 36000);
-    c.orbit_axis = o.vec3_or("axis", c.orbit_axis);
+    c.orbit_axis = vec3_or(o, "axis", c.orbit_axis);
     if (glm::length(c.orbit_axis) == 0) o.at("axis").fail("expected a non-zero axis");
   }
   return c;
@@ -107,7 +107,7 @@ class SceneBuilder {
     } catch (const nlohmann::json::parse_error& e) {
       throw SceneError(fmt::format("{}: byte {}: invalid JSON: {}", m_file, e.byte, e.what()));
     }
-    Node root(doc, "$", m_file);
+    Node root(doc, "$", m_file, &raise_scene_error);
     root.allow_only({"description", "viewport", "samples", "depth_range", "camera", "objects"});
 
     trace::Frame proto;
@@ -212,10 +212,10 @@ class SceneBuilder {
     Mesh m;
     if (type == "box") {
       p.allow_only({"type", "size"});
-      m = make_box(p.has("size") ? p.at("size").vec3_or_scalar() : glm::dvec3(1));
+      m = make_box(p.has("size") ? vec3_or_scalar(p.at("size")) : glm::dvec3(1));
     } else if (type == "plane") {
       p.allow_only({"type", "size", "subdivisions"});
-      m = make_plane(p.has("size") ? p.at("size").vec2_or_scalar() : glm::dvec2(1),
+      m = make_plane(p.has("size") ? vec2_or_scalar(p.at("size")) : glm::dvec2(1),
                      p.integer_or("subdivisions", 1, 1, 4096));
     } else if (type == "sphere") {
       p.allow_only({"type", "radius", "segments", "rings"});
@@ -224,11 +224,11 @@ class SceneBuilder {
     } else if (type == "quads") {
       p.allow_only({"type", "count", "size", "origin", "step"});
       m = make_quads(p.integer_or("count", 1, 1, 10'000'000),
-                     p.has("size") ? p.at("size").vec2_or_scalar() : glm::dvec2(1), p.vec3_or("origin", {0, 0, 0}),
-                     p.vec3_or("step", {0, 0, -0.01}));
+                     p.has("size") ? vec2_or_scalar(p.at("size")) : glm::dvec2(1), vec3_or(p, "origin", {0, 0, 0}),
+                     vec3_or(p, "step", {0, 0, -0.01}));
     } else if (type == "cornell_box") {
       p.allow_only({"type", "size"});
-      m = make_cornell_box(p.has("size") ? p.at("size").vec3_or_scalar() : glm::dvec3(1));
+      m = make_cornell_box(p.has("size") ? vec3_or_scalar(p.at("size")) : glm::dvec3(1));
     } else {
       p.at("type").fail("expected one of box, plane, sphere, quads, cornell_box");
     }
@@ -263,7 +263,7 @@ class SceneBuilder {
       if (c.array_size() != 3) c.fail("expected [nx, ny, nz]");
       uint32_t nx = c.at(size_t{0}).integer(1, 1000), ny = c.at(1).integer(1, 1000), nz = c.at(2).integer(1, 1000);
       if (uint64_t(nx) * ny * nz > 100000) c.fail("expected at most 100000 instances");
-      glm::dvec3 sp = g.vec3_or("spacing", {1, 1, 1});
+      glm::dvec3 sp = vec3_or(g, "spacing", {1, 1, 1});
       for (uint32_t z = 0; z < nz; ++z)
         for (uint32_t y = 0; y < ny; ++y)
           for (uint32_t x = 0; x < nx; ++x) {

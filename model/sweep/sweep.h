@@ -1,0 +1,196 @@
+// Exploration sweeps (issue 6): the cross product of scenes x resolutions x sample counts x
+// tile sizes x producers/modes x unit configurations, run as subprocesses of the tilevis
+// binary, resumable, with a progress line; or written out as independent command lines.
+//
+// A sweep file is JSON (reports/sweeps/README.md documents it); unknown keys and bad values
+// are one-line errors "FILE: $.path: expected ...". A producer is a command template:
+//
+//   {tilevis} golden {trace} --tile {tile} --samples {samples} -o {out}
+//
+// with {tilevis} the running binary, {trace} the trace built once per scene x resolution x
+// samples, {tile} "WxH", {out} the point's directory, {mode} the visibility mode and
+// {params} the unit configuration as "-p key=value" words. A point is done when its
+// DIR/stats.json exists (every producer writes it last, atomically), so an interrupted
+// sweep, run again, runs only what is missing.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace tilevis::sweep {
+
+class SweepError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+inline constexpr uint32_t kMinTile = 8, kMaxTile = 128;
+
+struct Size {
+  uint32_t width = 0, height = 0;
+  std::string text() const;  // "WxH"
+  auto operator<=>(const Size&) const = default;
+};
+
+// What a producer's numbers are good for in the report.
+enum class ProducerKind {
+  visibility,  // ids and per-tile counters (golden, cuda)
+  truth,       // z-buffer truth: fragments per visibility mode (exact or quantised depth)
+  timing,      // cycles (the SystemC model)
+};
+const char* to_string(ProducerKind kind);
+
+struct Producer {
+  std::string name, command, probe, description;
+  ProducerKind kind = ProducerKind::visibility;
+  bool probe_lists_params = false;  // the probe prints one parameter name per line, first word
+  bool uses_mode() const;           // the command has {mode}
+  bool uses_params() const;         // the command has {params}
+};
+
+// The built-in producers: golden, truth, truth_q16, truth_q24, sim_analytic, sim_tile,
+// sim_primitive, cuda_exact, cuda_float.
+std::vector<Producer> builtin_producers();
+
+struct Scene {
+  std::string name;
+  std::filesystem::path file;
+};
+
+struct Grid {
+  std::string name, description;
+  std::vector<std::string> scenes;   // names, keys of Sweep::scenes
+  std::vector<Size> resolutions, tiles;
+  std::vector<uint32_t> samples;
+  std::vector<std::string> producers, modes, configs;
+};
+
+struct CompareRule {
+  std::string a, b;   // producer names: every point of a against the matching point of b
+  bool explain = false;
+  std::vector<std::string> grids;  // only points of a made by these grids (empty: all)
+};
+
+struct Sweep {
+  std::filesystem::path file;
+  nlohmann::json source;                             // the file as read
+  std::string description;
+  std::map<std::string, Scene> scenes;               // every scene some grid uses
+  std::vector<Producer> producers;                   // built-ins, then the file's (same name replaces)
+  std::map<std::string, std::vector<std::pair<std::string, std::string>>> configs;  // name -> key=value
+  std::vector<Grid> grids;
+  std::vector<CompareRule> compares;
+  const Producer& producer(const std::string& name) const;
+};
+
+// Where bare scene names resolve ("bunny" -> DIR/bunny.json) unless the file says scenes_dir.
+std::filesystem::path default_scenes_dir();
+// The source tree this binary was built from (reports/make_report.py lives there).
+std::filesystem::path source_dir();
+
+// Reads and validates a sweep file. Throws SweepError naming the file and JSON path.
+Sweep load_sweep(const std::filesystem::path& file);
+
+struct Point {
+  std::string scene, producer, mode, config, grid;
+  Size resolution, tile;
+  uint32_t samples = 1;
+  std::filesystem::path dir, trace;  // dir relative to the sweep output; trace likewise
+};
+
+struct CompareJob {
+  size_t a = 0, b = 0;               // point indices
+  bool explain = false;
+  std::filesystem::path dir;         // relative: a's dir / "vs-<b producer>"
+};
+
+struct TraceJob {
+  std::string scene;
+  Size resolution;
+  uint32_t samples = 1;
+  std::filesystem::path file;        // relative to the sweep output
+};
+
+struct Plan {
+  std::vector<TraceJob> traces;
+  std::vector<Point> points;
+  std::vector<CompareJob> compares;
+};
+
+// The cross product of every grid, identical points (same directory) once.
+Plan make_plan(const Sweep& sweep);
+
+// Command words of one job, paths made absolute under `out`.
+struct Command {
+  std::vector<std::string> argv;
+  std::vector<std::pair<std::filesystem::path, std::filesystem::path>> renames;  // after success
+  std::string shell() const;  // one shell line: quoted words, then "&& mv -f A B" per rename
+};
+Command trace_command(const Sweep& sweep, const TraceJob& job, const std::string& tilevis,
+                      const std::filesystem::path& out);
+Command point_command(const Sweep& sweep, const Point& point, const std::string& tilevis,
+                      const std::filesystem::path& out);
+Command compare_command(const Plan& plan, const CompareJob& job, const std::string& tilevis,
+                        const std::filesystem::path& out);
+
+// Done markers: a trace file; a point's stats.json; a compare.json newer than both sides.
+bool trace_done(const TraceJob& job, const std::filesystem::path& out);
+bool point_done(const Point& point, const std::filesystem::path& out);
+bool compare_done(const Plan& plan, const CompareJob& job, const std::filesystem::path& out);
+
+struct Availability {
+  bool available = true;
+  std::string why;                       // when not
+  std::vector<std::string> param_names;  // from a probe that lists them
+};
+
+struct RunOptions {
+  std::filesystem::path out;
+  std::string tilevis;                   // absolute path of the binary
+  unsigned jobs = 1;
+  // The status line ("[done/total] % elapsed ETA running, last event"); `event` is true when
+  // a job just finished (false: a periodic refresh). The caller draws it.
+  std::function<void(const std::string& line, bool event)> progress;
+};
+
+struct RunSummary {
+  size_t total = 0, already_done = 0, ran = 0, failed = 0, unavailable = 0, skipped = 0;
+  bool interrupted = false;
+  double wall_seconds = 0;
+  std::vector<std::string> failures;     // one line each: job, exit status, log file
+};
+
+// Runs each producer's probe; the map is keyed by producer name (only producers in the plan).
+std::map<std::string, Availability> probe_producers(const Sweep& sweep, const Plan& plan, const std::string& tilevis);
+
+// Checks every configuration's keys against the parameter names the probes listed.
+void check_params(const Sweep& sweep, const Plan& plan, const std::map<std::string, Availability>& availability);
+
+// Writes OUT/sweep.json (the plan, producers and their availability, machine, commit).
+void write_manifest(const Sweep& sweep, const Plan& plan, const std::map<std::string, Availability>& availability,
+                    const RunOptions& options, const std::optional<RunSummary>& summary);
+
+// Runs what is not done, -j at a time; traces first, points as their traces appear,
+// comparisons when both sides are done. SIGINT/SIGTERM stop it cleanly (running jobs are
+// terminated; their points have no stats.json and run again next time).
+RunSummary run_plan(const Sweep& sweep, const Plan& plan, std::map<std::string, Availability>& availability,
+                    const RunOptions& options);
+
+// One independent command line per job that is not done, in three stages (traces, points,
+// comparisons); lines within a stage are independent of each other.
+void write_jobs_file(const Sweep& sweep, const Plan& plan, const std::map<std::string, Availability>& availability,
+                     const RunOptions& options, const std::filesystem::path& file);
+
+// Machine and commit, as recorded with every result.
+nlohmann::json machine_info();
+std::string source_commit();  // "abc1234" or "abc1234-dirty"; "unknown" without git
+
+}  // namespace tilevis::sweep

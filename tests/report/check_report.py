@@ -1,0 +1,145 @@
+#!/usr/bin/python3
+"""The sweep report as a person would look at it: runs a tiny sweep, checks that running it
+again runs nothing and that an interrupted sweep finishes only the rest, then opens
+index.html in headless Chromium (Selenium and chromedriver: Debian python3-selenium,
+chromium-driver) and checks that the page loads with no console errors, no network requests
+and every chart image decoded; saves a screenshot (OUT/screenshot.png).
+
+  check_report.py --tilevis BIN --sweep tiny.json --out DIR [--chromium C] [--chromedriver D]
+"""
+import argparse
+import base64
+import json
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+
+def fail(msg):
+    print(f"check_report: FAIL: {msg}", file=sys.stderr)
+    sys.exit(1)
+
+
+def run_sweep(a, extra=(), expect=0):
+    cmd = [a.tilevis, "sweep", a.sweep, "-o", a.out, "-j", "2", *extra]
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    sys.stderr.write(p.stderr[-3000:])
+    if p.returncode != expect:
+        fail(f"{' '.join(cmd)} exited {p.returncode}, expected {expect}\n{p.stdout[-2000:]}")
+    return p.stderr
+
+
+def ran_now(stderr):
+    m = re.search(r"(\d+) already done, (\d+) run now, (\d+) failed", stderr)
+    if not m:
+        fail("no summary line from tilevis sweep")
+    return int(m.group(1)), int(m.group(2)), int(m.group(3))
+
+
+def open_in_chromium(a, page, screenshot):
+    """Loads the page in headless Chromium through chromedriver (Selenium); returns its title,
+    its images, the console errors and every URL it requested."""
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service
+
+    opts = webdriver.ChromeOptions()
+    opts.binary_location = a.chromium
+    for flag in ("--headless=new", "--no-sandbox", "--disable-gpu", "--no-first-run", "--window-size=1280,1000",
+                 "--disable-background-networking", "--disable-component-update", "--disable-sync"):
+        opts.add_argument(flag)
+    opts.set_capability("goog:loggingPrefs", {"browser": "ALL", "performance": "ALL"})
+    driver = webdriver.Chrome(service=Service(executable_path=a.chromedriver), options=opts)
+    try:
+        driver.set_page_load_timeout(30)
+        driver.get(page.as_uri())
+        images = driver.execute_script(
+            "return Array.from(document.images).map(i => ({src: i.getAttribute('src'), "
+            "complete: i.complete, width: i.naturalWidth}))")
+        metrics = driver.execute_cdp_cmd("Page.getLayoutMetrics", {})
+        size = metrics.get("cssContentSize") or metrics["contentSize"]
+        shot = driver.execute_cdp_cmd("Page.captureScreenshot", {
+            "format": "png", "captureBeyondViewport": True,
+            "clip": {"x": 0, "y": 0, "width": size["width"], "height": min(size["height"], 12000), "scale": 1}})
+        Path(screenshot).write_bytes(base64.b64decode(shot["data"]))
+        errors = [f"{e.get('source', '')}: {e['message']}" for e in driver.get_log("browser")
+                  if e.get("level") == "SEVERE"]
+        requests = []
+        for e in driver.get_log("performance"):
+            msg = json.loads(e["message"])["message"]
+            if msg.get("method") == "Network.requestWillBeSent":
+                requests.append(msg["params"]["request"]["url"])
+        return driver.title, images, errors, requests
+    finally:
+        driver.quit()
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--tilevis", required=True)
+    ap.add_argument("--sweep", required=True)
+    ap.add_argument("--out", required=True)
+    ap.add_argument("--chromium", default="/usr/bin/chromium")
+    ap.add_argument("--chromedriver", default="/usr/bin/chromedriver")
+    a = ap.parse_args()
+    out = Path(a.out)
+    shutil.rmtree(out, ignore_errors=True)
+    t0 = time.time()
+
+    # Interrupt a first run part-way, then finish it: only the remaining jobs run.
+    p = subprocess.Popen([a.tilevis, "sweep", a.sweep, "-o", a.out, "-j", "2", "--no-report"],
+                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    while time.time() - t0 < 60 and len(list(out.glob("points/*/*/*/*/stats.json"))) < 6:
+        time.sleep(0.05)
+    p.send_signal(signal.SIGINT)
+    _, err = p.communicate(timeout=60)
+    if p.returncode != 130 or "interrupted" not in err:
+        fail(f"an interrupted sweep should exit 130 and say so; exit {p.returncode}: {err[-1500:]}")
+    before = len(list(out.glob("points/*/*/*/*/stats.json")))
+    print(f"check_report: interrupted after {before} points")
+    done, ran, failed = ran_now(run_sweep(a))
+    if done == 0 or ran == 0 or failed:
+        fail(f"the resumed sweep should run only what was left: {done} already done, {ran} run, {failed} failed")
+    done2, ran2, _ = ran_now(run_sweep(a))
+    if ran2 != 0:
+        fail(f"a finished sweep run again should run nothing, ran {ran2}")
+    print(f"check_report: resumed: {done} already done, {ran} run; run again: {ran2} run")
+
+    index = out / "index.html"
+    if not index.exists() or not (out / "report.md").exists() or not (out / "points.csv").exists():
+        fail("index.html, report.md or points.csv missing")
+    text = index.read_text()
+    external = re.findall(r'(?:src|href)="((?:https?:)?//[^"]*)"', text)
+    if external or "<script" in text:
+        fail(f"the report must be self-contained: external references {external}, scripts: {'<script' in text}")
+    figures = sorted(p.name for p in (out / "figures").glob("*.png"))
+    for kind in ("savings", "tiles_", "heatmap_", "speed_accuracy"):
+        if not any(f.startswith(kind) for f in figures):
+            fail(f"no {kind} chart in {out / 'figures'}: {figures}")
+
+    title, images, errors, requests = open_in_chromium(a, index, out / "screenshot.png")
+    if errors:
+        fail("console errors: " + "; ".join(errors))
+    outside = [u for u in requests if not (u.startswith("file:") or u.startswith("data:"))]
+    if outside:
+        fail(f"the report made network requests: {outside}")
+    broken = [i["src"] for i in images if not i["complete"] or i["width"] == 0]
+    if broken:
+        fail(f"images that did not load: {broken}")
+    shown = sorted(Path(i["src"]).name for i in images)
+    if shown != figures:
+        fail(f"the page shows {shown}, the figures folder has {figures}")
+    if not title.startswith("TileVis sweep"):
+        fail(f"unexpected title {title!r}")
+    shot = out / "screenshot.png"
+    if not shot.exists() or shot.read_bytes()[:8] != b"\x89PNG\r\n\x1a\n":
+        fail("no screenshot")
+    print(f"check_report: OK: {len(images)} charts loaded, no console errors, no network; screenshot {shot} "
+          f"({shot.stat().st_size} bytes); {time.time() - t0:.1f} s")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,49 @@
+#!/usr/bin/python3
+"""Bad sweep files end with one line naming the file, the JSON path and what was expected, a
+non-zero exit, and nothing written.
+
+  sweep_rejects.py TILEVIS
+"""
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+GRID = '{"name": "g", "scenes": ["dragon"], "producers": ["golden"]'
+CASES = [  # (sweep file text, expected in the message)
+    ('{"grids": [' + GRID + ', "tile": [8]}]}', "$.grids[0].tile: unknown member"),
+    ('{"grids": [' + GRID + ', "tiles": [4]}]}', "$.grids[0].tiles[0]: expected an integer in [8, 128], got 4"),
+    ('{"grids": [' + GRID + ', "tiles": ["16x256"]}]}', "$.grids[0].tiles[0]: expected a tile size"),
+    ('{"grids": [' + GRID + ', "samples": [3]}]}', "$.grids[0].samples[0]: expected 1, 2, 4, 8 or 16"),
+    ('{"grids": [' + GRID + ', "resolutions": ["1920"]}]}', "$.grids[0].resolutions[0]: expected a resolution"),
+    ('{"grids": [{"name": "g", "scenes": ["no_such_scene"], "producers": ["golden"]}]}', "$.grids[0].scenes[0]: no scene file"),
+    ('{"grids": [{"name": "g", "scenes": ["dragon"], "producers": ["gold"]}]}', '$.grids[0].producers[0]: unknown producer "gold"'),
+    ('{"grids": [' + GRID + ', "configs": ["fast"]}]}', '$.grids[0].configs[0]: unknown configuration "fast"'),
+    ('{"grids": [' + GRID + '}], "compare": [{"a": "golden", "b": "golden"}]}', "$.compare[0]: expected two different"),
+    ('{"producers": {"p": {"command": "{tilevis} golden {trace} {x} -o {out}"}}, "grids": [' + GRID + '}]}',
+     "$.producers.p.command: unknown placeholder {x}"),
+    ('{"grids": []}', "$.grids: expected a non-empty array"),
+    ('{"grids": [' + GRID + '}]', "invalid JSON"),
+    ('{"scenes": "all", "grids": [{"name": "g", "producers": ["golden"]}], "extra": 1}', "$.extra: unknown member"),
+]
+
+
+def main():
+    binary = sys.argv[1]
+    failed = 0
+    with tempfile.TemporaryDirectory() as tmp:
+        for i, (text, expected) in enumerate(CASES):
+            f = Path(tmp) / f"bad{i}.json"
+            f.write_text(text)
+            out = Path(tmp) / f"out{i}"
+            p = subprocess.run([binary, "sweep", str(f), "-o", str(out)], capture_output=True, text=True, timeout=60)
+            lines = [l for l in (p.stdout + p.stderr).splitlines() if l.strip()]
+            ok = p.returncode not in (0, None) and p.returncode < 128 and len(lines) == 1 \
+                and str(f) in lines[0] and expected in lines[0] and not out.exists()
+            print(f"{'ok  ' if ok else 'FAIL'} {expected}: exit {p.returncode}: {lines}")
+            failed += not ok
+    sys.exit(1 if failed else 0)
+
+
+if __name__ == "__main__":
+    main()
