@@ -15,6 +15,7 @@
 #include <cerrno>
 #include <cmath>
 #include <chrono>
+#include <cstdlib>
 #include <cstring>
 #include <ctime>
 #include <fstream>
@@ -181,22 +182,22 @@ std::vector<Producer> builtin_producers() {
   const std::string cuda = "{tilevis} cuda {trace} --tile {tile} --samples {samples} --precision ";
   const std::string sim_probe = "{tilevis} sim --list-params";  // fails where the build has no SystemC model
   std::vector<Producer> p = {
-      {"golden", golden + " -o {out}", "", "untimed SVGPU pipeline (exact)", ProducerKind::visibility, false},
-      {"truth", golden + " --truth -o {out}", "", "z-buffer truth, exact depth", ProducerKind::truth, false},
+      {"golden", golden + " -o {out}", "", "untimed SVGPU pipeline (exact)", ProducerKind::visibility, false, ""},
+      {"truth", golden + " --truth -o {out}", "", "z-buffer truth, exact depth", ProducerKind::truth, false, ""},
       {"truth_q16", golden + " --truth --quantized-depth 16 -o {out}", "", "z-buffer, depth rounded to 16 bits",
-       ProducerKind::truth, false},
+       ProducerKind::truth, false, ""},
       {"truth_q24", golden + " --truth --quantized-depth 24 -o {out}", "", "z-buffer, depth rounded to 24 bits",
-       ProducerKind::truth, false},
+       ProducerKind::truth, false, ""},
       {"sim_analytic", sim + "analytic {params} -o {out}", sim_probe,
-       "SystemC model, closed-form cycles per tile", ProducerKind::timing, true},
+       "SystemC model, closed-form cycles per tile", ProducerKind::timing, true, ""},
       {"sim_tile", sim + "tile {params} -o {out}", sim_probe, "SystemC model, one transaction per tile per unit",
-       ProducerKind::timing, true},
+       ProducerKind::timing, true, ""},
       {"sim_primitive", sim + "primitive {params} -o {out}", sim_probe,
-       "SystemC model, per-primitive transactions with back-pressure", ProducerKind::timing, true},
+       "SystemC model, per-primitive transactions with back-pressure", ProducerKind::timing, true, ""},
       {"cuda_exact", cuda + "exact -o {out}", "{tilevis} cuda --help", "CUDA reference, exact arithmetic",
-       ProducerKind::visibility, false},
+       ProducerKind::visibility, false, "gpu"},
       {"cuda_float", cuda + "float -o {out}", "{tilevis} cuda --help", "CUDA reference, float32 (as SVGPU)",
-       ProducerKind::visibility, false},
+       ProducerKind::visibility, false, "gpu"},
   };
   return p;
 }
@@ -207,8 +208,11 @@ const Producer& Sweep::producer(const std::string& name) const {
   throw SweepError("no producer " + name);
 }
 
-fs::path default_scenes_dir() { return TILEVIS_SCENES_DIR; }
-fs::path source_dir() { return TILEVIS_SOURCE_DIR; }
+fs::path source_dir() {
+  if (const char* env = std::getenv("TILEVIS_SOURCE_DIR"); env && *env) return env;  // a relocated checkout
+  return TILEVIS_SOURCE_DIR;
+}
+fs::path default_scenes_dir() { return source_dir() / "traces" / "scenes"; }
 
 Sweep load_sweep(const fs::path& file) {
   Sweep sw;
@@ -239,7 +243,7 @@ Sweep load_sweep(const fs::path& file) {
     for (const std::string& name : ps.keys()) {
       Node p = ps.at(name.c_str());
       if (!is_name(name)) p.fail("expected a producer name of letters, digits, '_', '-', '.'");
-      p.allow_only({"command", "probe", "kind", "description", "probe_lists_params"});
+      p.allow_only({"command", "probe", "kind", "description", "probe_lists_params", "exclusive"});
       Producer pr;
       pr.name = name;
       pr.command = p.at("command").string();
@@ -248,6 +252,9 @@ Sweep load_sweep(const fs::path& file) {
       if (!pr.probe.empty()) check_template(p.at("probe"), pr.probe, true);
       pr.description = p.string_or("description", "");
       pr.probe_lists_params = p.boolean_or("probe_lists_params", false);
+      pr.exclusive = p.string_or("exclusive", "");
+      if (!pr.exclusive.empty() && !is_name(pr.exclusive))
+        p.at("exclusive").fail("expected a resource name of letters, digits, '_', '-', '.'");
       std::string kind = p.string_or("kind", "visibility");
       if (kind == "visibility") pr.kind = ProducerKind::visibility;
       else if (kind == "truth") pr.kind = ProducerKind::truth;
@@ -624,8 +631,9 @@ nlohmann::json machine_info() {
 }
 
 std::string source_commit() {
+  if (const char* env = std::getenv("TILEVIS_COMMIT"); env && *env) return env;  // a copy without .git
   std::string head, status;
-  const std::string dir = TILEVIS_SOURCE_DIR;
+  const std::string dir = source_dir().string();
   if (run_capture({"git", "-C", dir, "rev-parse", "--short", "HEAD"}, &head) != 0) return "unknown";
   head.erase(head.find_last_not_of(" \n\r\t") + 1);
   if (run_capture({"git", "-C", dir, "status", "--porcelain", "--untracked-files=no"}, &status) == 0 && !status.empty())
@@ -782,6 +790,7 @@ struct Job {
   enum class Kind { trace, point, compare } kind;
   size_t index = 0;             // into plan.traces / points / compares
   std::string label, producer;  // producer: the ETA class ("trace", "compare" or the producer)
+  std::string exclusive;        // the producer's exclusive resource, if any
   Command command;
   fs::path log;
   std::vector<size_t> deps;
@@ -834,6 +843,7 @@ RunSummary run_plan(const Sweep& sw, const Plan& plan, std::map<std::string, Ava
                       p.mode.empty() ? "" : " " + p.mode, p.config == "default" ? "" : " " + p.config),
           p.producer, point_command(sw, p, opt.tilevis, out), out / p.dir / "run.log", {trace_by_file.at(p.trace)},
           megasamples(p.resolution, p.samples));
+    j.exclusive = sw.producer(p.producer).exclusive;
     if (point_done(p, out)) j.state = JobState::done;
     else if (!av.at(p.producer).available) j.state = JobState::unavailable;
     point_job[i] = jobs.size();
@@ -918,6 +928,7 @@ RunSummary run_plan(const Sweep& sw, const Plan& plan, std::map<std::string, Ava
 
   report(sum.already_done ? fmt::format("{} already done", sum.already_done) : "");
   size_t running = 0;
+  std::set<std::string> held;  // exclusive resources in use
   auto last_report = Clock::now();
   while (true) {
     if (g_stop_signal) break;
@@ -941,6 +952,7 @@ RunSummary run_plan(const Sweep& sw, const Plan& plan, std::map<std::string, Ava
     for (size_t i : ready) {
       if (running >= opt.jobs) break;
       Job& j = jobs[i];
+      if (!j.exclusive.empty() && held.count(j.exclusive)) continue;
       std::error_code ec;
       fs::create_directories(j.log.parent_path(), ec);
       for (const auto& [from, to] : j.command.renames) fs::create_directories(from.parent_path(), ec);
@@ -953,6 +965,7 @@ RunSummary run_plan(const Sweep& sw, const Plan& plan, std::map<std::string, Ava
       j.pid = s.pid;
       j.state = JobState::running;
       j.started = Clock::now();
+      if (!j.exclusive.empty()) held.insert(j.exclusive);
       ++running;
     }
     if (running == 0) break;
@@ -973,6 +986,7 @@ RunSummary run_plan(const Sweep& sw, const Plan& plan, std::map<std::string, Ava
     if (it == jobs.end()) continue;
     Job& j = *it;
     --running;
+    held.erase(j.exclusive);
     j.pid = -1;
     const double wall = std::chrono::duration<double>(Clock::now() - j.started).count();
     const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -1080,7 +1094,10 @@ void write_jobs_file(const Sweep& sw, const Plan& plan, const std::map<std::stri
       o << "# unavailable here (" << a.why << "): " << point_command(sw, p, opt.tilevis, opt.out).shell() << '\n';
       continue;
     }
-    o << point_command(sw, p, opt.tilevis, opt.out).shell() << '\n';
+    o << point_command(sw, p, opt.tilevis, opt.out).shell();
+    if (const std::string& r = sw.producer(p.producer).exclusive; !r.empty())
+      o << "  # exclusive: " << r << " (one such job at a time, for honest timings)";
+    o << '\n';
     ++n;
   }
   o << "# stage 3: comparisons\n";

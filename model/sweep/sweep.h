@@ -52,6 +52,8 @@ struct Producer {
   std::string name, command, probe, description;
   ProducerKind kind = ProducerKind::visibility;
   bool probe_lists_params = false;  // the probe prints one parameter name per line, first word
+  std::string exclusive;            // a resource (e.g. "gpu"): jobs naming the same one run one at a time,
+                                    // so that their timings do not include each other's work
   bool uses_mode() const;           // the command has {mode}
   bool uses_params() const;         // the command has {params}
 };

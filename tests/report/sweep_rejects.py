@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """Bad sweep files end with one line naming the file, the JSON path and what was expected, a
-non-zero exit, and nothing written.
+non-zero exit, and nothing written. Then a good one written out as a jobs file marks the points
+of an exclusive producer.
 
   sweep_rejects.py TILEVIS
 """
@@ -22,6 +23,8 @@ CASES = [  # (sweep file text, expected in the message)
     ('{"grids": [' + GRID + '}], "compare": [{"a": "golden", "b": "golden"}]}', "$.compare[0]: expected two different"),
     ('{"producers": {"p": {"command": "{tilevis} golden {trace} {x} -o {out}"}}, "grids": [' + GRID + '}]}',
      "$.producers.p.command: unknown placeholder {x}"),
+    ('{"producers": {"p": {"command": "{tilevis} golden {trace} -o {out}", "exclusive": "a b"}}, "grids": [' + GRID + '}]}',
+     "$.producers.p.exclusive: expected a resource name"),
     ('{"grids": []}', "$.grids: expected a non-empty array"),
     ('{"grids": [' + GRID + '}]', "invalid JSON"),
     ('{"scenes": "all", "grids": [{"name": "g", "producers": ["golden"]}], "extra": 1}', "$.extra: unknown member"),
@@ -42,6 +45,23 @@ def main():
                 and str(f) in lines[0] and expected in lines[0] and not out.exists()
             print(f"{'ok  ' if ok else 'FAIL'} {expected}: exit {p.returncode}: {lines}")
             failed += not ok
+
+        f = Path(tmp) / "exclusive.json"
+        f.write_text('{"producers": {"g1": {"command": "{tilevis} golden {trace} --tile {tile} -o {out}", '
+                     '"exclusive": "gpu"}}, "grids": [{"name": "g", "scenes": ["dragon"], "tiles": [16, 32], '
+                     '"producers": ["golden", "g1"]}]}')
+        jobs = Path(tmp) / "jobs.sh"
+        p = subprocess.run([binary, "sweep", str(f), "-o", str(Path(tmp) / "ex"), "--jobs-file", str(jobs)],
+                           capture_output=True, text=True, timeout=60)
+        lines = jobs.read_text().splitlines() if jobs.exists() else []
+        g1 = [l for l in lines if not l.startswith("#") and "/g1/" in l]
+        others = [l for l in lines if not l.startswith("#") and "/golden/" in l]
+        ok = p.returncode == 0 and len(g1) == 2 and all(l.endswith("# exclusive: gpu (one such job at a time, for "
+                                                                    "honest timings)") for l in g1) \
+            and len(others) == 2 and not any("exclusive" in l for l in others)
+        print(f"{'ok  ' if ok else 'FAIL'} jobs file marks the exclusive producer's points: exit {p.returncode}, "
+              f"{len(g1)} marked of {len(g1)}, {len(others)} others")
+        failed += not ok
     sys.exit(1 if failed else 0)
 
 

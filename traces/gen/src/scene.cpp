@@ -1,5 +1,6 @@
 #include "tilevis/scene.h"
 
+#include <cstdlib>
 #include <fstream>
 #include <list>
 #include <map>
@@ -15,8 +16,17 @@
 
 namespace tilevis::scene {
 
-std::filesystem::path glmark2_models_dir() { return TILEVIS_GLMARK2_MODELS; }
-std::filesystem::path cgal_meshes_dir() { return TILEVIS_CGAL_MESHES; }
+namespace {
+// The folders found at configure time, unless the environment names others (a binary run on
+// another machine with the meshes copied along).
+std::filesystem::path dir_from_env(const char* name, const char* configured) {
+  const char* env = std::getenv(name);
+  return env && *env ? env : configured;
+}
+}  // namespace
+
+std::filesystem::path glmark2_models_dir() { return dir_from_env("TILEVIS_GLMARK2_MODELS", TILEVIS_GLMARK2_MODELS); }
+std::filesystem::path cgal_meshes_dir() { return dir_from_env("TILEVIS_CGAL_MESHES", TILEVIS_CGAL_MESHES); }
 
 namespace {
 
