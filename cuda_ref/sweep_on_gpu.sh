@@ -1,0 +1,83 @@
+#!/usr/bin/env bash
+# A whole `tilevis sweep` (golden, truth, the SystemC model and the CUDA reference) on a GPU
+# machine that lacks TileVis's build dependencies (Ubuntu 24.04 with CUDA 13 and python3 with
+# matplotlib; no SystemC, OpenEXR, assimp, meshes or network). The binary built here travels
+# with the shared libraries it needs and the meshes the scenes read.
+#
+#   bash cuda_ref/sweep_on_gpu.sh prepare          HERE, after a full build (./tilevis demo or test):
+#                                                  fills .gpusweep/ (git-ignored): bin/tilevis, lib/,
+#                                                  meshes/{glmark2,cgal}/, commit.txt
+#   bash cuda_ref/sweep_on_gpu.sh run SWEEP NAME   THERE, from the repository root with .gpusweep
+#                                                  carried: tilevis sweep SWEEP -o reports/NAME -j nproc,
+#                                                  stopped cleanly (SIGINT) after TILEVIS_SWEEP_SECONDS
+#                                                  (default 500) so that the machine's command limit
+#                                                  never cuts a point in half; run it again to go on
+#                                                  (finished points are kept while the machine is warm)
+#
+# `run` leaves in $OUT: NAME-report.tar.xz (index.html, report.md, points.csv, figures/, sweep.json,
+# best_tiles.*: what reports/NAME/ commits) and NAME-points.tar.xz.partNN (every point's JSON, CSV
+# and logs, no EXR or traces: enough for `tilevis sweep SWEEP -o reports/NAME --report-only` here).
+# CUDA points hold the producer-level resource "gpu", so one runs at a time and its timings are
+# its own; the CPU producers fill the other cores meanwhile.
+set -euo pipefail
+
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$ROOT"
+CARRY=.gpusweep
+say() { printf '\033[1msweep_on_gpu:\033[0m %s\n' "$*" >&2; }
+die() { say "error: $*"; exit 1; }
+
+prepare() {
+  local bin=build/model/app/tilevis
+  [ -x "$bin" ] || die "$bin missing: build first (./tilevis demo)"
+  "$bin" cuda --help >/dev/null 2>&1 || die "$bin has no CUDA reference (configure with nvcc on PATH)"
+  rm -rf "$CARRY" && mkdir -p "$CARRY/bin" "$CARRY/lib" "$CARRY/meshes"
+  cp "$bin" "$CARRY/bin/"
+  # Every shared library but the C runtime and libstdc++/libgcc (the target's are newer and compatible).
+  ldd "$bin" | awk '$3 ~ /^\// {print $3}' | while read -r lib; do
+    case "$(basename "$lib")" in
+      libc.so* | libm.so* | libpthread.so* | libdl.so* | librt.so* | ld-linux* | libstdc++.so* | libgcc_s.so*) ;;
+      *) cp -L "$lib" "$CARRY/lib/" ;;
+    esac
+  done
+  local glmark=/usr/share/glmark2/models cgal=build/data/cgal  # traces/gen/CMakeLists.txt
+  [ -d "$glmark" ] && [ -d "$cgal" ] || die "meshes missing ($glmark, $cgal): build first"
+  cp -r "$glmark" "$CARRY/meshes/glmark2"
+  cp -r "$cgal" "$CARRY/meshes/cgal"
+  git rev-parse --short HEAD >"$CARRY/commit.txt"
+  [ -z "$(git status --porcelain --untracked-files=no)" ] || sed -i 's/$/-dirty/' "$CARRY/commit.txt"
+  grep -qx "/$CARRY/" .git/info/exclude 2>/dev/null || grep -qx "/$CARRY/" .gitignore ||
+    echo "/$CARRY/" >>.git/info/exclude
+  say "$(du -sh "$CARRY" | cut -f1) in $CARRY/ (commit $(cat "$CARRY/commit.txt")): carry [\"$CARRY\"]"
+}
+
+run() {
+  local sweep="${1:?usage: sweep_on_gpu.sh run SWEEP NAME}" name="${2:?usage: sweep_on_gpu.sh run SWEEP NAME}"
+  [ -x "$CARRY/bin/tilevis" ] || die "$CARRY/ missing: run 'sweep_on_gpu.sh prepare' on the build machine and carry it"
+  local out="${OUT:-/tmp/sweep_out}" dir="reports/$name" rc=0
+  mkdir -p "$out"
+  export LD_LIBRARY_PATH="$ROOT/$CARRY/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+  export TILEVIS_SOURCE_DIR="$ROOT" TILEVIS_COMMIT="$(cat "$CARRY/commit.txt")"
+  export TILEVIS_GLMARK2_MODELS="$ROOT/$CARRY/meshes/glmark2" TILEVIS_CGAL_MESHES="$ROOT/$CARRY/meshes/cgal"
+  export TILEVIS_PYTHON="${TILEVIS_PYTHON:-$(command -v python3)}"
+  "$TILEVIS_PYTHON" -c "import matplotlib, numpy" || die "$TILEVIS_PYTHON lacks matplotlib or numpy"
+  nvidia-smi -L || say "no nvidia-smi: the CUDA points will be reported unavailable"
+  say "tilevis sweep $sweep -o $dir -j $(nproc), for at most ${TILEVIS_SWEEP_SECONDS:-500} s"
+  timeout -s INT "${TILEVIS_SWEEP_SECONDS:-500}" "$CARRY/bin/tilevis" sweep "$sweep" -o "$dir" -j "$(nproc)" || rc=$?
+  if [ "$rc" = 124 ] || [ "$rc" = 130 ]; then
+    say "stopped after ${TILEVIS_SWEEP_SECONDS:-500} s: run the same command again to finish the rest"
+    "$CARRY/bin/tilevis" sweep "$sweep" -o "$dir" --report-only || true
+  fi
+  tar -C reports -cJf "$out/$name-report.tar.xz" \
+    --exclude="$name/points" --exclude="$name/traces" "$name"
+  tar -C reports -cf - --exclude='*.exr' --exclude='*.bin' --exclude="$name/traces" "$name/points" |
+    xz -6 -T0 | split -b 15M -d - "$out/$name-points.tar.xz.part"
+  ls -la "$out"
+  return "$rc"
+}
+
+case "${1:-}" in
+  prepare) prepare ;;
+  run) shift; run "$@" ;;
+  *) die "usage: sweep_on_gpu.sh prepare | run SWEEP NAME" ;;
+esac
