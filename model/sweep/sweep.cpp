@@ -378,8 +378,8 @@ Sweep load_sweep(const fs::path& file) {
     Node cs = root.at("compare");
     for (size_t i = 0; i < cs.array_size(); ++i) {
       Node c = cs.at(i);
-      c.allow_only({"a", "b", "explain", "grids"});
-      CompareRule r{producer_name(c.at("a")), producer_name(c.at("b")), c.boolean_or("explain", false), {}};
+      c.allow_only({"a", "b", "explain", "grids", "modes"});
+      CompareRule r{producer_name(c.at("a")), producer_name(c.at("b")), c.boolean_or("explain", false), {}, {}};
       if (r.a == r.b) c.fail("expected two different producers");
       if (c.has("grids"))
         r.grids = list_of<std::string>(c.at("grids"), [&](const Node& n) {
@@ -387,6 +387,10 @@ Sweep load_sweep(const fs::path& file) {
           if (!grid_names.contains(s)) n.fail(fmt::format("unknown grid \"{}\"", s));
           return s;
         });
+      if (c.has("modes")) {
+        if (!sw.producer(r.a).uses_mode()) c.at("modes").fail(fmt::format("producer {} has no {{mode}}", r.a));
+        r.modes = list_of<std::string>(c.at("modes"), name_of);
+      }
       sw.compares.push_back(r);
     }
   }
@@ -437,6 +441,7 @@ Plan make_plan(const Sweep& sw) {
       const Point& a = plan.points[i];
       if (a.producer != r.a) continue;
       if (!r.grids.empty() && std::find(r.grids.begin(), r.grids.end(), a.grid) == r.grids.end()) continue;
+      if (!r.modes.empty() && std::find(r.modes.begin(), r.modes.end(), a.mode) == r.modes.end()) continue;
       std::optional<size_t> best;
       int best_score = -1;
       for (size_t j = 0; j < plan.points.size(); ++j) {

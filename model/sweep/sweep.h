@@ -79,6 +79,7 @@ struct CompareRule {
   std::string a, b;   // producer names: every point of a against the matching point of b
   bool explain = false;
   std::vector<std::string> grids;  // only points of a made by these grids (empty: all)
+  std::vector<std::string> modes;  // only points of a in these visibility modes (empty: all)
 };
 
 struct Sweep {

@@ -25,6 +25,8 @@ CASES = [  # (sweep file text, expected in the message)
      "$.producers.p.command: unknown placeholder {x}"),
     ('{"producers": {"p": {"command": "{tilevis} golden {trace} -o {out}", "exclusive": "a b"}}, "grids": [' + GRID + '}]}',
      "$.producers.p.exclusive: expected a resource name"),
+    ('{"grids": [' + GRID + '}], "compare": [{"a": "golden", "b": "truth", "modes": ["hsr"]}]}',
+     "$.compare[0].modes: producer golden has no {mode}"),
     ('{"grids": []}', "$.grids: expected a non-empty array"),
     ('{"grids": [' + GRID + '}]', "invalid JSON"),
     ('{"scenes": "all", "grids": [{"name": "g", "producers": ["golden"]}], "extra": 1}', "$.extra: unknown member"),
