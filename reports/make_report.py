@@ -291,7 +291,15 @@ def sim_point(rows, scene, res, spp, tile, mode="analytic", config="default"):
     return None
 
 
-def section_savings(rep, rows, scenes):
+def text_table(head, rows):
+    """A plain-text table, numbers right-aligned (for the terminal)."""
+    cells = [head] + [[str(c) for c in r] for r in rows]
+    widths = [max(len(r[i]) for r in cells) for i in range(len(head))]
+    return "\n".join("  ".join(c.ljust(w) if i == 0 else c.rjust(w) for i, (c, w) in enumerate(zip(r, widths)))
+                     for r in cells) + "\n"
+
+
+def section_savings(rep, rows, scenes, out):
     rep.heading("Fragment work: what early visibility saves", 2, "savings")
     rep.para("Generated fragments are every covered sample of every front-facing triangle (what immediate mode "
              "shades). Early-Z, early-Z sorted, pre-pass and per-pixel HSR counts come from the z-buffer truth; "
@@ -345,6 +353,12 @@ def section_savings(rep, rows, scenes):
                 "EVU occlusion tests"] + [f"frame cycles ({m})" for m in sim_modes] + ["EVU busy cycles"]
         rep.table(head, table)
         rep.para(provenance(used), "*" + provenance(used) + "*")
+        if not all_used:  # the first resolution x samples, for the terminal (./tilevis demo prints it)
+            keep = [0, 2, 3, 5, 6, 9] + list(range(13, len(head)))
+            (out / "fragment_work.txt").write_text(
+                f"{res_title(res)}, {spp} spp, tiles {tile or '32x32'}: fragments generated and shaded per mode, "
+                "analytic savings, the model's frame cycles per mode and EVU busy cycles\n" +
+                text_table([head[i] for i in keep], [[r[i] for i in keep] for r in table]))
         all_used += used
     # Savings per mode at the first resolution x samples, and analytic savings at each of them.
     if summary:
@@ -732,7 +746,7 @@ def main():
     rep.html.append('<nav><a href="#savings">savings</a><a href="#tiles">tile size</a><a href="#best">best tile</a>'
                     '<a href="#heatmaps">heatmaps</a><a href="#crosscheck">cross-check</a>'
                     '<a href="#speed">speed vs accuracy</a><a href="#configs">configurations</a></nav>')
-    section_savings(rep, rows, scenes)
+    section_savings(rep, rows, scenes, out)
     best = section_tiles(rep, rows, scenes)
     section_configs(rep, rows)
     section_heatmaps(rep, out, rows, scenes)
