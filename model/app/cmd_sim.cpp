@@ -1,7 +1,7 @@
 // tilevis sim T -o DIR: the cycle-approximate SystemC model of the tiler on one frame.
 // Writes the canonical outputs (ids.exr, visible_area.bin, tiles.csv with per-unit cycle
 // columns, stats.json with cycles, param_buffer_bytes, dram_bytes and per-unit groups),
-// config.json (the effective config) and tile_cycles.exr; optionally a VCD.
+// config.json (the effective config), tile_cycles.exr and tile_cycles.png; optionally a VCD.
 #include <fmt/format.h>
 
 #include "commands.h"

@@ -9,6 +9,7 @@
 #include <ImfHeader.h>
 #include <ImfOutputFile.h>
 
+#include "top/heatmap_png.h"
 #include "top/tiler.h"
 
 namespace tilevis::sim {
@@ -136,6 +137,13 @@ void write_sim_outputs(const SimOutput& out, const std::filesystem::path& dir) {
       o.writePixels(int(t.tiles_y));
     }
     std::filesystem::rename(tmp, file);
+    // The same cycles as an image a person can open: whole-tile cycles, viridis, max in tEXt.
+    const size_t total = t.column("tile_cycles");
+    if (total != std::string::npos) {
+      std::vector<double> v(t.rows.size());
+      for (size_t r = 0; r < t.rows.size(); ++r) v[r] = double(t.rows[r][total]);
+      write_heatmap_png(dir / "tile_cycles.png", v, t.tiles_x, t.tiles_y, "tile_cycles");
+    }
   }
   outputs::write_result(out.result, dir);  // stats.json last: the directory is complete
 }

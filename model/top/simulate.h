@@ -2,7 +2,8 @@
 // (or the closed form at fidelity analytic), and the canonical outputs plus the model's
 // own (DESIGN.md "Canonical outputs"): stats.json with cycles, param_buffer_bytes,
 // dram_bytes, per-unit groups and triangle accounts; tiles.csv with cycle columns;
-// config.json; tile_cycles.exr (per-tile cycles heatmap, one pixel per tile).
+// config.json; tile_cycles.exr (per-tile cycles, one pixel per tile) and tile_cycles.png
+// (the whole-tile cycles as a viridis heatmap).
 // A process can simulate once (SystemC allows one elaboration per process).
 #pragma once
 
@@ -32,7 +33,7 @@ struct SimOutput {
 };
 
 SimOutput simulate(const trace::Frame& frame, const TilerConfig& config, const SimOptions& options = {});
-// Canonical outputs, config.json and tile_cycles.exr into `dir`.
+// Canonical outputs, config.json, tile_cycles.exr and tile_cycles.png into `dir`.
 void write_sim_outputs(const SimOutput& out, const std::filesystem::path& dir);
 
 }  // namespace tilevis::sim

@@ -12,6 +12,9 @@ mkdir -p "$work/$name"
 "$bin" golden "$trace" --tile "$tile" -o "$work/$name/golden" >/dev/null
 "$bin" sim "$trace" --tile "$tile" "$@" -o "$work/$name/sim"
 "$bin" compare "$work/$name/sim" "$work/$name/golden"
+for f in tile_cycles.exr tile_cycles.png config.json; do
+  [ -s "$work/$name/sim/$f" ] || { echo "compare_scene: sim wrote no $f" >&2; exit 1; }
+done
 python3 - "$work/$name/sim/compare.json" <<'PY'
 import json, sys
 c = json.load(open(sys.argv[1]))
