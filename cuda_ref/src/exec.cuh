@@ -189,6 +189,8 @@ class Exec {
                   int end_bit);
 
  private:
+  template <class T>
+  void scan_into(const uint32_t* in, T* out, uint64_t n);  // both exclusive_scan overloads
   void launch_kernel(const void* fn, uint32_t blocks, uint32_t block, const void* args, uint64_t n);
   void* temp(size_t bytes);
   uint64_t m_live = 0, m_peak = 0;

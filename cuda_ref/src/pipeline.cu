@@ -157,12 +157,13 @@ struct ZeroPadded {
 };
 }  // namespace
 
-void Exec::exclusive_scan(const uint32_t* in, uint64_t* out, uint64_t n) {
+template <class T>
+void Exec::scan_into(const uint32_t* in, T* out, uint64_t n) {
   ++queued;
   if (where == Where::cpu) {
-    uint64_t s = 0;
+    T s = 0;
     for (uint64_t i = 0; i < n; ++i) {
-      const uint64_t v = in[i];
+      const T v = in[i];
       out[i] = s;
       s += v;
     }
@@ -171,29 +172,13 @@ void Exec::exclusive_scan(const uint32_t* in, uint64_t* out, uint64_t n) {
   }
   const ZeroPadded padded{in, n};
   size_t bytes = 0;
-  TV_CUDA(cub::DeviceScan::ExclusiveScan(nullptr, bytes, padded, out, ::cuda::std::plus<uint64_t>{}, uint64_t{0}, n + 1, stream));
+  TV_CUDA(cub::DeviceScan::ExclusiveScan(nullptr, bytes, padded, out, ::cuda::std::plus<T>{}, T{0}, n + 1, stream));
   void* t = temp(bytes);
-  TV_CUDA(cub::DeviceScan::ExclusiveScan(t, bytes, padded, out, ::cuda::std::plus<uint64_t>{}, uint64_t{0}, n + 1, stream));
+  TV_CUDA(cub::DeviceScan::ExclusiveScan(t, bytes, padded, out, ::cuda::std::plus<T>{}, T{0}, n + 1, stream));
 }
 
-void Exec::exclusive_scan(const uint32_t* in, uint32_t* out, uint64_t n) {
-  ++queued;
-  if (where == Where::cpu) {
-    uint32_t s = 0;
-    for (uint64_t i = 0; i < n; ++i) {
-      const uint32_t v = in[i];
-      out[i] = s;
-      s += v;
-    }
-    out[n] = s;
-    return;
-  }
-  const ZeroPadded padded{in, n};
-  size_t bytes = 0;
-  TV_CUDA(cub::DeviceScan::ExclusiveScan(nullptr, bytes, padded, out, ::cuda::std::plus<uint32_t>{}, uint32_t{0}, n + 1, stream));
-  void* t = temp(bytes);
-  TV_CUDA(cub::DeviceScan::ExclusiveScan(t, bytes, padded, out, ::cuda::std::plus<uint32_t>{}, uint32_t{0}, n + 1, stream));
-}
+void Exec::exclusive_scan(const uint32_t* in, uint64_t* out, uint64_t n) { scan_into(in, out, n); }
+void Exec::exclusive_scan(const uint32_t* in, uint32_t* out, uint64_t n) { scan_into(in, out, n); }
 
 void Exec::sort_pairs(const uint64_t* keys_in, uint64_t* keys_out, const uint32_t* vals_in, uint32_t* vals_out,
                       uint64_t n, int end_bit) {

@@ -142,20 +142,8 @@ Command add_golden_command(CLI::App& app) {
   cmd->add_option("--svg", a->svg, "Also write the visible planar map as SVG");
   return {cmd, [a]() {
             uint32_t tw = 0, th = 0;
-            if (!parse_size(a->tile, tw, th) || tw < 4 || th < 4 || tw > 256 || th > 256)
-              throw std::runtime_error(fmt::format("--tile {}: expected N or WxH with 4 <= N <= 256", a->tile));
-            trace::Trace t = trace::read(a->trace);
-            if (a->frame >= t.frames.size())
-              throw std::runtime_error(
-                  fmt::format("--frame {}: {} has {} frame(s)", a->frame, a->trace, t.frames.size()));
-            trace::Frame frame = std::move(t.frames[a->frame]);
-            if (a->samples) {
-              try {
-                frame.samples = trace::standard_samples(a->samples, frame.subpixel_bits);
-              } catch (const std::invalid_argument&) {
-                throw std::runtime_error(fmt::format("--samples {}: expected 1, 2, 4, 8 or 16", a->samples));
-              }
-            }
+            parse_tile(a->tile, tw, th);
+            trace::Frame frame = load_frame(a->trace, a->frame, a->samples);
             if (a->truth) return run_truth(*a, frame, tw, th);
             return run_golden(*a, frame, tw, th);
           }};

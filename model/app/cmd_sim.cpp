@@ -41,25 +41,14 @@ int run_sim(const SimArgs& a) {
   std::vector<std::string> params = a.params;
   if (!a.tile.empty()) {
     uint32_t tw = 0, th = 0;
-    if (!parse_size(a.tile, tw, th) || tw < 4 || th < 4 || tw > 256 || th > 256)
-      throw std::runtime_error(fmt::format("--tile {}: expected N or WxH with 4 <= N <= 256", a.tile));
+    parse_tile(a.tile, tw, th);
     params.push_back(fmt::format("sim.tile_width={}", tw));
     params.push_back(fmt::format("sim.tile_height={}", th));
   }
   const sim::TilerConfig cfg = sim::load_config(a.config, params);
   if (!a.vcd.empty() && cfg.sim.fidelity == sim::Fidelity::analytic)
     throw std::runtime_error("--vcd " + a.vcd + ": fidelity analytic simulates no events; use tile or primitive");
-  trace::Trace t = trace::read(a.trace);
-  if (a.frame >= t.frames.size())
-    throw std::runtime_error(fmt::format("--frame {}: {} has {} frame(s)", a.frame, a.trace, t.frames.size()));
-  trace::Frame frame = std::move(t.frames[a.frame]);
-  if (a.samples) {
-    try {
-      frame.samples = trace::standard_samples(a.samples, frame.subpixel_bits);
-    } catch (const std::invalid_argument&) {
-      throw std::runtime_error(fmt::format("--samples {}: expected 1, 2, 4, 8 or 16", a.samples));
-    }
-  }
+  const trace::Frame frame = load_frame(a.trace, a.frame, a.samples);
   sim::SimOptions opt;
   opt.trace_name = a.trace;
   opt.frame_index = a.frame;

@@ -6,6 +6,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "tilevis/trace.h"
+
 namespace tilevis::app {
 
 struct Command {
@@ -23,5 +25,10 @@ Command add_sweep_command(CLI::App& app);
 
 // Parses "WxH" or "N" (square).
 bool parse_size(const std::string& text, uint32_t& width, uint32_t& height);
+// A --tile value: parse_size with 4 <= W, H <= 256, or a one-line error.
+void parse_tile(const std::string& text, uint32_t& width, uint32_t& height);
+// Frame `frame_index` of the trace at `path`; samples != 0 replaces its sample pattern with
+// the standard one of that count (--samples). Errors name the option.
+trace::Frame load_frame(const std::string& path, uint32_t frame_index, uint32_t samples);
 
 }  // namespace tilevis::app
