@@ -1,4 +1,5 @@
-// Per-tile culling (SVGPU §3.2.1), one thread per (tile, triangle) item rather than per tile:
+// Per-tile culling (SVGPU §3.2.1), kCullLanes threads per (tile, triangle) item rather than
+// one thread per tile (lane l takes the item's pairs l, l + kCullLanes, ...):
 // the pairs of an item are the tile's edges not behind the triangle (test 6 on edges sorted
 // by nearest depth: a binary search gives the count). The cheap tests (test 6, bounding
 // boxes, test 4) run there; the survivors are appended to a list (device counter, grown and
@@ -33,14 +34,19 @@ struct CullArgs {
 
 namespace {
 
-// One thread per item (tile, triangle). The items of a tile are neighbours, so the lanes of a
-// warp walk the same tile's edge list (edges by nearest depth) nearly in step: the loads of
-// the streamed edge boxes are shared. Pairs past the cheap tests go to the exact tests.
+inline constexpr uint32_t kCullLanes = 8;
+
+// Element i: lane i % kCullLanes of item i / kCullLanes (tile, triangle). The items of a tile
+// are neighbours, so the threads of a warp walk the same tile's edge list (edges by nearest
+// depth) nearly in step: the loads of the streamed edge boxes are shared. Pairs past the
+// cheap tests go to the exact tests.
 template <class P>
-TV_HD void cull_item(const CullArgs<P>& a, uint64_t j) {
+TV_HD void cull_item(const CullArgs<P>& a, uint64_t i) {
+  const uint64_t j = i / kCullLanes;
+  const uint32_t lane = uint32_t(i % kCullLanes);
   const uint32_t tile = uint32_t(a.item_key[j]);
   const TileTri<P>& tt = a.tris[a.item_tri[j]];
-  a.cand_count[j] = 0;
+  if (lane == 0) a.cand_count[j] = 0;
   // Binning put the triangle here because its interior meets the tile's, so the exact tile
   // polygon is never empty (golden's empty check cannot fire). Float arithmetic can make it
   // empty, and then the item does nothing, as golden would with an empty polygon.
@@ -49,13 +55,10 @@ TV_HD void cull_item(const CullArgs<P>& a, uint64_t j) {
     PEdge<P> poly[kTileCap];
     bool overflow = false;
     n = tile_polygon<P>(tt, a.grid.rect(tile), poly, overflow);
-    if (overflow) atomic_add(&a.counters[kFloatAnomalies], 1);
+    if (overflow && lane == 0) atomic_add(&a.counters[kFloatAnomalies], 1);
   }
-  if (n == 0) {
-    a.piece_count[j] = 0;
-    return;
-  }
-  a.piece_count[j] = 1;
+  if (lane == 0) a.piece_count[j] = n == 0 ? 0 : 1;
+  if (n == 0) return;
   // Test 6: edges whose nearest depth is behind the triangle's farthest are skipped, with
   // every later one: the pairs examined are the edges with z_min <= z_max (upper bound).
   const int64_t* row = a.rows + uint64_t(tile) * kTileColumns;
@@ -68,9 +71,9 @@ TV_HD void cull_item(const CullArgs<P>& a, uint64_t j) {
     else hi = mid;
   }
   if (lo == 0) return;
-  atomic_add(&a.rows[uint64_t(tile) * kTileColumns + kColPairTests], int64_t(lo));
+  if (lane == 0) atomic_add(&a.rows[uint64_t(tile) * kTileColumns + kColPairTests], int64_t(lo));
   const Rect tb = tt.bbox;
-  for (uint32_t k = begin; k < begin + lo; ++k) {
+  for (uint32_t k = begin + lane; k < begin + lo; k += kCullLanes) {
     // Bounding boxes that at most touch: the segment cannot meet the interior (test 2). The
     // boxes are streamed in the tile's order; the edge itself is read only past this test.
     const Rect eb = a.tedge_box[k];
@@ -141,7 +144,7 @@ void stage_cull(Pipeline<P>& p) {
   a.cands = p.cands.need(p.caps.candidates);
   a.cand_cap = p.caps.candidates;
   a.n_items = ni;
-  ex.launch(k_cull_item<P>, cull_item<P>, ni, a);
+  ex.launch(k_cull_item<P>, cull_item<P>, ni * kCullLanes, a);
   ex.launch_dyn(k_cull_exact<P>, cull_exact<P>, p.counters.get() + kDeepPairs, p.caps.deep_pairs, a);
 }
 
