@@ -168,7 +168,6 @@ struct Pipeline {
   uint64_t n_pieces = 0;
   Buf<uint8_t> piece_visible;
   Buf<double> piece_area;
-  Buf<uint32_t> piece_first_hit;   // occlusion: the first occluder index that hides the piece, or ~0
 
   // Outputs.
   Buf<uint32_t> winner;            // per sample: front triangle + 1 of the last visible piece
@@ -180,8 +179,7 @@ struct Pipeline {
                     &tri_tiles, &edge_tiles, &item_tri, &item_tri_sorted, &occ_tri, &occ_tri_sorted, &tedge_id,
                     &tedge_id_sorted, &tile_item_begin, &tile_edge_begin, &tile_occ_count, &area_item,
                     &area_item_sorted, &piece_count, &cand_count, &cand_cursor, &cand_offset,
-                    &cand_edges, &cand_scratch, &clip_items, &item_slot, &winner, &indices, &tri_draw, &sample_xy,
-                    &piece_first_hit})
+                    &cand_edges, &cand_scratch, &clip_items, &item_slot, &winner, &indices, &tri_draw, &sample_xy})
       b->bind(&e);
     for (auto* b : {&fan_offset, &use_key, &sil_offset, &sil_key, &sil_key_sorted,
                     &front_offset, &tri_tiles_off, &edge_tiles_off, &item_key, &item_key_sorted, &occ_key,

@@ -327,36 +327,23 @@ struct OccRec {
   uint32_t z_min, id, tri, pad;
 };
 
-// Occluder k of a piece's tile (sorted nearest first) against the piece's interior point q:
-// 0 not examined (self, or q outside its box), 1 examined (a test) and not hiding, 2 hides.
 template <class P>
-TV_HD inline int occluder_verdict(const typename P::R& q, double qx, double qy, const TileTri<P>& tt,
-                                  const TileTri<P>* tris, const OccRec& o) {
-  if (o.id == tt.id) return 0;
-  if (qx < o.bbox.x0 - 1.0 || qx > o.bbox.x1 + 1.0 || qy < o.bbox.y0 - 1.0 || qy > o.bbox.y1 + 1.0) return 0;
-  const TileTri<P>& u = tris[o.tri];
-  if (!P::in_half(u.edge[0], q) || !P::in_half(u.edge[1], q) || !P::in_half(u.edge[2], q)) return 1;
-  const int order = P::depth(u.plane, tt.plane, q);
-  return order < 0 || (order == 0 && u.id < tt.id) ? 2 : 1;
-}
-
-// The scan order of occlusion: occluders k = first, first + stride, ... up to the first one
-// wholly behind the piece's triangle or to `limit` (exclusive). Returns the first hiding index
-// in that subsequence (or ~0u) and counts the tests up to and including it.
-template <class P>
-TV_HD inline uint32_t first_hiding(const PEdge<P>* piece, const TileTri<P>& tt, const TileTri<P>* tris, const OccRec* occ,
-                                   uint32_t n_occ, uint32_t first, uint32_t stride, uint32_t limit, uint32_t& tests) {
+TV_HD inline bool occluded(const PEdge<P>* piece, const TileTri<P>& tt, const TileTri<P>* tris, const OccRec* occ,
+                           uint32_t n_occ, uint32_t& tests) {
   const typename P::R q = P::interior(piece[0].start, piece[1].start, piece[2].start);
   const double qx = P::rx(q), qy = P::ry(q);
-  const uint32_t end = n_occ < limit ? n_occ : limit;
-  for (uint32_t k = first; k < end; k += stride) {
+  for (uint32_t k = 0; k < n_occ; ++k) {
     const OccRec o = occ[k];
     if (o.z_min > tt.z_max) break;
-    const int v = occluder_verdict<P>(q, qx, qy, tt, tris, o);
-    tests += v != 0;
-    if (v == 2) return k;
+    if (o.id == tt.id) continue;
+    if (qx < o.bbox.x0 - 1.0 || qx > o.bbox.x1 + 1.0 || qy < o.bbox.y0 - 1.0 || qy > o.bbox.y1 + 1.0) continue;
+    ++tests;
+    const TileTri<P>& u = tris[o.tri];
+    if (!P::in_half(u.edge[0], q) || !P::in_half(u.edge[1], q) || !P::in_half(u.edge[2], q)) continue;
+    const int order = P::depth(u.plane, tt.plane, q);
+    if (order < 0 || (order == 0 && u.id < tt.id)) return true;
   }
-  return ~0u;
+  return false;
 }
 
 template <class P>

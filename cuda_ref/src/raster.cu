@@ -1,7 +1,5 @@
-// Raster and outputs: the samples of every piece (kRasterLanes threads per piece, each over
-// every kRasterLanes-th pixel row of its bounding box inside the tile, so that a large piece
-// does not keep one thread busy while the rest of the grid idles; a sample is covered under
-// the tie rule), the id buffer
+// Raster and outputs: the samples of every piece (one thread per piece, over the pixels of
+// its bounding box inside the tile; a sample is covered under the tie rule), the id buffer
 // (per sample, the last visible piece in canonical order: within a tile, the highest
 // triangle in setup order, kept by atomicMax), the per-tile sample counters, and the
 // visible area per original triangle folded in canonical order (items sorted by id).
@@ -24,9 +22,6 @@ struct RasterArgs {
 // lives in registers. Exact: edge functions stepped along a row, e(x + 2^sb) = e(x) + a 2^sb,
 // exact in int64 (|e| < 2^49, |a 2^sb| <= 2^32), so this is the same integer test as covers().
 // Float: each sample evaluated as covers() does.
-// Threads per piece; each takes the rows py0 + lane, py0 + lane + kRasterLanes, ...
-inline constexpr uint32_t kRasterLanes = 8;
-
 template <int N, class P>
 TV_HD int64_t raster_rows(const RasterArgs<P>& a, const PieceView<P>& v, int64_t px0, int64_t px_end, int64_t py0,
                           int64_t py1, bool vis) {
@@ -34,7 +29,7 @@ TV_HD int64_t raster_rows(const RasterArgs<P>& a, const PieceView<P>& v, int64_t
   typename P::Line l[N];
   for (int i = 0; i < N; ++i) l[i] = v.e[i].line;
   int64_t covered = 0;
-  for (int64_t py = py0; py <= py1 && py < a.height; py += kRasterLanes)
+  for (int64_t py = py0; py <= py1 && py < a.height; ++py)
     for (uint32_t k = 0; k < a.n_samples; ++k) {
       const uint32_t sxy = a.sample_xy[k];
       const int64_t x0 = (px0 << sb) + (sxy & 0xffffu), y = (py << sb) + (sxy >> 16);
@@ -60,11 +55,8 @@ TV_HD int64_t raster_rows(const RasterArgs<P>& a, const PieceView<P>& v, int64_t
   return covered;
 }
 
-// Element i: piece i / kRasterLanes, its rows lane, lane + kRasterLanes, ... from the top.
 template <class P>
-TV_HD void raster_piece(const RasterArgs<P>& a, uint64_t i) {
-  const uint64_t p = i / kRasterLanes;
-  const uint32_t lane = uint32_t(i % kRasterLanes);
+TV_HD void raster_piece(const RasterArgs<P>& a, uint64_t p) {
   PEdge<P> local[kTileCap];
   const PieceView<P> v = piece_at<P>(a.src, p, local);
   if (v.n < 3) return;
@@ -76,7 +68,7 @@ TV_HD void raster_piece(const RasterArgs<P>& a, uint64_t i) {
   // A pixel's samples lie in [px 2^sb, (px + 1) 2^sb).
   const int64_t px0 = tmax<int64_t>(int64_t(tx) * g.tile_w, int64_t(b.x0) >> sb);
   const int64_t px1 = tmin<int64_t>(int64_t(tx + 1) * g.tile_w - 1, int64_t(b.x1) >> sb);
-  const int64_t py0 = tmax<int64_t>(int64_t(ty) * g.tile_h, int64_t(b.y0) >> sb) + lane;
+  const int64_t py0 = tmax<int64_t>(int64_t(ty) * g.tile_h, int64_t(b.y0) >> sb);
   const int64_t py1 = tmin<int64_t>(int64_t(ty + 1) * g.tile_h - 1, int64_t(b.y1) >> sb);
   int64_t covered = 0;
   const int64_t px_end = tmin<int64_t>(px1, int64_t(a.width) - 1);
@@ -92,7 +84,7 @@ TV_HD void raster_piece(const RasterArgs<P>& a, uint64_t i) {
       default: break;
     }
   }
-  for (int64_t py = py0; !done && py <= py1 && py < a.height; py += kRasterLanes)
+  for (int64_t py = py0; !done && py <= py1 && py < a.height; ++py)
     for (int64_t px = px0; px <= px1 && px < a.width; ++px)
       for (uint32_t k = 0; k < a.n_samples; ++k) {
         const uint32_t sxy = a.sample_xy[k];
@@ -174,7 +166,7 @@ void stage_raster(Pipeline<P>& p) {
   a.rows = p.tile_rows.get();
   a.winner = p.winner.need(n_samples + 1);
   ex.zero(a.winner, n_samples * 4);
-  ex.launch(k_raster<P>, raster_piece<P>, p.n_pieces * kRasterLanes, a);
+  ex.launch(k_raster<P>, raster_piece<P>, p.n_pieces, a);
 
   OutArgs<P> o{};
   o.winner = a.winner;
