@@ -159,7 +159,9 @@ phase_report() {
   device="$(nvidia-smi --query-gpu=name --format=csv,noheader 2>/dev/null | head -n 1 || true)"
   [ -n "$device" ] || device="$(grep -h '^  "device":' "$WORK"/*/t*/exact/stats.json 2>/dev/null | head -n 1 | sed 's/.*"device": "\(.*\)".*/\1/')"
   [ -n "$device" ] || device=unknown-gpu
-  commit="$(git rev-parse --verify -q HEAD 2>/dev/null || cat .gpu/commit.txt 2>/dev/null || echo unknown)"
+  # .gpu/commit.txt first: prepare_gpu_run.sh wrote it from the checkout the traces and the
+  # tree came from (a copied tree's own .git, if any, may be older).
+  commit="$(cat .gpu/commit.txt 2>/dev/null || git rev-parse --verify -q HEAD 2>/dev/null || echo unknown)"
   nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.max.sm,clocks.max.mem --format=csv,noheader \
     >"$WORK/meta/nvidia_smi.txt" 2>/dev/null || true
   nvcc --version | tail -n 1 >"$WORK/meta/nvcc.txt" 2>/dev/null || true
