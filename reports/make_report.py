@@ -212,14 +212,14 @@ class Report:
         self.md.append((md or text) + "\n")
 
     def table(self, head, rows, numeric_from=1):
-        h = ["<table><thead><tr>" + "".join(f"<th>{html.escape(str(c))}</th>" for c in head) + "</tr></thead><tbody>"]
+        h = ['<div class="wide"><table><thead><tr>' + "".join(f"<th>{html.escape(str(c))}</th>" for c in head) + "</tr></thead><tbody>"]
         for r in rows:
             cells = []
             for i, c in enumerate(r):
                 cls = ' class="n"' if i >= numeric_from else ""
                 cells.append(f"<td{cls}>{html.escape(str(c))}</td>")
             h.append("<tr>" + "".join(cells) + "</tr>")
-        h.append("</tbody></table>")
+        h.append("</tbody></table></div>")
         self.html.append("\n".join(h))
         md = ["| " + " | ".join(str(c) for c in head) + " |", "|" + "---|" * len(head)]
         md += ["| " + " | ".join(str(c).replace("|", "/") for c in r) + " |" for r in rows]
@@ -239,9 +239,10 @@ class Report:
     def write(self, title):
         css = """body{font-family:sans-serif;max-width:1200px;margin:1em auto;padding:0 1em;color:#222}
 table{border-collapse:collapse;margin:.5em 0 1.2em;font-size:13px}th,td{border:1px solid #ccc;padding:2px 6px}
-th{background:#f0f0f0}td.n{text-align:right;font-variant-numeric:tabular-nums}figure{margin:1em 0}
+th{background:#f0f0f0}td.n{text-align:right;font-variant-numeric:tabular-nums;white-space:nowrap}figure{margin:1em 0}
 figure img{max-width:100%;border:1px solid #ddd}figcaption{font-size:13px;color:#444}.prov{color:#777;font-size:12px}
-code{background:#f4f4f4;padding:0 3px}nav a{margin-right:1em}"""
+code{background:#f4f4f4;padding:0 3px}nav a{margin-right:1em}
+div.wide{overflow-x:auto;max-width:100%}th{position:sticky;top:0}"""
         doc = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
                '<link rel="icon" href="data:,">', f"<title>{html.escape(title)}</title>", f"<style>{css}</style>",
                "</head><body>", *self.html, "</body></html>"]
