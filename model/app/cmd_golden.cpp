@@ -16,7 +16,7 @@ namespace tilevis::app {
 namespace {
 
 struct GoldenArgs {
-  std::string trace, out, tile = "32", svg;
+  std::string trace, out, tile = "32", svg, occlusion_bin;
   uint32_t samples = 0, frame = 0, depth_bits = 24, quantized_depth_bits = 0;
   bool truth = false;
 };
@@ -83,6 +83,12 @@ int run_golden(const GoldenArgs& a, const trace::Frame& frame, uint32_t tw, uint
   cfg.tile_w = tw;
   cfg.tile_h = th;
   cfg.keep_pieces = !a.svg.empty();
+  if (!a.occlusion_bin.empty()) {
+    if (!parse_size(a.occlusion_bin, cfg.occlusion_bin_w, cfg.occlusion_bin_h) || cfg.occlusion_bin_w < 1 ||
+        cfg.occlusion_bin_h < 1 || cfg.occlusion_bin_w > tw || cfg.occlusion_bin_h > th)
+      throw std::runtime_error(fmt::format("--occlusion-bin {}: expected N or WxH no larger than the tile ({}x{})",
+                                           a.occlusion_bin, tw, th));
+  }
   vis::GoldenResult r = vis::golden_visibility(s, cfg);
   auto t2 = std::chrono::steady_clock::now();
   double setup_s = std::chrono::duration<double>(t1 - t0).count(), tiles_s = std::chrono::duration<double>(t2 - t1).count();
@@ -111,7 +117,13 @@ int run_golden(const GoldenArgs& a, const trace::Frame& frame, uint32_t tw, uint
   out.stats = {{"tool", "golden"},
                {"trace", a.trace},
                {"frame", a.frame},
-               {"config", {{"tile_w", tw}, {"tile_h", th}, {"samples", r.samples}, {"depth_bits", a.depth_bits}}},
+               {"config",
+                {{"tile_w", tw},
+                 {"tile_h", th},
+                 {"occlusion_bin_w", cfg.occlusion_bin_w ? cfg.occlusion_bin_w : tw},
+                 {"occlusion_bin_h", cfg.occlusion_bin_h ? cfg.occlusion_bin_h : th},
+                 {"samples", r.samples},
+                 {"depth_bits", a.depth_bits}}},
                {"totals", totals},
                {"stage_seconds", {{"setup", setup_s}, {"tiles", tiles_s}}},
                {"host_seconds", setup_s + tiles_s}};
@@ -140,6 +152,9 @@ Command add_golden_command(CLI::App& app) {
                   "With --truth: compare depth rounded to N bits, as hardware does (shows z-fighting)")
       ->check(CLI::Range(1, 24));
   cmd->add_option("--svg", a->svg, "Also write the visible planar map as SVG");
+  cmd->add_option("--occlusion-bin", a->occlusion_bin,
+                  "Finer occlusion bins (SVGPU 4.1), N or WxH pixels within each tile: only the scanning of "
+                  "occluders shrinks; ids and counters are unchanged (default: the tile)");
   return {cmd, [a]() {
             uint32_t tw = 0, th = 0;
             parse_tile(a->tile, tw, th);

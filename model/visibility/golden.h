@@ -21,6 +21,11 @@ namespace tilevis::vis {
 
 struct GoldenConfig {
   uint32_t tile_w = 32, tile_h = 32;
+  // Finer occlusion bins (SVGPU §4.1): each tile's occluder list split over bins of this many
+  // pixels (0: one bin per tile). A piece scans only the bin of its interior point, whose
+  // list holds every occluder whose bounding-box test could pass there, in the same order:
+  // results and counters are those of one bin per tile; only the scanning shrinks.
+  uint32_t occlusion_bin_w = 0, occlusion_bin_h = 0;
   bool keep_pieces = false;  // collect visible pieces as polygons (for SVG)
 };
 

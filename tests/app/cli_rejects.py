@@ -85,6 +85,8 @@ def main():
         ok &= check(name, [binary, "trace", str(f), "-o", str(tmp / "out.tvt")], str(f))
     ok &= check("missing_trace", [binary, "info", str(tmp / "missing.tvt")], "missing.tvt")
     ok &= check("bad_tile", [binary, "golden", str(good), "--tile", "3", "-o", str(tmp / "g")], "--tile")
+    ok &= check("occlusion_bin_over_tile", [binary, "golden", str(good), "--tile", "16", "--occlusion-bin", "32",
+                                            "-o", str(tmp / "g")], "--occlusion-bin")
     shutil.rmtree(tmp)
     sys.exit(0 if ok else 1)
 

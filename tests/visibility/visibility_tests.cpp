@@ -157,6 +157,28 @@ TEST(Golden, DeterministicAcrossRuns) {
   EXPECT_EQ(a.tiles.rows, b.tiles.rows);
 }
 
+// SVGPU §4.1's finer occlusion bins only shorten each piece's scan of occluders: every
+// result and counter equals that of one bin per tile, for bins that divide the tile and
+// bins that do not.
+TEST(Golden, FinerOcclusionBinsChangeNothingButTheScan) {
+  for (const auto& f : {frame_of("cubes", kCubes), shipped("bunny", 480, 270, 1)}) {
+    auto s = vis::primitive_setup(f, {});
+    vis::GoldenConfig base;
+    base.tile_w = base.tile_h = 32;
+    const auto ref = vis::golden_visibility(s, base);
+    ASSERT_GT(ref.occlusion_tests, 0u);
+    for (auto [bw, bh] : {std::pair{1u, 1u}, {4u, 4u}, {5u, 7u}, {8u, 32u}, {31u, 31u}, {32u, 32u}}) {
+      vis::GoldenConfig gc = base;
+      gc.occlusion_bin_w = bw;
+      gc.occlusion_bin_h = bh;
+      const auto g = vis::golden_visibility(s, gc);
+      EXPECT_EQ(g.ids, ref.ids) << bw << "x" << bh;
+      EXPECT_EQ(g.visible_area, ref.visible_area) << bw << "x" << bh;
+      EXPECT_EQ(g.tiles.rows, ref.tiles.rows) << bw << "x" << bh;
+    }
+  }
+}
+
 TEST(Golden, VisibleAreaOfAnUnoccludedTriangleIsItsArea) {
   // One quad facing the camera, orthographic-like: both triangles fully visible, their
   // visible areas sum to the quad's snapped area whatever the tiling.
