@@ -141,6 +141,80 @@ TV_HD void area_key(const AreaKeyArgs<P>& a, uint64_t j) {
   a.item[j] = uint32_t(j);
 }
 
+// Finer occlusion bins (SVGPU §4.1), as golden makes them: within a tile, bin (bx, by)
+// covers [x0 + bx step_x, x0 + (bx + 1) step_x) and likewise in y, the outer bins open towards
+// the outside; an opaque occluder joins every bin its bounding-box test (the test point within
+// [bbox.x0 - 1, bbox.x1 + 1], same in y) can pass in. Records keep their tile order in a bin.
+struct ObinArgs {
+  const OccRec* rec;           // by (tile, not opaque, z_min)
+  const uint64_t* occ_key;     // tile << (d + 1) | not opaque << d | z_min
+  uint32_t depth_bits;
+  TileGrid grid;
+  int64_t step_x, step_y;      // bin size in sub-pixel units
+  uint32_t bins_x, bins_y;     // per tile
+  uint32_t* cnt;               // per record: bins joined
+  const uint64_t* off;         // per record: first pair slot (scan of cnt)
+  uint64_t* key;               // per pair: global bin
+  uint32_t* val;               // per pair: record index
+  uint32_t* count;             // per global bin: pairs
+};
+
+TV_HD inline uint32_t obin_of(int64_t v, int64_t origin, int64_t step, uint32_t n) {
+  const int64_t k = v < origin ? 0 : (v - origin) / step;
+  return uint32_t(k < int64_t(n) - 1 ? k : int64_t(n) - 1);
+}
+
+// The bins [bx0, bx1] x [by0, by1] record k joins; false for a record that is not an occluder.
+TV_HD inline bool obin_span(const ObinArgs& a, uint64_t k, uint32_t& tile, uint32_t& bx0, uint32_t& bx1, uint32_t& by0,
+                            uint32_t& by1) {
+  const uint64_t key = a.occ_key[k];
+  if ((key >> a.depth_bits) & 1) return false;  // not opaque: never occludes
+  tile = uint32_t(key >> (a.depth_bits + 1));
+  const Rect r = a.grid.rect(tile);
+  const Rect& b = a.rec[k].bbox;
+  bx0 = obin_of(int64_t(b.x0) - 1, r.x0, a.step_x, a.bins_x);
+  bx1 = obin_of(int64_t(b.x1) + 1, r.x0, a.step_x, a.bins_x);
+  by0 = obin_of(int64_t(b.y0) - 1, r.y0, a.step_y, a.bins_y);
+  by1 = obin_of(int64_t(b.y1) + 1, r.y0, a.step_y, a.bins_y);
+  return true;
+}
+
+TV_HD void obin_count(const ObinArgs& a, uint64_t k) {
+  uint32_t tile, bx0, bx1, by0, by1;
+  a.cnt[k] = obin_span(a, k, tile, bx0, bx1, by0, by1) ? (bx1 - bx0 + 1) * (by1 - by0 + 1) : 0;
+}
+
+TV_HD void obin_emit(const ObinArgs& a, uint64_t k) {
+  uint32_t tile, bx0, bx1, by0, by1;
+  if (!obin_span(a, k, tile, bx0, bx1, by0, by1)) return;
+  uint64_t at = a.off[k];
+  for (uint32_t by = by0; by <= by1; ++by)
+    for (uint32_t bx = bx0; bx <= bx1; ++bx) {
+      const uint64_t g = (uint64_t(tile) * a.bins_y + by) * a.bins_x + bx;
+      a.key[at] = g;
+      a.val[at] = uint32_t(k);
+      ++at;
+      atomic_add(&a.count[g], 1u);
+    }
+}
+
+struct ObinGatherArgs {
+  const OccRec* rec;
+  const uint32_t* val;
+  OccRec* out;
+};
+TV_HD void obin_gather(const ObinGatherArgs& a, uint64_t q) { a.out[q] = a.rec[a.val[q]]; }
+
+__global__ void k_obin_count(ObinArgs a, uint64_t n) {
+  TV_GRID_LOOP(i, n) obin_count(a, i);
+}
+__global__ void k_obin_emit(ObinArgs a, uint64_t n) {
+  TV_GRID_LOOP(i, n) obin_emit(a, i);
+}
+__global__ void k_obin_gather(ObinGatherArgs a, uint64_t n) {
+  TV_GRID_LOOP(i, n) obin_gather(a, i);
+}
+
 template <class P>
 __global__ void k_bin_tri_count(BinArgs<P> a, uint64_t n) {
   TV_GRID_LOOP(i, n) bin_tri_count<P>(a, i);
@@ -239,6 +313,46 @@ void stage_binning(Pipeline<P>& p) {
   ex.launch(k_tile_begin, tile_begin, ne, RangeArgs{p.tedge_key_sorted.get(), uint32_t(d), ne, edge_begin});
   ex.launch(k_gather_occ<P>, gather_occ<P>, ni, OccGatherArgs<P>{p.tris.get(), p.occ_tri_sorted.get(), p.occ_rec.need(ni + 1)});
   ex.launch(k_gather_box<P>, gather_box<P>, ne, BoxArgs<P>{p.edges.get(), p.tedge_id_sorted.get(), p.tedge_box.need(ne + 1)});
+
+  // Finer occlusion bins: (bin, record) pairs counted, emitted in record order, sorted
+  // stably by bin (so records keep their tile order in each bin), gathered.
+  p.obins_x = p.obins_y = 1;
+  const uint32_t bw = c.occlusion_bin_w && c.occlusion_bin_w < c.tile_w ? c.occlusion_bin_w : c.tile_w;
+  const uint32_t bh = c.occlusion_bin_h && c.occlusion_bin_h < c.tile_h ? c.occlusion_bin_h : c.tile_h;
+  if (bw != c.tile_w || bh != c.tile_h) {
+    p.obin_w = bw;
+    p.obin_h = bh;
+    p.obins_x = (c.tile_w + bw - 1) / bw;
+    p.obins_y = (c.tile_h + bh - 1) / bh;
+    const uint64_t n_bins = uint64_t(tiles) * p.obins_x * p.obins_y;
+    ObinArgs o{};
+    o.rec = p.occ_rec.get();
+    o.occ_key = p.occ_key_sorted.get();
+    o.depth_bits = p.f.depth_bits;
+    o.grid = p.grid;
+    o.step_x = int64_t(bw) << p.f.subpixel_bits;
+    o.step_y = int64_t(bh) << p.f.subpixel_bits;
+    o.bins_x = p.obins_x;
+    o.bins_y = p.obins_y;
+    o.cnt = p.obin_cnt.need(ni + 1);
+    o.off = p.obin_off.need(ni + 1);
+    o.count = p.obin_count.need(n_bins + 1);
+    ex.zero(o.count, n_bins * 4);
+    ex.launch(k_obin_count, obin_count, ni, o);
+    ex.exclusive_scan(o.cnt, p.obin_off.get(), ni);
+    p.n_obin_pairs = ex.read(p.obin_off.get() + ni);  // sync: the number of (bin, occluder) pairs
+    const uint64_t np = p.n_obin_pairs;
+    o.key = p.obin_key.need(np + 1);
+    o.val = p.obin_val.need(np + 1);
+    ex.launch(k_obin_emit, obin_emit, ni, o);
+    ex.sort_pairs(o.key, p.obin_key_sorted.need(np + 1), o.val, p.obin_val_sorted.need(np + 1), np,
+                  int(bits_for(n_bins)));
+    uint32_t* begin = p.obin_begin.need(n_bins + 1);
+    ex.zero(begin, n_bins * 4);
+    ex.launch(k_tile_begin, tile_begin, np, RangeArgs{p.obin_key_sorted.get(), 0, np, begin});
+    ex.launch(k_obin_gather, obin_gather, np, ObinGatherArgs{p.occ_rec.get(), p.obin_val_sorted.get(),
+                                                            p.obin_rec.need(np + 1)});
+  }
 
   AreaKeyArgs<P> ak{p.tris.get(), p.item_tri_sorted.get(), p.area_key.need(ni + 1), p.area_item.need(ni + 1)};
   ex.launch(k_area_key<P>, area_key<P>, ni, ak);

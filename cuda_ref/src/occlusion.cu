@@ -18,7 +18,21 @@ struct OccArgs {
   double* area;
   uint64_t* counters;
   double area_scale;  // 2 * 2^sb * 2^sb
+  // Finer occlusion bins (bins_x * bins_y > 1): the piece scans only the list of the bin of
+  // its interior point (binning.cu says which occluders a bin lists).
+  uint32_t bins_x, bins_y;
+  double step_x, step_y;  // bin size, sub-pixel units
+  const OccRec* bin_occ;
+  const uint32_t* bin_begin;
+  const uint32_t* bin_count;
 };
+
+// The bin whose half-open span holds v (the outer bins take whatever lies beyond the tile),
+// with the same monotone arithmetic as golden's.
+TV_HD inline uint32_t bin_at(double v, double origin, double step, uint32_t n) {
+  const double k = floor((v - origin) / step);
+  return k <= 0.0 ? 0u : k >= double(n - 1) ? n - 1 : uint32_t(k);
+}
 
 template <class P>
 TV_HD void occlude_piece(const OccArgs<P>& a, uint64_t p) {
@@ -28,7 +42,18 @@ TV_HD void occlude_piece(const OccArgs<P>& a, uint64_t p) {
   if (v.n < 3) return;  // a float polygon that degenerated: covers nothing
   const TileTri<P>& tt = a.src.tris[v.tri];
   uint32_t tests = 0;
-  const bool hidden = occluded<P>(v.e, tt, a.src.tris, a.occ + a.item_begin[v.tile], a.occ_count[v.tile], tests);
+  const typename P::R q = P::interior(v.e[0].start, v.e[1].start, v.e[2].start);
+  const double qx = P::rx(q), qy = P::ry(q);
+  const OccRec* occ = a.occ + a.item_begin[v.tile];
+  uint32_t n_occ = a.occ_count[v.tile];
+  if (a.bins_x * a.bins_y > 1) {
+    const Rect r = a.src.grid.rect(v.tile);
+    const uint64_t g = (uint64_t(v.tile) * a.bins_y + bin_at(qy, double(r.y0), a.step_y, a.bins_y)) * a.bins_x +
+                       bin_at(qx, double(r.x0), a.step_x, a.bins_x);
+    n_occ = a.bin_count[g];
+    occ = a.bin_occ + a.bin_begin[g];
+  }
+  const bool hidden = occluded_at<P>(q, qx, qy, tt, a.src.tris, occ, n_occ, tests);
   int64_t* row = a.rows + uint64_t(v.tile) * kTileColumns;
   if (tests) atomic_add(&row[kColOcclusionTests], int64_t(tests));
   if (hidden) return;
@@ -58,6 +83,15 @@ void stage_occlusion(Pipeline<P>& p) {
   a.counters = p.counters.get();
   const double s = double(1u << p.f.subpixel_bits);
   a.area_scale = 2.0 * s * s;
+  a.bins_x = p.obins_x;
+  a.bins_y = p.obins_y;
+  if (p.obins_x * p.obins_y > 1) {
+    a.step_x = double(p.obin_w) * s;
+    a.step_y = double(p.obin_h) * s;
+    a.bin_occ = p.obin_rec.get();
+    a.bin_begin = p.obin_begin.get();
+    a.bin_count = p.obin_count.get();
+  }
   p.ex.launch(k_occlude<P>, occlude_piece<P>, p.n_pieces, a);
 }
 

@@ -143,6 +143,15 @@ struct Pipeline {
   Buf<Rect> tedge_box;
   Buf<OccRec> occ_rec;                        // the sorted occluder list as records (streamed by occlusion)                        // the sorted pairs' edge bounding boxes (streamed by cull)
   Buf<uint32_t> tile_item_begin, tile_edge_begin, tile_occ_count;  // n_tiles + 1 (begin of next = end)
+  // Finer occlusion bins: per record its bin count and first slot; the (bin, record) pairs by
+  // bin (records in tile order within a bin); the records gathered in that order; per global
+  // bin (tile * bins_per_tile + bin) its first pair and its count.
+  Buf<uint32_t> obin_cnt, obin_val, obin_val_sorted, obin_begin, obin_count;
+  Buf<uint64_t> obin_off, obin_key, obin_key_sorted;
+  Buf<OccRec> obin_rec;
+  uint32_t obins_x = 1, obins_y = 1;  // bins per tile, 1 x 1 when off
+  uint32_t obin_w = 0, obin_h = 0;    // bin size in pixels when on
+  uint64_t n_obin_pairs = 0;
   Buf<uint64_t> area_key, area_key_sorted;    // items by original id (visible-area fold order)
   Buf<uint32_t> area_item, area_item_sorted;
   uint64_t n_items = 0, n_tile_edges = 0;
@@ -179,16 +188,19 @@ struct Pipeline {
                     &tri_tiles, &edge_tiles, &item_tri, &item_tri_sorted, &occ_tri, &occ_tri_sorted, &tedge_id,
                     &tedge_id_sorted, &tile_item_begin, &tile_edge_begin, &tile_occ_count, &area_item,
                     &area_item_sorted, &piece_count, &cand_count, &cand_cursor, &cand_offset,
-                    &cand_edges, &cand_scratch, &clip_items, &item_slot, &winner, &indices, &tri_draw, &sample_xy})
+                    &cand_edges, &cand_scratch, &clip_items, &item_slot, &winner, &indices, &tri_draw, &sample_xy,
+                    &obin_cnt, &obin_val, &obin_val_sorted, &obin_begin, &obin_count})
       b->bind(&e);
     for (auto* b : {&fan_offset, &use_key, &sil_offset, &sil_key, &sil_key_sorted,
                     &front_offset, &tri_tiles_off, &edge_tiles_off, &item_key, &item_key_sorted, &occ_key,
-                    &occ_key_sorted, &tedge_key, &tedge_key_sorted, &area_key, &area_key_sorted, &deep, &cands, &slot_poly, &piece_offset, &counters})
+                    &occ_key_sorted, &tedge_key, &tedge_key_sorted, &area_key, &area_key_sorted, &deep, &cands, &slot_poly, &piece_offset, &counters,
+                    &obin_off, &obin_key, &obin_key_sorted})
       b->bind(&e);
     vertices.bind(&e);
     tedge_box.bind(&e);
     hash_slots.bind(&e);
     occ_rec.bind(&e);
+    obin_rec.bind(&e);
     draws.bind(&e);
     setup.bind(&e);
     edges.bind(&e);

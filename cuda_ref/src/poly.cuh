@@ -328,10 +328,8 @@ struct OccRec {
 };
 
 template <class P>
-TV_HD inline bool occluded(const PEdge<P>* piece, const TileTri<P>& tt, const TileTri<P>* tris, const OccRec* occ,
-                           uint32_t n_occ, uint32_t& tests) {
-  const typename P::R q = P::interior(piece[0].start, piece[1].start, piece[2].start);
-  const double qx = P::rx(q), qy = P::ry(q);
+TV_HD inline bool occluded_at(const typename P::R& q, double qx, double qy, const TileTri<P>& tt,
+                              const TileTri<P>* tris, const OccRec* occ, uint32_t n_occ, uint32_t& tests) {
   for (uint32_t k = 0; k < n_occ; ++k) {
     const OccRec o = occ[k];
     if (o.z_min > tt.z_max) break;
@@ -344,6 +342,14 @@ TV_HD inline bool occluded(const PEdge<P>* piece, const TileTri<P>& tt, const Ti
     if (order < 0 || (order == 0 && u.id < tt.id)) return true;
   }
   return false;
+}
+
+// The piece's interior point q (the centroid of its first three vertices) against occ.
+template <class P>
+TV_HD inline bool occluded(const PEdge<P>* piece, const TileTri<P>& tt, const TileTri<P>* tris, const OccRec* occ,
+                           uint32_t n_occ, uint32_t& tests) {
+  const typename P::R q = P::interior(piece[0].start, piece[1].start, piece[2].start);
+  return occluded_at<P>(q, P::rx(q), P::ry(q), tt, tris, occ, n_occ, tests);
 }
 
 template <class P>

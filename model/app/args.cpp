@@ -26,6 +26,15 @@ void parse_tile(const std::string& text, uint32_t& width, uint32_t& height) {
     throw std::runtime_error(fmt::format("--tile {}: expected N or WxH with 4 <= N <= 256", text));
 }
 
+void parse_occlusion_bin(const std::string& text, uint32_t tile_w, uint32_t tile_h, uint32_t& width,
+                         uint32_t& height) {
+  width = height = 0;
+  if (text.empty()) return;
+  if (!parse_size(text, width, height) || width > tile_w || height > tile_h)
+    throw std::runtime_error(
+        fmt::format("--occlusion-bin {}: expected N or WxH no larger than the tile ({}x{})", text, tile_w, tile_h));
+}
+
 trace::Frame load_frame(const std::string& path, uint32_t frame_index, uint32_t samples) {
   trace::Trace t = trace::read(path);
   if (frame_index >= t.frames.size())

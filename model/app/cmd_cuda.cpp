@@ -16,7 +16,7 @@ namespace tilevis::app {
 namespace {
 
 struct CudaArgs {
-  std::string trace, out, tile = "32", precision = "exact", device = "gpu";
+  std::string trace, out, tile = "32", precision = "exact", device = "gpu", occlusion_bin;
   uint32_t samples = 0, frame = 0, depth_bits = 24, runs = 20, warmup = 2;
 };
 
@@ -33,6 +33,7 @@ int run(const CudaArgs& a, const trace::Frame& frame, uint32_t tw, uint32_t th) 
   cuda::CudaConfig cfg;
   cfg.tile_w = tw;
   cfg.tile_h = th;
+  parse_occlusion_bin(a.occlusion_bin, tw, th, cfg.occlusion_bin_w, cfg.occlusion_bin_h);
   cfg.depth_bits = a.depth_bits;
   cfg.precision = a.precision == "float" ? cuda::Precision::floating : cuda::Precision::exact;
   cfg.device = a.device == "cpu" ? cuda::Device::cpu : cuda::Device::gpu;
@@ -92,6 +93,8 @@ int run(const CudaArgs& a, const trace::Frame& frame, uint32_t tw, uint32_t th) 
                {"config",
                 {{"tile_w", tw},
                  {"tile_h", th},
+                 {"occlusion_bin_w", cfg.occlusion_bin_w ? cfg.occlusion_bin_w : tw},
+                 {"occlusion_bin_h", cfg.occlusion_bin_h ? cfg.occlusion_bin_h : th},
                  {"samples", r.samples},
                  {"depth_bits", a.depth_bits},
                  {"precision", a.precision},
@@ -143,6 +146,9 @@ Command add_cuda_command(CLI::App& app) {
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
   cmd->add_option("--frame", a->frame, "Frame of the trace")->capture_default_str();
+  cmd->add_option("--occlusion-bin", a->occlusion_bin,
+                  "Finer occlusion bins (SVGPU 4.1), N or WxH pixels within each tile; ids and counters are "
+                  "unchanged (default: the tile)");
   cmd->add_option("--depth-bits", a->depth_bits, "Bits of snapped depth")->check(CLI::Range(1, 24))->capture_default_str();
   cmd->add_option("--device", a->device, "gpu, or cpu: the kernels' logic on the host, one element at a time")
       ->check(CLI::IsMember({"gpu", "cpu"}))

@@ -83,12 +83,7 @@ int run_golden(const GoldenArgs& a, const trace::Frame& frame, uint32_t tw, uint
   cfg.tile_w = tw;
   cfg.tile_h = th;
   cfg.keep_pieces = !a.svg.empty();
-  if (!a.occlusion_bin.empty()) {
-    if (!parse_size(a.occlusion_bin, cfg.occlusion_bin_w, cfg.occlusion_bin_h) || cfg.occlusion_bin_w < 1 ||
-        cfg.occlusion_bin_h < 1 || cfg.occlusion_bin_w > tw || cfg.occlusion_bin_h > th)
-      throw std::runtime_error(fmt::format("--occlusion-bin {}: expected N or WxH no larger than the tile ({}x{})",
-                                           a.occlusion_bin, tw, th));
-  }
+  parse_occlusion_bin(a.occlusion_bin, tw, th, cfg.occlusion_bin_w, cfg.occlusion_bin_h);
   vis::GoldenResult r = vis::golden_visibility(s, cfg);
   auto t2 = std::chrono::steady_clock::now();
   double setup_s = std::chrono::duration<double>(t1 - t0).count(), tiles_s = std::chrono::duration<double>(t2 - t1).count();

@@ -27,6 +27,8 @@ Command add_sweep_command(CLI::App& app);
 bool parse_size(const std::string& text, uint32_t& width, uint32_t& height);
 // A --tile value: parse_size with 4 <= W, H <= 256, or a one-line error.
 void parse_tile(const std::string& text, uint32_t& width, uint32_t& height);
+// An --occlusion-bin value (SVGPU §4.1 bins within a tile): empty gives 0 x 0 (off).
+void parse_occlusion_bin(const std::string& text, uint32_t tile_w, uint32_t tile_h, uint32_t& width, uint32_t& height);
 // Frame `frame_index` of the trace at `path`; samples != 0 replaces its sample pattern with
 // the standard one of that count (--samples). Errors name the option.
 trace::Frame load_frame(const std::string& path, uint32_t frame_index, uint32_t samples);

@@ -53,6 +53,26 @@ TEST_P(ExactEmulation, BitIdenticalToGolden) {
 
 INSTANTIATE_TEST_SUITE_P(Scenes, ExactEmulation, ::testing::ValuesIn(cases()), name_of);
 
+// Finer occlusion bins (SVGPU §4.1) change which occluders a piece scans, never the result:
+// still bit-identical to golden (with or without its own bins), bins dividing the tile or not.
+TEST(Emulation, FinerOcclusionBinsStayBitIdentical) {
+  for (const auto& s : {"cubes", "mixed", "stack"}) {
+    const trace::Frame f = ct::scene(s);
+    const auto g = ct::golden_of(f, 32, 32);
+    ASSERT_GT(g.occlusion_tests, 0u) << s;
+    for (auto [bw, bh] : {std::pair{8u, 8u}, {5u, 7u}, {1u, 32u}}) {
+      auto cfg = ct::config(cuda::Device::cpu, cuda::Precision::exact, 32, 32);
+      cfg.occlusion_bin_w = bw;
+      cfg.occlusion_bin_h = bh;
+      cfg.shuffle_cpu = true;
+      const auto d = ct::diff(g, cuda::run_cuda(f, cfg));
+      EXPECT_EQ(d.id_mismatches, 0u) << s << " " << bw << "x" << bh;
+      EXPECT_EQ(d.tile_cell_mismatches, 0u) << s << " " << bw << "x" << bh << ": " << d.first_tile_mismatch;
+      EXPECT_EQ(d.area_bit_mismatches, 0u) << s << " " << bw << "x" << bh;
+    }
+  }
+}
+
 TEST(Emulation, ScenesExerciseThePipeline) {
   // The scenes are only worth comparing if they clip, split, occlude and tie.
   const auto cubes = ct::golden_of(ct::scene("cubes"), 32, 32);

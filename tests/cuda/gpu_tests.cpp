@@ -42,6 +42,20 @@ INSTANTIATE_TEST_SUITE_P(Scenes, ExactGpu,
                          ::testing::Combine(::testing::ValuesIn(ct::scene_names()), ::testing::Values(16u, 32u, 64u),
                                             ::testing::Values(1u, 4u)));
 
+TEST(Gpu, FinerOcclusionBinsStayBitIdentical) {
+  REQUIRE_GPU();
+  for (const auto& name : ct::scene_names()) {
+    const trace::Frame f = ct::scene(name);
+    auto cfg = ct::config(cuda::Device::gpu, cuda::Precision::exact, 32, 32);
+    cfg.occlusion_bin_w = cfg.occlusion_bin_h = 8;
+    cfg.runs = 2;
+    const auto d = ct::diff(ct::golden_of(f, 32, 32), cuda::run_cuda(f, cfg));
+    EXPECT_EQ(d.id_mismatches, 0u) << name;
+    EXPECT_EQ(d.tile_cell_mismatches, 0u) << name << ": " << d.first_tile_mismatch;
+    EXPECT_EQ(d.area_bit_mismatches, 0u) << name;
+  }
+}
+
 TEST(Gpu, SameAsHostEmulation) {
   // exact: the device and the host emulation of its kernels agree bit for bit. (float is not
   // compared: the device contracts float multiply-adds into FMA, the host does not.)

@@ -24,6 +24,9 @@ enum class Device {
 
 struct CudaConfig {
   uint32_t tile_w = 32, tile_h = 32;
+  // Finer occlusion bins (SVGPU §4.1) within each tile, in pixels; 0: one bin per tile. As in
+  // golden, only the scanning of occluders shrinks: ids and counters are unchanged.
+  uint32_t occlusion_bin_w = 0, occlusion_bin_h = 0;
   uint32_t depth_bits = 24;
   Precision precision = Precision::exact;
   Device device = Device::gpu;
