@@ -35,6 +35,16 @@ void parse_occlusion_bin(const std::string& text, uint32_t tile_w, uint32_t tile
         fmt::format("--occlusion-bin {}: expected N or WxH no larger than the tile ({}x{})", text, tile_w, tile_h));
 }
 
+nlohmann::json visibility_config(uint32_t tile_w, uint32_t tile_h, uint32_t occlusion_bin_w, uint32_t occlusion_bin_h,
+                                 uint32_t samples, uint32_t depth_bits) {
+  return {{"tile_w", tile_w},
+          {"tile_h", tile_h},
+          {"occlusion_bin_w", occlusion_bin_w ? occlusion_bin_w : tile_w},
+          {"occlusion_bin_h", occlusion_bin_h ? occlusion_bin_h : tile_h},
+          {"samples", samples},
+          {"depth_bits", depth_bits}};
+}
+
 trace::Frame load_frame(const std::string& path, uint32_t frame_index, uint32_t samples) {
   trace::Trace t = trace::read(path);
   if (frame_index >= t.frames.size())

@@ -87,18 +87,13 @@ int run(const CudaArgs& a, const trace::Frame& frame, uint32_t tw, uint32_t th) 
                            {"float_anomalies", r.float_anomalies}};
   nlohmann::json stages = nlohmann::json::object();
   for (const auto& s : r.stage_ms) stages[s.name] = s.ms;
+  nlohmann::json config = visibility_config(tw, th, cfg.occlusion_bin_w, cfg.occlusion_bin_h, r.samples, a.depth_bits);
+  config["precision"] = a.precision;
+  config["device"] = a.device;
   out.stats = {{"tool", "cuda"},
                {"trace", a.trace},
                {"frame", a.frame},
-               {"config",
-                {{"tile_w", tw},
-                 {"tile_h", th},
-                 {"occlusion_bin_w", cfg.occlusion_bin_w ? cfg.occlusion_bin_w : tw},
-                 {"occlusion_bin_h", cfg.occlusion_bin_h ? cfg.occlusion_bin_h : th},
-                 {"samples", r.samples},
-                 {"depth_bits", a.depth_bits},
-                 {"precision", a.precision},
-                 {"device", a.device}}},
+               {"config", config},
                {"totals", totals},
                {"device", r.device_name},
                {"stage_ms", stages},

@@ -5,6 +5,7 @@
 #include <functional>
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
 #include "tilevis/trace.h"
 
@@ -29,6 +30,10 @@ bool parse_size(const std::string& text, uint32_t& width, uint32_t& height);
 void parse_tile(const std::string& text, uint32_t& width, uint32_t& height);
 // An --occlusion-bin value (SVGPU §4.1 bins within a tile): empty gives 0 x 0 (off).
 void parse_occlusion_bin(const std::string& text, uint32_t tile_w, uint32_t tile_h, uint32_t& width, uint32_t& height);
+// stats.json's "config" of a visibility producer (golden, cuda): tiles, occlusion bins (the
+// tile when off), samples, depth bits.
+nlohmann::json visibility_config(uint32_t tile_w, uint32_t tile_h, uint32_t occlusion_bin_w, uint32_t occlusion_bin_h,
+                                 uint32_t samples, uint32_t depth_bits);
 // Frame `frame_index` of the trace at `path`; samples != 0 replaces its sample pattern with
 // the standard one of that count (--samples). Errors name the option.
 trace::Frame load_frame(const std::string& path, uint32_t frame_index, uint32_t samples);
