@@ -355,9 +355,11 @@ def section_savings(rep, rows, scenes, out):
         rep.table(head, table)
         rep.para(provenance(used), "*" + provenance(used) + "*")
         if not all_used:  # the first resolution x samples, for the terminal (./tilevis demo prints it)
-            keep = [0, 2, 3, 5, 6, 9] + list(range(13, len(head)))
+            names = ["scene", "generated", "early-Z", "HSR / prepass", "analytic", "saved: analytic"]
+            keep = [head.index(n) for n in names] + [i for i, h in enumerate(head) if "cycles" in h]
+            tiles = ", ".join(sorted({p["tile"] for p in used if p["producer"] == "golden"}, key=tile_key))
             (out / "fragment_work.txt").write_text(
-                f"{res_title(res)}, {spp} spp, tiles {tile or '32x32'}: fragments generated and shaded per mode, "
+                f"{res_title(res)}, {spp} spp, tiles {tiles}: fragments generated and shaded per mode, "
                 "analytic savings, the model's frame cycles per mode and EVU busy cycles\n" +
                 text_table([head[i] for i in keep], [[r[i] for i in keep] for r in table]))
         all_used += used

@@ -314,12 +314,6 @@ TV_HD inline void split(const PEdge<P>* poly, uint32_t n, const typename P::Line
   }
 }
 
-// SVGPU §3.3: the piece is hidden if an original opaque triangle nearer at its interior
-// point contains that point; equal depth: the earlier-submitted triangle stays in front.
-// Occluders come nearest first (by z_min); the first hit ends the search, and an occluder
-// whose nearest point is behind the piece's farthest ends it too. `tests` counts exact
-// containment tests (the occluder's bounding box, widened by a margin far above the error of
-// the test point's doubles, rejects first).
 // An occluder as the occlusion loop streams it: what the cheap tests need (32 bytes); the
 // full triangle is read only past them.
 struct OccRec {
@@ -327,6 +321,13 @@ struct OccRec {
   uint32_t z_min, id, tri, pad;
 };
 
+// SVGPU §3.3: the piece is hidden if an original opaque triangle nearer at its interior
+// point q (the centroid of its first three vertices; qx, qy its doubles) contains that point;
+// equal depth: the earlier-submitted triangle stays in front. Occluders come nearest first
+// (by z_min); the first hit ends the search, and an occluder whose nearest point is behind
+// the piece's farthest ends it too. `tests` counts exact containment tests (the occluder's
+// bounding box, widened by a margin far above the error of the test point's doubles, rejects
+// first).
 template <class P>
 TV_HD inline bool occluded_at(const typename P::R& q, double qx, double qy, const TileTri<P>& tt,
                               const TileTri<P>* tris, const OccRec* occ, uint32_t n_occ, uint32_t& tests) {
@@ -342,14 +343,6 @@ TV_HD inline bool occluded_at(const typename P::R& q, double qx, double qy, cons
     if (order < 0 || (order == 0 && u.id < tt.id)) return true;
   }
   return false;
-}
-
-// The piece's interior point q (the centroid of its first three vertices) against occ.
-template <class P>
-TV_HD inline bool occluded(const PEdge<P>* piece, const TileTri<P>& tt, const TileTri<P>* tris, const OccRec* occ,
-                           uint32_t n_occ, uint32_t& tests) {
-  const typename P::R q = P::interior(piece[0].start, piece[1].start, piece[2].start);
-  return occluded_at<P>(q, P::rx(q), P::ry(q), tt, tris, occ, n_occ, tests);
 }
 
 template <class P>

@@ -89,6 +89,7 @@ class GoldenTiler::Impl {
     m_r.ids.assign(n_samples, -1);
     m_r.visible_area.assign(m_s.triangle_draw.size(), 0.0);
     m_r.tiles.resize(m_cfg.tile_w, m_cfg.tile_h, m_s.width, m_s.height, golden_tile_columns());
+    setup_occlusion_bins();
   }
 
   void prepare() {
@@ -283,34 +284,41 @@ class GoldenTiler::Impl {
   // towards the outside. An occluder joins every bin its bounding-box test (qx within
   // [x0 - 1, x1 + 1], same for y) can pass in, in tile order, so for any point q the bin of q
   // lists exactly the tile's occluders that can pass the test at q, in the same order.
-  void bin_occluders(const Rect& rect) {
-    m_bins_x = m_bins_y = 1;
+  // The bin grid is the same for every tile: set once, here.
+  void setup_occlusion_bins() {
     const uint32_t bw = m_cfg.occlusion_bin_w ? std::min(m_cfg.occlusion_bin_w, m_cfg.tile_w) : m_cfg.tile_w;
     const uint32_t bh = m_cfg.occlusion_bin_h ? std::min(m_cfg.occlusion_bin_h, m_cfg.tile_h) : m_cfg.tile_h;
-    if (bw == m_cfg.tile_w && bh == m_cfg.tile_h) return;
-    const int64_t sb = int64_t(m_s.subpixel_bits);
     m_bins_x = (m_cfg.tile_w + bw - 1) / bw;
     m_bins_y = (m_cfg.tile_h + bh - 1) / bh;
+    m_bin_step_x = int64_t(bw) << m_s.subpixel_bits;
+    m_bin_step_y = int64_t(bh) << m_s.subpixel_bits;
+    m_bin_occ.resize(size_t(m_bins_x) * m_bins_y);
+  }
+
+  bool binned() const { return m_bin_occ.size() > 1; }
+
+  // The bin whose span holds v: floor((v - origin) / step), clamped to [0, n - 1]. Integer
+  // and double arguments give the same bin for the same value, and both are monotone in v.
+  static uint32_t bin_index(int64_t v, int64_t origin, int64_t step, uint32_t n) {
+    const int64_t k = v < origin ? 0 : (v - origin) / step;
+    return uint32_t(std::min<int64_t>(k, int64_t(n) - 1));
+  }
+  static uint32_t bin_index(double v, int64_t origin, int64_t step, uint32_t n) {
+    const double k = std::floor((v - double(origin)) / double(step));
+    return uint32_t(std::clamp<double>(k, 0.0, double(n - 1)));
+  }
+
+  void bin_occluders(const Rect& rect) {
+    if (!binned()) return;
     m_bin_x0 = rect.x0;
     m_bin_y0 = rect.y0;
-    m_bin_step_x = int64_t(bw) << sb;
-    m_bin_step_y = int64_t(bh) << sb;
-    m_bin_occ.resize(size_t(m_bins_x) * m_bins_y);
     for (auto& b : m_bin_occ) b.clear();
-    // The bins [first, last] whose span meets [lo, hi] (closed), the outer bins unbounded.
-    auto span = [](int64_t lo, int64_t hi, int64_t origin, int64_t step, uint32_t n, uint32_t& first, uint32_t& last) {
-      auto bin_of = [&](int64_t v) {
-        const int64_t k = v < origin ? 0 : (v - origin) / step;
-        return uint32_t(std::min<int64_t>(k, int64_t(n) - 1));
-      };
-      first = bin_of(lo);
-      last = bin_of(hi);
-    };
     for (uint32_t oi : m_occluders) {
       const Rect& b = m_tris[oi].bbox;
-      uint32_t bx0, bx1, by0, by1;
-      span(int64_t(b.x0) - 1, int64_t(b.x1) + 1, m_bin_x0, m_bin_step_x, m_bins_x, bx0, bx1);
-      span(int64_t(b.y0) - 1, int64_t(b.y1) + 1, m_bin_y0, m_bin_step_y, m_bins_y, by0, by1);
+      const uint32_t bx0 = bin_index(int64_t(b.x0) - 1, m_bin_x0, m_bin_step_x, m_bins_x);
+      const uint32_t bx1 = bin_index(int64_t(b.x1) + 1, m_bin_x0, m_bin_step_x, m_bins_x);
+      const uint32_t by0 = bin_index(int64_t(b.y0) - 1, m_bin_y0, m_bin_step_y, m_bins_y);
+      const uint32_t by1 = bin_index(int64_t(b.y1) + 1, m_bin_y0, m_bin_step_y, m_bins_y);
       for (uint32_t by = by0; by <= by1; ++by)
         for (uint32_t bx = bx0; bx <= bx1; ++bx) m_bin_occ[size_t(by) * m_bins_x + bx].push_back(oi);
     }
@@ -318,14 +326,9 @@ class GoldenTiler::Impl {
 
   // The occluders a piece with interior point (qx, qy) scans: its bin's, or the tile's.
   const std::vector<uint32_t>& occluders_at(double qx, double qy) const {
-    if (m_bins_x * m_bins_y == 1) return m_occluders;
-    // The bin whose half-open span holds q (the outer bins take whatever lies beyond the tile).
-    auto bin_of = [](double v, int64_t origin, int64_t step, uint32_t n) {
-      const double k = std::floor((v - double(origin)) / double(step));
-      return uint32_t(std::clamp<double>(k, 0.0, double(n - 1)));
-    };
-    return m_bin_occ[size_t(bin_of(qy, m_bin_y0, m_bin_step_y, m_bins_y)) * m_bins_x +
-                     bin_of(qx, m_bin_x0, m_bin_step_x, m_bins_x)];
+    if (!binned()) return m_occluders;
+    return m_bin_occ[size_t(bin_index(qy, m_bin_y0, m_bin_step_y, m_bins_y)) * m_bins_x +
+                     bin_index(qx, m_bin_x0, m_bin_step_x, m_bins_x)];
   }
 
   void keep(const ConvexPolygon& piece, const TileTriangle& tt) {
@@ -351,7 +354,7 @@ class GoldenTiler::Impl {
   uint32_t m_tiles_x = 0, m_tiles_y = 0;
   std::vector<std::vector<uint32_t>> m_tile_tris, m_tile_edges;
   std::vector<uint32_t> m_sorted_edges, m_occluders, m_candidates;
-  std::vector<std::vector<uint32_t>> m_bin_occ;  // finer occlusion bins of the current tile
+  std::vector<std::vector<uint32_t>> m_bin_occ;  // finer occlusion bins of the current tile (one: off)
   uint32_t m_bins_x = 1, m_bins_y = 1;
   int64_t m_bin_x0 = 0, m_bin_y0 = 0, m_bin_step_x = 1, m_bin_step_y = 1;
   std::vector<ConvexPolygon> m_pieces;
