@@ -12,53 +12,6 @@
 namespace tilevis::cuda {
 namespace {
 
-// A team of lanes working on one item: a warp on the device, one lane on the host.
-struct HostTeam {
-  static constexpr uint32_t kSize = 1;
-  TV_HD uint32_t lane() const { return 0; }
-  TV_HD uint32_t ballot(bool p) const { return p ? 1u : 0u; }
-  TV_HD uint64_t bcast(uint64_t v) const { return v; }
-  TV_HD void sync() const {}
-};
-
-struct WarpTeam {
-  static constexpr uint32_t kSize = 32;
-  TV_HD uint32_t lane() const {
-#if defined(__CUDA_ARCH__)
-    return threadIdx.x & 31;
-#else
-    return 0;
-#endif
-  }
-  TV_HD uint32_t ballot(bool p) const {
-#if defined(__CUDA_ARCH__)
-    return __ballot_sync(0xffffffffu, p);
-#else
-    return p;
-#endif
-  }
-  TV_HD uint64_t bcast(uint64_t v) const {
-#if defined(__CUDA_ARCH__)
-    return __shfl_sync(0xffffffffu, static_cast<unsigned long long>(v), 0);
-#else
-    return v;
-#endif
-  }
-  TV_HD void sync() const {
-#if defined(__CUDA_ARCH__)
-    __syncwarp();
-#endif
-  }
-};
-
-TV_HD inline uint32_t popc(uint32_t v) {
-#if defined(__CUDA_ARCH__)
-  return __popc(v);
-#else
-  return uint32_t(__builtin_popcount(v));
-#endif
-}
-
 template <class P>
 struct ClipArgs {
   const TileTri<P>* tris;

@@ -111,6 +111,67 @@ TV_HD inline uint64_t bump_one(uint64_t* counter, uint64_t cap) {
 #endif
 }
 
+// A team of lanes working on one element: a warp on the device (every lane of the warp takes
+// the same element, so control flow that depends only on the element stays uniform), one lane
+// on the host. A lane takes the element's sub-tasks lane(), lane() + kSize, ...
+struct HostTeam {
+  static constexpr uint32_t kSize = 1;
+  TV_HD uint32_t lane() const { return 0; }
+  TV_HD uint32_t ballot(bool p) const { return p ? 1u : 0u; }
+  TV_HD uint64_t bcast(uint64_t v) const { return v; }
+  TV_HD uint64_t sum(uint64_t v) const { return v; }
+  TV_HD void sync() const {}
+};
+
+struct WarpTeam {
+  static constexpr uint32_t kSize = 32;
+  TV_HD uint32_t lane() const {
+#if defined(__CUDA_ARCH__)
+    return threadIdx.x & 31;
+#else
+    return 0;
+#endif
+  }
+  TV_HD uint32_t ballot(bool p) const {
+#if defined(__CUDA_ARCH__)
+    return __ballot_sync(0xffffffffu, p);
+#else
+    return p;
+#endif
+  }
+  TV_HD uint64_t bcast(uint64_t v) const {
+#if defined(__CUDA_ARCH__)
+    return __shfl_sync(0xffffffffu, static_cast<unsigned long long>(v), 0);
+#else
+    return v;
+#endif
+  }
+  TV_HD uint64_t sum(uint64_t v) const {
+#if defined(__CUDA_ARCH__)
+    for (int d = 16; d > 0; d >>= 1) v += __shfl_xor_sync(0xffffffffu, static_cast<unsigned long long>(v), d);
+#endif
+    return v;
+  }
+  TV_HD void sync() const {
+#if defined(__CUDA_ARCH__)
+    __syncwarp();
+#endif
+  }
+};
+
+TV_HD inline uint32_t popc(uint32_t v) {
+#if defined(__CUDA_ARCH__)
+  return __popc(v);
+#else
+  return uint32_t(__builtin_popcount(v));
+#endif
+}
+
+// Warp-stride loop over [0, n): warp w takes elements w, w + warps, ... (64-bit safe).
+#define TV_WARP_LOOP(w, n)                                                                   \
+  for (uint64_t w = (uint64_t(blockIdx.x) * blockDim.x + threadIdx.x) / 32; w < uint64_t(n); \
+       w += uint64_t(gridDim.x) * blockDim.x / 32)
+
 enum class Where { gpu, cpu };
 
 class Exec {
@@ -163,6 +224,21 @@ class Exec {
     }
     const uint64_t want = (n + block - 1) / block;
     const uint32_t blocks = uint32_t(want < grid_blocks * 8ull ? want : grid_blocks * 8ull);
+    launch_kernel(reinterpret_cast<const void*>(kernel), blocks, block, &args, n);
+  }
+  // One warp per element (TV_WARP_LOOP): body(args, i, team) with a WarpTeam on the device,
+  // a HostTeam on the host.
+  template <class Args>
+  void launch_warps(void (*kernel)(Args, uint64_t), void (*body)(const Args&, uint64_t), uint64_t n,
+                    const Args& args, uint32_t block = 256) {
+    if (n == 0) return;
+    ++queued;
+    if (where == Where::cpu) {
+      for (uint64_t k = 0; k < n; ++k) body(args, host_index(k, n));
+      return;
+    }
+    const uint64_t want = (n * 32 + block - 1) / block;
+    const uint32_t blocks = uint32_t(want < grid_blocks * 16ull ? want : grid_blocks * 16ull);
     launch_kernel(reinterpret_cast<const void*>(kernel), blocks, block, &args, n);
   }
   // A kernel whose grid-stride loop reads its element count from device memory (no host

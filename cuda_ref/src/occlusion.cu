@@ -1,4 +1,5 @@
-// Occlusion (SVGPU §3.3), one thread per piece: the centroid of the piece's first three
+// Occlusion (SVGPU §3.3), one warp per (tile, triangle) item, its pieces in turn, the warp's
+// lanes judging 32 occluders at a time: the centroid of the piece's first three
 // vertices against the tile's original opaque triangles, nearest first (stable by z_min),
 // stopping at the first that hides it or at the first wholly behind it. Visible pieces get
 // their exact area (doubled area terms rounded once each, summed in fan order).
@@ -34,38 +35,81 @@ TV_HD inline uint32_t bin_at(double v, double origin, double step, uint32_t n) {
   return k <= 0.0 ? 0u : k >= double(n - 1) ? n - 1 : uint32_t(k);
 }
 
-template <class P>
-TV_HD void occlude_piece(const OccArgs<P>& a, uint64_t p) {
-  PEdge<P> local[kTileCap];
-  const PieceView<P> v = piece_at<P>(a.src, p, local);
-  a.visible[p] = 0;
-  if (v.n < 3) return;  // a float polygon that degenerated: covers nothing
-  const TileTri<P>& tt = a.src.tris[v.tri];
-  uint32_t tests = 0;
-  const typename P::R q = P::interior(v.e[0].start, v.e[1].start, v.e[2].start);
-  const double qx = P::rx(q), qy = P::ry(q);
-  const OccRec* occ = a.occ + a.item_begin[v.tile];
-  uint32_t n_occ = a.occ_count[v.tile];
-  if (a.bins_x * a.bins_y > 1) {
-    const Rect r = a.src.grid.rect(v.tile);
-    const uint64_t g = (uint64_t(v.tile) * a.bins_y + bin_at(qy, double(r.y0), a.step_y, a.bins_y)) * a.bins_x +
-                       bin_at(qx, double(r.x0), a.step_x, a.bins_x);
-    n_occ = a.bin_count[g];
-    occ = a.bin_occ + a.bin_begin[g];
+// The sequential scan of an occluder list, judged a team at a time: lane l judges occluder
+// k0 + l; the lowest lane whose verdict ends the search decides, and the tests counted are
+// those the sequential loop would have made up to it.
+template <class P, class Team>
+TV_HD bool occluded(const typename P::R& q, double qx, double qy, const TileTri<P>& tt, const TileTri<P>* tris,
+                    const OccRec* occ, uint32_t n_occ, uint32_t& tests, Team team) {
+  const uint32_t lane = team.lane();
+  for (uint32_t k0 = 0; k0 < n_occ; k0 += Team::kSize) {
+    const OccVerdict v =
+        k0 + lane < n_occ ? occluder_verdict<P>(q, qx, qy, tt, tris, occ[k0 + lane]) : OccVerdict::skip;
+    const uint32_t tested = team.ballot(v == OccVerdict::tested || v == OccVerdict::hides);
+    const uint32_t ends = team.ballot(v == OccVerdict::hides || v == OccVerdict::ends);
+    if (ends == 0) {
+      tests += popc(tested);
+      continue;
+    }
+    const uint32_t first = ends & (~ends + 1u);  // lowest set bit
+    tests += popc(tested & (first | (first - 1u)));
+    return (team.ballot(v == OccVerdict::hides) & first) != 0;
   }
-  const bool hidden = occluded_at<P>(q, qx, qy, tt, a.src.tris, occ, n_occ, tests);
-  int64_t* row = a.rows + uint64_t(v.tile) * kTileColumns;
+  return false;
+}
+
+// One (tile, triangle) item, piece by piece: each piece's interior point against its
+// tile's (or bin's) occluder list; per-tile counters added once per item.
+template <class P, class Team>
+TV_HD void occlude_item(const OccArgs<P>& a, uint64_t j, Team team) {
+  PEdge<P> local[kTileCap];
+  const ItemPieces<P> it = item_pieces<P>(a.src, j, local);
+  if (it.count == 0) return;
+  const TileTri<P>& tt = a.src.tris[it.tri];
+  const bool lead = team.lane() == 0;
+  uint32_t tests = 0, visible = 0, triangles = 0;
+  for (uint64_t k = 0; k < it.count; ++k) {
+    const uint64_t p = it.first + k;
+    const PieceView<P> v = piece_of<P>(a.src, it, k, local);
+    if (v.n < 3) {  // a float polygon that degenerated: covers nothing
+      if (lead) a.visible[p] = 0;
+      continue;
+    }
+    const typename P::R q = P::interior(v.e[0].start, v.e[1].start, v.e[2].start);
+    const double qx = P::rx(q), qy = P::ry(q);
+    const OccRec* occ = a.occ + a.item_begin[it.tile];
+    uint32_t n_occ = a.occ_count[it.tile];
+    if (a.bins_x * a.bins_y > 1) {
+      const Rect r = a.src.grid.rect(it.tile);
+      const uint64_t g = (uint64_t(it.tile) * a.bins_y + bin_at(qy, double(r.y0), a.step_y, a.bins_y)) * a.bins_x +
+                         bin_at(qx, double(r.x0), a.step_x, a.bins_x);
+      n_occ = a.bin_count[g];
+      occ = a.bin_occ + a.bin_begin[g];
+    }
+    const bool hidden = occluded<P>(q, qx, qy, tt, a.src.tris, occ, n_occ, tests, team);
+    if (!lead) continue;
+    a.visible[p] = hidden ? 0 : 1;
+    if (hidden) continue;
+    ++visible;
+    triangles += v.n - 2;
+    a.area[p] = ddiv(doubled_area<P>(v.e, v.n), a.area_scale);
+  }
+  if (!lead) return;
+  int64_t* row = a.rows + uint64_t(it.tile) * kTileColumns;
   if (tests) atomic_add(&row[kColOcclusionTests], int64_t(tests));
-  if (hidden) return;
-  a.visible[p] = 1;
-  atomic_add(&row[kColVisiblePieces], 1);
-  atomic_add(&a.counters[kVisibleTriangles], uint64_t(v.n - 2));
-  a.area[p] = ddiv(doubled_area<P>(v.e, v.n), a.area_scale);
+  if (!visible) return;
+  atomic_add(&row[kColVisiblePieces], int64_t(visible));
+  atomic_add(&a.counters[kVisibleTriangles], uint64_t(triangles));
+}
+
+template <class P>
+TV_HD void occlude_item_host(const OccArgs<P>& a, uint64_t j) {
+  occlude_item<P>(a, j, HostTeam{});
 }
 
 template <class P>
 __global__ void k_occlude(OccArgs<P> a, uint64_t n) {
-  TV_GRID_LOOP(i, n) occlude_piece<P>(a, i);
+  TV_WARP_LOOP(w, n) occlude_item<P>(a, w, WarpTeam{});
 }
 
 }  // namespace
@@ -92,7 +136,7 @@ void stage_occlusion(Pipeline<P>& p) {
     a.bin_begin = p.obin_begin.get();
     a.bin_count = p.obin_count.get();
   }
-  p.ex.launch(k_occlude<P>, occlude_piece<P>, p.n_pieces, a);
+  p.ex.launch_warps(k_occlude<P>, occlude_item_host<P>, p.n_items, a);
 }
 
 template void stage_occlusion<ExactP>(Pipeline<ExactP>&);

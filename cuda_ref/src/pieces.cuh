@@ -1,7 +1,7 @@
-// The flat piece index space shared by occlusion and raster: piece p belongs to the item j
-// with piece_offset[j] <= p < piece_offset[j + 1]. An item without candidates has one piece,
-// its triangle clipped to the tile, recomputed here rather than stored; clipped items keep
-// theirs in the clip pools.
+// The flat piece index space shared by occlusion and raster: item j owns the pieces
+// piece_offset[j] <= p < piece_offset[j + 1]. An item without candidates has one piece, its
+// triangle clipped to the tile, recomputed here rather than stored; clipped items keep theirs
+// in the clip pools. Occlusion and raster visit items (one warp each), piece by piece.
 #pragma once
 
 #include "pipeline.cuh"
@@ -19,40 +19,48 @@ struct PieceSource {
   const uint64_t* slot_poly;
   const PEdge<P>* pool;
   TileGrid grid;
-  uint64_t n_items;
+};
+
+// An item's pieces: flat indices [first, first + count). An item without candidates has one
+// piece, its triangle clipped to the tile, computed into `local` once for all its visits.
+template <class P>
+struct ItemPieces {
+  uint32_t tile, tri;
+  uint64_t first, count;
+  const uint64_t* slots;  // clipped item: its pieces' slot_poly entries; else null
+  uint32_t n_local;
 };
 
 template <class P>
 struct PieceView {
   const PEdge<P>* e;
   uint32_t n;
-  uint32_t item, tile, tri;
 };
 
 // `local` must hold kTileCap edges.
 template <class P>
-TV_HD inline PieceView<P> piece_at(const PieceSource<P>& s, uint64_t p, PEdge<P>* local) {
-  uint64_t lo = 0, hi = s.n_items;  // last item whose offset <= p
-  while (hi - lo > 1) {
-    const uint64_t mid = (lo + hi) / 2;
-    if (s.piece_offset[mid] <= p) lo = mid;
-    else hi = mid;
-  }
-  PieceView<P> v;
-  v.item = uint32_t(lo);
-  v.tile = uint32_t(s.item_key[lo]);
-  v.tri = s.item_tri[lo];
-  if (s.cand_count[lo] == 0) {
-    const Rect r = s.grid.rect(v.tile);
+TV_HD inline ItemPieces<P> item_pieces(const PieceSource<P>& s, uint64_t j, PEdge<P>* local) {
+  ItemPieces<P> v{};
+  v.tile = uint32_t(s.item_key[j]);
+  v.tri = s.item_tri[j];
+  v.first = s.piece_offset[j];
+  v.count = s.piece_offset[j + 1] - v.first;
+  if (v.count == 0) return v;
+  if (s.cand_count[j] == 0) {
     bool overflow = false;
-    v.n = tile_polygon<P>(s.tris[v.tri], r, local, overflow);
-    v.e = local;
+    v.n_local = tile_polygon<P>(s.tris[v.tri], s.grid.rect(v.tile), local, overflow);
   } else {
-    const uint64_t sp = s.slot_poly[s.item_slot[lo] + (p - s.piece_offset[lo])];
-    v.e = s.pool + (sp >> 32);
-    v.n = uint32_t(sp);
+    v.slots = s.slot_poly + s.item_slot[j];
   }
   return v;
+}
+
+template <class P>
+TV_HD inline PieceView<P> piece_of(const PieceSource<P>& s, const ItemPieces<P>& it, uint64_t k,
+                                   const PEdge<P>* local) {
+  if (!it.slots) return {local, it.n_local};
+  const uint64_t sp = it.slots[k];
+  return {s.pool + (sp >> 32), uint32_t(sp)};
 }
 
 template <class P>
@@ -67,7 +75,6 @@ PieceSource<P> piece_source(Pipeline<P>& p) {
   s.slot_poly = p.slot_poly.get();
   s.pool = p.clip_edges.get();
   s.grid = p.grid;
-  s.n_items = p.n_items;
   return s;
 }
 

@@ -328,21 +328,22 @@ struct OccRec {
 // the piece's farthest ends it too. `tests` counts exact containment tests (the occluder's
 // bounding box, widened by a margin far above the error of the test point's doubles, rejects
 // first).
+//
+// One occluder's verdict, independent of the others (so a team can judge many at once and
+// keep the sequential loop's result: the first that ends the search decides).
+enum class OccVerdict { skip, tested, hides, ends };
+
 template <class P>
-TV_HD inline bool occluded_at(const typename P::R& q, double qx, double qy, const TileTri<P>& tt,
-                              const TileTri<P>* tris, const OccRec* occ, uint32_t n_occ, uint32_t& tests) {
-  for (uint32_t k = 0; k < n_occ; ++k) {
-    const OccRec o = occ[k];
-    if (o.z_min > tt.z_max) break;
-    if (o.id == tt.id) continue;
-    if (qx < o.bbox.x0 - 1.0 || qx > o.bbox.x1 + 1.0 || qy < o.bbox.y0 - 1.0 || qy > o.bbox.y1 + 1.0) continue;
-    ++tests;
-    const TileTri<P>& u = tris[o.tri];
-    if (!P::in_half(u.edge[0], q) || !P::in_half(u.edge[1], q) || !P::in_half(u.edge[2], q)) continue;
-    const int order = P::depth(u.plane, tt.plane, q);
-    if (order < 0 || (order == 0 && u.id < tt.id)) return true;
-  }
-  return false;
+TV_HD inline OccVerdict occluder_verdict(const typename P::R& q, double qx, double qy, const TileTri<P>& tt,
+                                         const TileTri<P>* tris, const OccRec& o) {
+  if (o.z_min > tt.z_max) return OccVerdict::ends;
+  if (o.id == tt.id) return OccVerdict::skip;
+  if (qx < o.bbox.x0 - 1.0 || qx > o.bbox.x1 + 1.0 || qy < o.bbox.y0 - 1.0 || qy > o.bbox.y1 + 1.0)
+    return OccVerdict::skip;
+  const TileTri<P>& u = tris[o.tri];
+  if (!P::in_half(u.edge[0], q) || !P::in_half(u.edge[1], q) || !P::in_half(u.edge[2], q)) return OccVerdict::tested;
+  const int order = P::depth(u.plane, tt.plane, q);
+  return order < 0 || (order == 0 && u.id < tt.id) ? OccVerdict::hides : OccVerdict::tested;
 }
 
 template <class P>

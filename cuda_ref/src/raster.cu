@@ -1,5 +1,6 @@
-// Raster and outputs: the samples of every piece (one thread per piece, over the pixels of
-// its bounding box inside the tile; a sample is covered under the tie rule), the id buffer
+// Raster and outputs: the samples of every piece (one warp per (tile, triangle) item, its
+// lanes over the samples of each piece's pixel box inside the tile; a sample is covered under
+// the tie rule), the id buffer
 // (per sample, the last visible piece in canonical order: within a tile, the highest
 // triangle in setup order, kept by atomicMax), the per-tile sample counters, and the
 // visible area per original triangle folded in canonical order (items sorted by id).
@@ -18,85 +19,89 @@ struct RasterArgs {
   uint32_t* winner;
 };
 
-// Coverage of an N-edge piece, row by row, N a template parameter so that the edge data
-// lives in registers. Exact: edge functions stepped along a row, e(x + 2^sb) = e(x) + a 2^sb,
-// exact in int64 (|e| < 2^49, |a 2^sb| <= 2^32), so this is the same integer test as covers().
-// Float: each sample evaluated as covers() does.
-template <int N, class P>
-TV_HD int64_t raster_rows(const RasterArgs<P>& a, const PieceView<P>& v, int64_t px0, int64_t px_end, int64_t py0,
-                          int64_t py1, bool vis) {
-  const uint32_t sb = a.src.grid.sb;
-  typename P::Line l[N];
-  for (int i = 0; i < N; ++i) l[i] = v.e[i].line;
-  int64_t covered = 0;
-  for (int64_t py = py0; py <= py1 && py < a.height; ++py)
-    for (uint32_t k = 0; k < a.n_samples; ++k) {
-      const uint32_t sxy = a.sample_xy[k];
-      const int64_t x0 = (px0 << sb) + (sxy & 0xffffu), y = (py << sb) + (sxy >> 16);
-      [[maybe_unused]] int64_t e[N];
-      if constexpr (P::kExact)
-        for (int i = 0; i < N; ++i) e[i] = l[i].a * x0 + l[i].b * y + l[i].c;
-      for (int64_t px = px0; px <= px_end; ++px) {
-        bool in = true;
-        if constexpr (P::kExact) {
-          for (int i = 0; i < N; ++i) {
-            in &= e[i] > 0 || (e[i] == 0 && l[i].owns_boundary());
-            e[i] += l[i].a << sb;
-          }
-        } else {
-          const Pt s{int32_t(x0 + ((px - px0) << sb)), int32_t(y)};
-          for (int i = 0; i < N; ++i) in &= P::in_half(l[i], s);
-        }
-        if (!in) continue;
-        ++covered;
-        if (vis) atomic_max(&a.winner[(uint64_t(py) * a.width + uint64_t(px)) * a.n_samples + k], v.tri + 1);
-      }
+// The pixels [px0, px0 + w) x [py0, py0 + h) of a piece's bounding box inside the tile and
+// the screen.
+struct PixelBox {
+  int64_t px0, py0;
+  uint32_t w, h;
+};
+
+// Coverage of a piece over its pixel box: the team's lanes take the box's samples in turn
+// (each sample tested as covers() does, under the tie rule). N > 0: N edges, held in
+// registers; N = 0: any edge count. Returns this lane's covered samples.
+template <int N, class P, class Team>
+TV_HD uint64_t raster_box(const RasterArgs<P>& a, const PEdge<P>* poly, uint32_t n, const PixelBox& b, uint32_t tri,
+                          bool vis, Team team) {
+  [[maybe_unused]] typename P::Line l[N > 0 ? N : 1];
+  if constexpr (N > 0)
+    for (int i = 0; i < N; ++i) l[i] = poly[i].line;
+  const uint32_t S = a.n_samples, sb = a.src.grid.sb;
+  const uint32_t cells = b.w * b.h * S;  // <= 4096 * 4096 * 16
+  uint64_t covered = 0;
+  for (uint32_t c = team.lane(); c < cells; c += Team::kSize) {
+    const uint32_t k = c % S, pix = c / S;
+    const int64_t px = b.px0 + int64_t(pix % b.w), py = b.py0 + int64_t(pix / b.w);
+    const uint32_t sxy = a.sample_xy[k];
+    const Pt s{int32_t((px << sb) + (sxy & 0xffffu)), int32_t((py << sb) + (sxy >> 16))};
+    bool in = true;
+    if constexpr (N > 0) {
+      for (int i = 0; i < N; ++i) in &= P::in_half(l[i], s);
+    } else {
+      in = covers<P>(poly, n, s);
     }
+    if (!in) continue;
+    ++covered;
+    if (vis) atomic_max(&a.winner[(uint64_t(py) * a.width + uint64_t(px)) * S + k], tri + 1);
+  }
   return covered;
 }
 
-template <class P>
-TV_HD void raster_piece(const RasterArgs<P>& a, uint64_t p) {
+// One (tile, triangle) item, piece by piece; per-tile counters added once per item.
+template <class P, class Team>
+TV_HD void raster_item(const RasterArgs<P>& a, uint64_t j, Team team) {
   PEdge<P> local[kTileCap];
-  const PieceView<P> v = piece_at<P>(a.src, p, local);
-  if (v.n < 3) return;
-  const bool vis = a.visible[p] != 0;
+  const ItemPieces<P> it = item_pieces<P>(a.src, j, local);
+  if (it.count == 0) return;
   const TileGrid& g = a.src.grid;
   const uint32_t sb = g.sb;
-  const uint32_t tx = v.tile % g.tiles_x, ty = v.tile / g.tiles_x;
-  const Rect b = bounding_box<P>(v.e, v.n);
-  // A pixel's samples lie in [px 2^sb, (px + 1) 2^sb).
-  const int64_t px0 = tmax<int64_t>(int64_t(tx) * g.tile_w, int64_t(b.x0) >> sb);
-  const int64_t px1 = tmin<int64_t>(int64_t(tx + 1) * g.tile_w - 1, int64_t(b.x1) >> sb);
-  const int64_t py0 = tmax<int64_t>(int64_t(ty) * g.tile_h, int64_t(b.y0) >> sb);
-  const int64_t py1 = tmin<int64_t>(int64_t(ty + 1) * g.tile_h - 1, int64_t(b.y1) >> sb);
-  int64_t covered = 0;
-  const int64_t px_end = tmin<int64_t>(px1, int64_t(a.width) - 1);
-  bool done = false;
-  {
+  const uint32_t tx = it.tile % g.tiles_x, ty = it.tile / g.tiles_x;
+  uint64_t frags = 0, vis_frags = 0;
+  for (uint64_t k = 0; k < it.count; ++k) {
+    const PieceView<P> v = piece_of<P>(a.src, it, k, local);
+    if (v.n < 3) continue;
+    const bool vis = a.visible[it.first + k] != 0;
+    const Rect r = bounding_box<P>(v.e, v.n);
+    // A pixel's samples lie in [px 2^sb, (px + 1) 2^sb).
+    const int64_t px0 = tmax<int64_t>(int64_t(tx) * g.tile_w, int64_t(r.x0) >> sb);
+    const int64_t px1 = tmin<int64_t>(tmin<int64_t>(int64_t(tx + 1) * g.tile_w, a.width) - 1, int64_t(r.x1) >> sb);
+    const int64_t py0 = tmax<int64_t>(int64_t(ty) * g.tile_h, int64_t(r.y0) >> sb);
+    const int64_t py1 = tmin<int64_t>(tmin<int64_t>(int64_t(ty + 1) * g.tile_h, a.height) - 1, int64_t(r.y1) >> sb);
+    if (px1 < px0 || py1 < py0) continue;
+    const PixelBox b{px0, py0, uint32_t(px1 - px0 + 1), uint32_t(py1 - py0 + 1)};
+    uint64_t c = 0;
     switch (v.n) {
-      case 3: covered = raster_rows<3>(a, v, px0, px_end, py0, py1, vis), done = true; break;
-      case 4: covered = raster_rows<4>(a, v, px0, px_end, py0, py1, vis), done = true; break;
-      case 5: covered = raster_rows<5>(a, v, px0, px_end, py0, py1, vis), done = true; break;
-      case 6: covered = raster_rows<6>(a, v, px0, px_end, py0, py1, vis), done = true; break;
-      case 7: covered = raster_rows<7>(a, v, px0, px_end, py0, py1, vis), done = true; break;
-      case 8: covered = raster_rows<8>(a, v, px0, px_end, py0, py1, vis), done = true; break;
-      default: break;
+      case 3: c = raster_box<3, P>(a, v.e, v.n, b, it.tri, vis, team); break;
+      case 4: c = raster_box<4, P>(a, v.e, v.n, b, it.tri, vis, team); break;
+      case 5: c = raster_box<5, P>(a, v.e, v.n, b, it.tri, vis, team); break;
+      case 6: c = raster_box<6, P>(a, v.e, v.n, b, it.tri, vis, team); break;
+      case 7: c = raster_box<7, P>(a, v.e, v.n, b, it.tri, vis, team); break;
+      case 8: c = raster_box<8, P>(a, v.e, v.n, b, it.tri, vis, team); break;
+      default: c = raster_box<0, P>(a, v.e, v.n, b, it.tri, vis, team); break;
     }
+    frags += c;
+    if (vis) vis_frags += c;
   }
-  for (int64_t py = py0; !done && py <= py1 && py < a.height; ++py)
-    for (int64_t px = px0; px <= px1 && px < a.width; ++px)
-      for (uint32_t k = 0; k < a.n_samples; ++k) {
-        const uint32_t sxy = a.sample_xy[k];
-        const Pt s{int32_t((px << sb) + (sxy & 0xffffu)), int32_t((py << sb) + (sxy >> 16))};
-        if (!covers<P>(v.e, v.n, s)) continue;
-        ++covered;
-        if (vis) atomic_max(&a.winner[(uint64_t(py) * a.width + uint64_t(px)) * a.n_samples + k], v.tri + 1);
-      }
-  if (!covered) return;
-  int64_t* row = a.rows + uint64_t(v.tile) * kTileColumns;
-  atomic_add(&row[kColFragments], covered);
-  if (vis) atomic_add(&row[kColSamplesCovered], covered);
+  frags = team.sum(frags);
+  vis_frags = team.sum(vis_frags);
+  if (team.lane() != 0 || frags == 0) return;
+  int64_t* row = a.rows + uint64_t(it.tile) * kTileColumns;
+  atomic_add(&row[kColFragments], int64_t(frags));
+  if (vis_frags) atomic_add(&row[kColSamplesCovered], int64_t(vis_frags));
+}
+
+template <class P>
+TV_HD void raster_item_host(const RasterArgs<P>& a, uint64_t j) {
+  raster_item<P>(a, j, HostTeam{});
 }
 
 template <class P>
@@ -139,7 +144,7 @@ TV_HD void fold_area(const OutArgs<P>& a, uint64_t q) {
 
 template <class P>
 __global__ void k_raster(RasterArgs<P> a, uint64_t n) {
-  TV_GRID_LOOP(i, n) raster_piece<P>(a, i);
+  TV_WARP_LOOP(w, n) raster_item<P>(a, w, WarpTeam{});
 }
 template <class P>
 __global__ void k_write_id(OutArgs<P> a, uint64_t n) {
@@ -166,7 +171,7 @@ void stage_raster(Pipeline<P>& p) {
   a.rows = p.tile_rows.get();
   a.winner = p.winner.need(n_samples + 1);
   ex.zero(a.winner, n_samples * 4);
-  ex.launch(k_raster<P>, raster_piece<P>, p.n_pieces, a);
+  ex.launch_warps(k_raster<P>, raster_item_host<P>, p.n_items, a);
 
   OutArgs<P> o{};
   o.winner = a.winner;
