@@ -14,6 +14,14 @@
 #                                                  never cuts a point in half; run it again to go on
 #                                                  (finished points are kept while the machine is warm)
 #
+#   bash cuda_ref/sweep_on_gpu.sh bench SCENE...   THERE, likewise: cuda_ref's GPU tests (the carried
+#                                                  cuda_gpu_tests), then `tilevis cuda` exact and float
+#                                                  at tiles $TILEVIS_BENCH_TILES (default 32) on each
+#                                                  scene (traced there), 20 timed runs; TILEVIS_NCU=1
+#                                                  adds Nsight Compute's time per kernel for the first
+#                                                  scene in float. A table of total and stage times last;
+#                                                  $OUT/bench.json holds every stats.json.
+#
 # `run` leaves in $OUT: NAME-report.tar.xz (index.html, report.md, points.csv, figures/, sweep.json,
 # best_tiles.*: what reports/NAME/ commits) and NAME-points.tar.xz.partNN (every point's JSON, CSV
 # and logs, no EXR or traces: enough for `tilevis sweep SWEEP -o reports/NAME --report-only` here).
@@ -33,6 +41,7 @@ prepare() {
   "$bin" cuda --help >/dev/null 2>&1 || die "$bin has no CUDA reference (configure with nvcc on PATH)"
   rm -rf "$CARRY" && mkdir -p "$CARRY/bin" "$CARRY/lib" "$CARRY/meshes"
   cp "$bin" "$CARRY/bin/"
+  [ -x build/tests/cuda/cuda_gpu_tests ] && cp build/tests/cuda/cuda_gpu_tests "$CARRY/bin/"
   # Every shared library but the C runtime and libstdc++/libgcc (the target's are newer and compatible).
   ldd "$bin" | awk '$3 ~ /^\// {print $3}' | while read -r lib; do
     case "$(basename "$lib")" in
@@ -76,8 +85,67 @@ run() {
   return "$rc"
 }
 
+bench() {
+  [ $# -ge 1 ] || die "usage: sweep_on_gpu.sh bench SCENE..."
+  [ -x "$CARRY/bin/tilevis" ] || die "$CARRY/ missing: run 'sweep_on_gpu.sh prepare' on the build machine and carry it"
+  local out="${OUT:-/tmp/bench_out}" work=/tmp/tilevis_bench rc=0
+  mkdir -p "$out" "$work"
+  export LD_LIBRARY_PATH="$ROOT/$CARRY/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+  export TILEVIS_SOURCE_DIR="$ROOT" TILEVIS_COMMIT="$(cat "$CARRY/commit.txt")"
+  export TILEVIS_GLMARK2_MODELS="$ROOT/$CARRY/meshes/glmark2" TILEVIS_CGAL_MESHES="$ROOT/$CARRY/meshes/cgal"
+  export PATH="/usr/local/cuda/bin:$PATH"
+  nvidia-smi -L || die "no GPU here"
+  if [ -x "$CARRY/bin/cuda_gpu_tests" ]; then
+    "$CARRY/bin/cuda_gpu_tests" --gtest_brief=1 >"$out/gpu_tests.log" 2>&1 || rc=$?
+    say "cuda_gpu_tests: exit $rc, $(grep -cE '^\[  (FAILED|SKIPPED) ' "$out/gpu_tests.log") failed or skipped lines"
+    tail -n 3 "$out/gpu_tests.log" >&2
+  fi
+  for scene in "$@"; do
+    "$CARRY/bin/tilevis" trace "traces/scenes/$scene.json" -q -o "$work/$scene.tvt" || die "trace $scene failed"
+    for tile in ${TILEVIS_BENCH_TILES:-32}; do
+      for prec in exact float; do
+        "$CARRY/bin/tilevis" cuda "$work/$scene.tvt" --tile "$tile" --precision "$prec" -o "$work/$scene-$tile-$prec" \
+          >"$work/$scene-$tile-$prec.log" 2>&1 || { rc=1; say "cuda $scene $tile $prec failed"; tail -n 5 "$work/$scene-$tile-$prec.log" >&2; }
+      done
+    done
+  done
+  if [ "${TILEVIS_NCU:-0}" = 1 ] && command -v ncu >/dev/null; then
+    ncu --metrics gpu__time_duration.sum --csv "$CARRY/bin/tilevis" cuda "$work/$1.tvt" --tile 32 --precision float \
+      --runs 1 --warmup 1 -o "$work/ncu_run" >"$out/ncu.csv" 2>"$out/ncu.log" || say "ncu failed (see ncu.log)"
+  fi
+  python3 - "$work" "$out" <<'PY'
+import csv, glob, json, os, sys
+work, out = sys.argv[1], sys.argv[2]
+runs = {}
+for f in sorted(glob.glob(os.path.join(work, "*", "stats.json"))):
+    runs[os.path.basename(os.path.dirname(f))] = json.load(open(f))
+json.dump(runs, open(os.path.join(out, "bench.json"), "w"), indent=1)
+ncu = os.path.join(out, "ncu.csv")
+if os.path.exists(ncu):
+    per = {}
+    lines = [l for l in open(ncu) if l.startswith('"')]
+    for r in csv.DictReader(lines):
+        if r.get("Metric Name") != "gpu__time_duration.sum": continue
+        name = r["Kernel Name"].split("(")[0].split("<")[0].split("::")[-1][:40]
+        v = float(r["Metric Value"].replace(",", "")) / (1000.0 if r["Metric Unit"] == "nsecond" else 1.0)
+        per[name] = per.get(name, 0.0) + v
+    print("ncu, first scene float, one warm run (us per kernel, summed over launches):")
+    for k, v in sorted(per.items(), key=lambda kv: -kv[1])[:25]:
+        print(f"  {v:9.1f}  {k}")
+    print(f"  {sum(per.values()):9.1f}  total")
+stages = ["setup", "silhouettes", "binning", "cull", "clip", "occlusion", "raster"]
+print("run                       total  " + " ".join(f"{s[:7]:>7}" for s in stages) + "   ops syncs")
+for name, d in runs.items():
+    st = d["stage_ms"]
+    print(f"{name:24s} {d['total_ms']:7.3f}  " + " ".join(f"{st.get(s, 0):7.3f}" for s in stages) +
+          f"  {d.get('queued_operations', 0):4d} {d.get('host_syncs', 0):5d}")
+PY
+  return "$rc"
+}
+
 case "${1:-}" in
   prepare) prepare ;;
   run) shift; run "$@" ;;
-  *) die "usage: sweep_on_gpu.sh prepare | run SWEEP NAME" ;;
+  bench) shift; bench "$@" ;;
+  *) die "usage: sweep_on_gpu.sh prepare | run SWEEP NAME | bench SCENE..." ;;
 esac
