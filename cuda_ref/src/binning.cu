@@ -61,8 +61,8 @@ TV_HD void bin_tri(const BinArgs<P>& a, uint64_t i, bool emit) {
         a.occ_key[at] = (uint64_t(tile) << (a.depth_bits + 1)) | zkey;
         a.occ_tri[at] = uint32_t(i);
         ++at;
-        atomic_add(&a.rows[uint64_t(tile) * kTileColumns + kColTriangles], 1);
-        if (t.opaque) atomic_add(&a.occ_count[tile], 1u);
+        count_add(&a.rows[uint64_t(tile) * kTileColumns + kColTriangles], 1);
+        if (t.opaque) count_add(&a.occ_count[tile], 1u);
       });
   if (!emit) a.tri_tiles[i] = count;
 }
@@ -80,7 +80,7 @@ TV_HD void bin_edge(const BinArgs<P>& a, uint64_t i, bool emit) {
         a.tedge_key[at] = (uint64_t(tile) << a.depth_bits) | e.z_min;
         a.tedge_id[at] = uint32_t(i);
         ++at;
-        atomic_add(&a.rows[uint64_t(tile) * kTileColumns + kColEdges], 1);
+        count_add(&a.rows[uint64_t(tile) * kTileColumns + kColEdges], 1);
       });
   if (!emit) a.edge_tiles[i] = count;
 }

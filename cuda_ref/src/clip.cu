@@ -189,8 +189,8 @@ struct PieceArgs {
 TV_HD void count_pieces(const PieceArgs& a, uint64_t j) {
   const uint32_t n = a.piece_count[j];
   if (n == 0) return;
-  atomic_add(&a.rows[a.item_key[j] * kTileColumns + kColPieces], int64_t(n));
-  atomic_max(&a.counters[kMaxTilePieces], uint64_t(n));
+  count_add(&a.rows[a.item_key[j] * kTileColumns + kColPieces], n);
+  count_max(&a.counters[kMaxTilePieces], n);
 }
 __global__ void k_count_pieces(PieceArgs a, uint64_t n) {
   TV_GRID_LOOP(i, n) count_pieces(a, i);

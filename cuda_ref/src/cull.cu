@@ -71,7 +71,7 @@ TV_HD void cull_item(const CullArgs<P>& a, uint64_t i) {
     else hi = mid;
   }
   if (lo == 0) return;
-  if (lane == 0) atomic_add(&a.rows[uint64_t(tile) * kTileColumns + kColPairTests], int64_t(lo));
+  if (lane == 0) count_add(&a.rows[uint64_t(tile) * kTileColumns + kColPairTests], lo);
   const Rect tb = tt.bbox;
   for (uint32_t k = begin + lane; k < begin + lo; k += kCullLanes) {
     // Bounding boxes that at most touch: the segment cannot meet the interior (test 2). The
@@ -102,7 +102,7 @@ TV_HD void cull_exact(const CullArgs<P>& a, uint64_t k) {
   bool overflow = false;
   const uint32_t n = tile_polygon<P>(tt, a.grid.rect(tile), poly, overflow);
   if (!survives<P>(poly, n, tt, a.edges[ei])) return;
-  atomic_add(&a.rows[uint64_t(tile) * kTileColumns + kColCandidates], 1);
+  count_add(&a.rows[uint64_t(tile) * kTileColumns + kColCandidates], 1);
   atomic_add(&a.cand_count[j], 1u);
   const uint64_t at = bump_one(&a.counters[kCandidates], a.cand_cap);
   if (at != ~uint64_t{0}) a.cands[at] = d;

@@ -88,6 +88,40 @@ TV_HD inline uint64_t atomic_cas(uint64_t* p, uint64_t expect, uint64_t v) {
 #endif
 }
 
+// Counter updates from many threads to few addresses (a frame-wide count, a tile's row): the
+// updates of a warp's active lanes to the same address are combined into one atomic, since
+// atomics to one address are served one at a time (70 K of them cost tens of microseconds).
+TV_HD inline void count_add(uint64_t* p, uint32_t v) {
+#if defined(__CUDA_ARCH__)
+  const unsigned group = __match_any_sync(__activemask(), reinterpret_cast<unsigned long long>(p));
+  const unsigned s = __reduce_add_sync(group, v);
+  if ((threadIdx.x & 31u) == unsigned(__ffs(group) - 1) && s)
+    atomicAdd(reinterpret_cast<unsigned long long*>(p), static_cast<unsigned long long>(s));
+#else
+  *p += v;
+#endif
+}
+TV_HD inline void count_add(int64_t* p, uint32_t v) { count_add(reinterpret_cast<uint64_t*>(p), v); }
+TV_HD inline void count_add(uint32_t* p, uint32_t v) {
+#if defined(__CUDA_ARCH__)
+  const unsigned group = __match_any_sync(__activemask(), reinterpret_cast<unsigned long long>(p));
+  const unsigned s = __reduce_add_sync(group, v);
+  if ((threadIdx.x & 31u) == unsigned(__ffs(group) - 1) && s) atomicAdd(p, s);
+#else
+  *p += v;
+#endif
+}
+TV_HD inline void count_max(uint64_t* p, uint32_t v) {
+#if defined(__CUDA_ARCH__)
+  const unsigned group = __match_any_sync(__activemask(), reinterpret_cast<unsigned long long>(p));
+  const unsigned m = __reduce_max_sync(group, v);
+  if ((threadIdx.x & 31u) == unsigned(__ffs(group) - 1) && m > 0)
+    atomicMax(reinterpret_cast<unsigned long long*>(p), static_cast<unsigned long long>(m));
+#else
+  if (v > *p) *p = v;
+#endif
+}
+
 // Bump allocation from a pool of `cap` elements; the counter keeps counting past the end so
 // the host learns the size it needs. Returns UINT64_MAX on overflow.
 TV_HD inline uint64_t bump(uint64_t* counter, uint64_t n, uint64_t cap) {
@@ -237,8 +271,10 @@ class Exec {
       for (uint64_t k = 0; k < n; ++k) body(args, host_index(k, n));
       return;
     }
+    // At most 4 warps per SM scheduler slot's worth: each warp takes several elements, and
+    // kernels that total per warp add once per warp.
     const uint64_t want = (n * 32 + block - 1) / block;
-    const uint32_t blocks = uint32_t(want < grid_blocks * 16ull ? want : grid_blocks * 16ull);
+    const uint32_t blocks = uint32_t(want < grid_blocks * 2ull ? want : grid_blocks * 2ull);
     launch_kernel(reinterpret_cast<const void*>(kernel), blocks, block, &args, n);
   }
   // A kernel whose grid-stride loop reads its element count from device memory (no host

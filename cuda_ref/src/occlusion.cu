@@ -1,5 +1,5 @@
-// Occlusion (SVGPU §3.3), one warp per (tile, triangle) item, its pieces in turn, the warp's
-// lanes judging 32 occluders at a time: the centroid of the piece's first three
+// Occlusion (SVGPU §3.3) per (tile, triangle) item, its pieces in turn (float: one warp per
+// item, its lanes judging 32 occluders at a time; exact: one thread per item): the centroid of the piece's first three
 // vertices against the tile's original opaque triangles, nearest first (stable by z_min),
 // stopping at the first that hides it or at the first wholly behind it. Visible pieces get
 // their exact area (doubled area terms rounded once each, summed in fan order).
@@ -59,9 +59,10 @@ TV_HD bool occluded(const typename P::R& q, double qx, double qy, const TileTri<
 }
 
 // One (tile, triangle) item, piece by piece: each piece's interior point against its
-// tile's (or bin's) occluder list; per-tile counters added once per item.
+// tile's (or bin's) occluder list; per-tile counters added once per item, the frame's count of
+// visible triangles into `vis_tris` (added once per warp).
 template <class P, class Team>
-TV_HD void occlude_item(const OccArgs<P>& a, uint64_t j, Team team) {
+TV_HD void occlude_item(const OccArgs<P>& a, uint64_t j, Team team, uint64_t& vis_tris) {
   PEdge<P> local[kTileCap];
   const ItemPieces<P> it = item_pieces<P>(a.src, j, local);
   if (it.count == 0) return;
@@ -96,20 +97,30 @@ TV_HD void occlude_item(const OccArgs<P>& a, uint64_t j, Team team) {
   }
   if (!lead) return;
   int64_t* row = a.rows + uint64_t(it.tile) * kTileColumns;
-  if (tests) atomic_add(&row[kColOcclusionTests], int64_t(tests));
-  if (!visible) return;
-  atomic_add(&row[kColVisiblePieces], int64_t(visible));
-  atomic_add(&a.counters[kVisibleTriangles], uint64_t(triangles));
+  count_add(&row[kColOcclusionTests], tests);
+  count_add(&row[kColVisiblePieces], visible);
+  vis_tris += triangles;
 }
 
 template <class P>
 TV_HD void occlude_item_host(const OccArgs<P>& a, uint64_t j) {
-  occlude_item<P>(a, j, HostTeam{});
+  uint64_t vis_tris = 0;
+  occlude_item<P>(a, j, HostTeam{}, vis_tris);
+  a.counters[kVisibleTriangles] += vis_tris;
 }
 
+// Exact: one thread per item (its interior point and tests are too heavy to repeat in 32
+// lanes); float: one warp per item.
 template <class P>
 __global__ void k_occlude(OccArgs<P> a, uint64_t n) {
-  TV_WARP_LOOP(w, n) occlude_item<P>(a, w, WarpTeam{});
+  uint64_t vis_tris = 0;
+  if constexpr (P::kExact) {
+    TV_GRID_LOOP(i, n) occlude_item<P>(a, i, HostTeam{}, vis_tris);
+  } else {
+    TV_WARP_LOOP(w, n) occlude_item<P>(a, w, WarpTeam{}, vis_tris);
+  }
+  if (vis_tris >> 32) atomic_add(&a.counters[kVisibleTriangles], vis_tris);
+  else count_add(&a.counters[kVisibleTriangles], uint32_t(vis_tris));
 }
 
 }  // namespace
@@ -136,7 +147,8 @@ void stage_occlusion(Pipeline<P>& p) {
     a.bin_begin = p.obin_begin.get();
     a.bin_count = p.obin_count.get();
   }
-  p.ex.launch_warps(k_occlude<P>, occlude_item_host<P>, p.n_items, a);
+  if constexpr (P::kExact) p.ex.launch(k_occlude<P>, occlude_item_host<P>, p.n_items, a);
+  else p.ex.launch_warps(k_occlude<P>, occlude_item_host<P>, p.n_items, a);
 }
 
 template void stage_occlusion<ExactP>(Pipeline<ExactP>&);

@@ -43,6 +43,7 @@ enum Counter : uint32_t {
   kVisibleTriangles,
   kMaxTilePieces,
   kPieces,          // copy of the piece total, so one copy brings back every count
+  kHeavyPieces,     // raster: pieces queued for a warp each
   kCounterCount
 };
 
@@ -176,6 +177,7 @@ struct Pipeline {
   Buf<uint64_t> piece_offset;      // scan of piece_count (n_items + 1)
   uint64_t n_pieces = 0;
   Buf<uint8_t> piece_visible;
+  Buf<uint64_t> heavy;             // raster: queued large pieces
   Buf<double> piece_area;
 
   // Outputs.
@@ -193,7 +195,7 @@ struct Pipeline {
       b->bind(&e);
     for (auto* b : {&fan_offset, &use_key, &sil_offset, &sil_key, &sil_key_sorted,
                     &front_offset, &tri_tiles_off, &edge_tiles_off, &item_key, &item_key_sorted, &occ_key,
-                    &occ_key_sorted, &tedge_key, &tedge_key_sorted, &area_key, &area_key_sorted, &deep, &cands, &slot_poly, &piece_offset, &counters,
+                    &occ_key_sorted, &tedge_key, &tedge_key_sorted, &area_key, &area_key_sorted, &deep, &cands, &slot_poly, &piece_offset, &counters, &heavy,
                     &obin_off, &obin_key, &obin_key_sorted})
       b->bind(&e);
     vertices.bind(&e);

@@ -1,6 +1,7 @@
-// Raster and outputs: the samples of every piece (one warp per (tile, triangle) item, its
-// lanes over the samples of each piece's pixel box inside the tile; a sample is covered under
-// the tie rule), the id buffer
+// Raster and outputs: the samples of every piece (one thread per (tile, triangle) item for
+// pieces of at most kSoloSamples samples in their pixel box inside the tile, then one warp per
+// larger piece, its lanes taking the samples in turn; a sample is covered under the tie rule),
+// the id buffer
 // (per sample, the last visible piece in canonical order: within a tile, the highest
 // triangle in setup order, kept by atomicMax), the per-tile sample counters, and the
 // visible area per original triangle folded in canonical order (items sorted by id).
@@ -17,7 +18,14 @@ struct RasterArgs {
   uint32_t n_samples, width, height;
   int64_t* rows;
   uint32_t* winner;
+  uint64_t* heavy;            // queued pieces: item << 32 | piece within the item
+  uint64_t* heavy_count;      // counters + kHeavyPieces
+  uint64_t heavy_cap;
 };
+
+// Pieces with more samples than this in their pixel box go to the second pass (one warp each);
+// the rest are rastered by their item's thread.
+inline constexpr uint32_t kSoloSamples = 64;
 
 // The pixels [px0, px0 + w) x [py0, py0 + h) of a piece's bounding box inside the tile and
 // the screen.
@@ -56,52 +64,85 @@ TV_HD uint64_t raster_box(const RasterArgs<P>& a, const PEdge<P>* poly, uint32_t
   return covered;
 }
 
-// One (tile, triangle) item, piece by piece; per-tile counters added once per item.
+// Piece k of an item: its pixel box (false: it covers no pixel of the tile and screen).
+template <class P>
+TV_HD bool pixel_box(const RasterArgs<P>& a, uint32_t tile, const PieceView<P>& v, PixelBox& b) {
+  if (v.n < 3) return false;
+  const TileGrid& g = a.src.grid;
+  const uint32_t sb = g.sb, tx = tile % g.tiles_x, ty = tile / g.tiles_x;
+  const Rect r = bounding_box<P>(v.e, v.n);
+  // A pixel's samples lie in [px 2^sb, (px + 1) 2^sb).
+  const int64_t px0 = tmax<int64_t>(int64_t(tx) * g.tile_w, int64_t(r.x0) >> sb);
+  const int64_t px1 = tmin<int64_t>(tmin<int64_t>(int64_t(tx + 1) * g.tile_w, a.width) - 1, int64_t(r.x1) >> sb);
+  const int64_t py0 = tmax<int64_t>(int64_t(ty) * g.tile_h, int64_t(r.y0) >> sb);
+  const int64_t py1 = tmin<int64_t>(tmin<int64_t>(int64_t(ty + 1) * g.tile_h, a.height) - 1, int64_t(r.y1) >> sb);
+  if (px1 < px0 || py1 < py0) return false;
+  b = {px0, py0, uint32_t(px1 - px0 + 1), uint32_t(py1 - py0 + 1)};
+  return true;
+}
+
 template <class P, class Team>
-TV_HD void raster_item(const RasterArgs<P>& a, uint64_t j, Team team) {
+TV_HD uint64_t raster_piece(const RasterArgs<P>& a, const PieceView<P>& v, const PixelBox& b, uint32_t tri, bool vis,
+                            Team team) {
+  switch (v.n) {
+    case 3: return raster_box<3, P>(a, v.e, v.n, b, tri, vis, team);
+    case 4: return raster_box<4, P>(a, v.e, v.n, b, tri, vis, team);
+    case 5: return raster_box<5, P>(a, v.e, v.n, b, tri, vis, team);
+    case 6: return raster_box<6, P>(a, v.e, v.n, b, tri, vis, team);
+    case 7: return raster_box<7, P>(a, v.e, v.n, b, tri, vis, team);
+    case 8: return raster_box<8, P>(a, v.e, v.n, b, tri, vis, team);
+    default: return raster_box<0, P>(a, v.e, v.n, b, tri, vis, team);
+  }
+}
+
+// First pass, one thread per (tile, triangle) item: its small pieces rastered, its large ones
+// queued; per-tile counters added once per item.
+template <class P>
+TV_HD void raster_item(const RasterArgs<P>& a, uint64_t j) {
   PEdge<P> local[kTileCap];
   const ItemPieces<P> it = item_pieces<P>(a.src, j, local);
   if (it.count == 0) return;
-  const TileGrid& g = a.src.grid;
-  const uint32_t sb = g.sb;
-  const uint32_t tx = it.tile % g.tiles_x, ty = it.tile / g.tiles_x;
-  uint64_t frags = 0, vis_frags = 0;
+  uint32_t frags = 0, vis_frags = 0;
   for (uint64_t k = 0; k < it.count; ++k) {
     const PieceView<P> v = piece_of<P>(a.src, it, k, local);
-    if (v.n < 3) continue;
-    const bool vis = a.visible[it.first + k] != 0;
-    const Rect r = bounding_box<P>(v.e, v.n);
-    // A pixel's samples lie in [px 2^sb, (px + 1) 2^sb).
-    const int64_t px0 = tmax<int64_t>(int64_t(tx) * g.tile_w, int64_t(r.x0) >> sb);
-    const int64_t px1 = tmin<int64_t>(tmin<int64_t>(int64_t(tx + 1) * g.tile_w, a.width) - 1, int64_t(r.x1) >> sb);
-    const int64_t py0 = tmax<int64_t>(int64_t(ty) * g.tile_h, int64_t(r.y0) >> sb);
-    const int64_t py1 = tmin<int64_t>(tmin<int64_t>(int64_t(ty + 1) * g.tile_h, a.height) - 1, int64_t(r.y1) >> sb);
-    if (px1 < px0 || py1 < py0) continue;
-    const PixelBox b{px0, py0, uint32_t(px1 - px0 + 1), uint32_t(py1 - py0 + 1)};
-    uint64_t c = 0;
-    switch (v.n) {
-      case 3: c = raster_box<3, P>(a, v.e, v.n, b, it.tri, vis, team); break;
-      case 4: c = raster_box<4, P>(a, v.e, v.n, b, it.tri, vis, team); break;
-      case 5: c = raster_box<5, P>(a, v.e, v.n, b, it.tri, vis, team); break;
-      case 6: c = raster_box<6, P>(a, v.e, v.n, b, it.tri, vis, team); break;
-      case 7: c = raster_box<7, P>(a, v.e, v.n, b, it.tri, vis, team); break;
-      case 8: c = raster_box<8, P>(a, v.e, v.n, b, it.tri, vis, team); break;
-      default: c = raster_box<0, P>(a, v.e, v.n, b, it.tri, vis, team); break;
+    PixelBox b;
+    if (!pixel_box<P>(a, it.tile, v, b)) continue;
+    if (b.w * b.h * a.n_samples > kSoloSamples) {
+      const uint64_t at = bump_one(a.heavy_count, a.heavy_cap);
+      if (at != ~uint64_t{0}) a.heavy[at] = j << 32 | k;
+      continue;
     }
+    const bool vis = a.visible[it.first + k] != 0;
+    const uint32_t c = uint32_t(raster_piece<P>(a, v, b, it.tri, vis, HostTeam{}));
     frags += c;
     if (vis) vis_frags += c;
   }
-  frags = team.sum(frags);
-  vis_frags = team.sum(vis_frags);
-  if (team.lane() != 0 || frags == 0) return;
   int64_t* row = a.rows + uint64_t(it.tile) * kTileColumns;
-  atomic_add(&row[kColFragments], int64_t(frags));
-  if (vis_frags) atomic_add(&row[kColSamplesCovered], int64_t(vis_frags));
+  count_add(&row[kColFragments], frags);
+  count_add(&row[kColSamplesCovered], vis_frags);
+}
+
+// Second pass, one team per queued piece: the lanes take its samples in turn.
+template <class P, class Team>
+TV_HD void raster_heavy(const RasterArgs<P>& a, uint64_t h, Team team) {
+  const uint64_t q = a.heavy[h];
+  const uint64_t j = q >> 32, k = uint32_t(q);
+  PEdge<P> local[kTileCap];
+  const ItemPieces<P> it = item_pieces<P>(a.src, j, local);
+  const PieceView<P> v = piece_of<P>(a.src, it, k, local);
+  PixelBox b;
+  pixel_box<P>(a, it.tile, v, b);
+  const bool vis = a.visible[it.first + k] != 0;
+  const uint64_t c = team.sum(raster_piece<P>(a, v, b, it.tri, vis, team));
+  if (team.lane() != 0) return;
+  int64_t* row = a.rows + uint64_t(it.tile) * kTileColumns;
+  atomic_add(&row[kColFragments], int64_t(c));
+  if (vis) atomic_add(&row[kColSamplesCovered], int64_t(c));
 }
 
 template <class P>
-TV_HD void raster_item_host(const RasterArgs<P>& a, uint64_t j) {
-  raster_item<P>(a, j, HostTeam{});
+TV_HD void raster_heavy_host(const RasterArgs<P>& a, uint64_t h) {
+  raster_heavy<P>(a, h, HostTeam{});
 }
 
 template <class P>
@@ -144,7 +185,12 @@ TV_HD void fold_area(const OutArgs<P>& a, uint64_t q) {
 
 template <class P>
 __global__ void k_raster(RasterArgs<P> a, uint64_t n) {
-  TV_WARP_LOOP(w, n) raster_item<P>(a, w, WarpTeam{});
+  TV_GRID_LOOP(i, n) raster_item<P>(a, i);
+}
+template <class P>
+__global__ void k_raster_heavy(RasterArgs<P> a, const uint64_t* count, uint64_t cap) {
+  const uint64_t n = *count < cap ? *count : cap;
+  TV_WARP_LOOP(w, n) raster_heavy<P>(a, w, WarpTeam{});
 }
 template <class P>
 __global__ void k_write_id(OutArgs<P> a, uint64_t n) {
@@ -171,7 +217,11 @@ void stage_raster(Pipeline<P>& p) {
   a.rows = p.tile_rows.get();
   a.winner = p.winner.need(n_samples + 1);
   ex.zero(a.winner, n_samples * 4);
-  ex.launch_warps(k_raster<P>, raster_item_host<P>, p.n_items, a);
+  a.heavy_count = p.counters.get() + kHeavyPieces;
+  a.heavy_cap = p.n_pieces;
+  a.heavy = p.heavy.need(p.n_pieces + 1);
+  ex.launch(k_raster<P>, raster_item<P>, p.n_items, a);
+  ex.launch_dyn(k_raster_heavy<P>, raster_heavy_host<P>, a.heavy_count, a.heavy_cap, a);
 
   OutArgs<P> o{};
   o.winner = a.winner;

@@ -130,8 +130,8 @@ TV_HD __noinline__ uint32_t count_clipped(const SetupArgs& a, uint64_t t) {
   ClipV poly[kMaxClipVerts];
   bool cut = false;
   const uint32_t n = clip_triangle(a, t, poly, cut);
-  if (n == 0) atomic_add(&a.counters[kFrustumCulled], 1);
-  else if (cut) atomic_add(&a.counters[kClippedTris], 1);
+  if (n == 0) count_add(&a.counters[kFrustumCulled], 1);
+  else if (cut) count_add(&a.counters[kClippedTris], 1);
   return n ? n - 2 : 0;
 }
 
@@ -156,7 +156,7 @@ TV_HD inline void emit_one(const SetupArgs& a, uint64_t t, uint64_t out, const V
   const int64_t area = orient2d(v0.xy(), v1.xy(), v2.xy());
   // Counter-clockwise in NDC is clockwise in y-down window space: negative area.
   st.front = area < 0;
-  atomic_add(&a.counters[area == 0 ? kDegenerate : area > 0 ? kBackFacing : kFrontFacing], 1);
+  count_add(&a.counters[area == 0 ? kDegenerate : area > 0 ? kBackFacing : kFrontFacing], 1);
   a.setup[out] = st;
   // Edges made by clipping have no neighbour: boundaries, sorted after the draw's keyed edges.
   const uint64_t boundary = (uint64_t(di.vertex_offset + di.vertex_count - 1) << 32) | 0xffffffffu;
