@@ -82,33 +82,47 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team) {
   }
 
   const uint64_t want = tmin<uint64_t>(piece_bound(c), uint64_t(a.slot_factor) * (c + 1));
-  uint64_t base = 0;
-  if (lane == 0) {
-    base = bump(&a.counters[kSlotsUsed], want, a.slot_cap);
-    if (base != ~uint64_t{0}) {
-      const Rect r = a.grid.rect(tile);
-      const uint64_t at = bump(&a.counters[kEdgesUsed], kTileCap, a.pool_cap);
-      if (at == ~uint64_t{0}) {
-        base = ~uint64_t{0};
-      } else {
-        bool overflow = false;
-        const uint32_t n = tile_polygon<P>(tt, r, a.pool + at, overflow);
-        a.slot_poly[base] = (at << 32) | n;
-        a.item_slot[j] = uint32_t(base);
-      }
+  // Polygon edges come from a chunk of the pool the team holds, refilled with one bump (of
+  // twice the last, at least what a step needs), so that a step's splits cost no atomic.
+  uint64_t chunk_at = 0, chunk_left = 0, next_grab = 2 * kTileCap;
+  auto take = [&](uint64_t total) -> uint64_t {  // uniform over the team; ~0: the pool is exhausted
+    if (total > chunk_left) {
+      const uint64_t grab = tmax(total, next_grab);
+      next_grab = tmin<uint64_t>(2 * next_grab, 1024);
+      uint64_t at = 0;
+      if (lane == 0) at = bump(&a.counters[kEdgesUsed], grab, a.pool_cap);
+      at = team.bcast(at);
+      if (at == ~uint64_t{0}) return at;
+      chunk_at = at;
+      chunk_left = grab;
     }
-  }
+    const uint64_t at = chunk_at;
+    chunk_at += total;
+    chunk_left -= total;
+    return at;
+  };
+  uint64_t base = 0;
+  if (lane == 0) base = bump(&a.counters[kSlotsUsed], want, a.slot_cap);
   base = team.bcast(base);
-  team.sync();
-  if (base == ~uint64_t{0}) {
+  const uint64_t poly_at = base == ~uint64_t{0} ? base : take(kTileCap);
+  if (poly_at == ~uint64_t{0}) {
     if (lane == 0) atomic_add(&a.counters[kClipOverflow], 1);
     return;
   }
+  if (lane == 0) {
+    bool overflow = false;
+    const uint32_t n = tile_polygon<P>(tt, a.grid.rect(tile), a.pool + poly_at, overflow);
+    a.slot_poly[base] = (poly_at << 32) | n;
+    a.item_slot[j] = uint32_t(base);
+  }
+  team.sync();
   uint64_t* slots = a.slot_poly + base;
   uint32_t count = 1, splits = 0, anomalies = 0;
   bool failed = false;
+  uint32_t next_id = a.cand_sorted[off];
   for (uint32_t ci = 0; ci < c && !failed; ++ci) {
-    const SilEdge<P>& e = a.edges[a.cand_sorted[off + ci]];
+    const SilEdge<P> e = a.edges[next_id];  // this step's edge; the next one's id read ahead
+    if (ci + 1 < c) next_id = a.cand_sorted[off + ci + 1];
     const uint32_t n = count;
     uint32_t appended = 0;
     for (uint32_t k0 = 0; k0 < n; k0 += Team::kSize) {
@@ -120,27 +134,27 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team) {
         flag = survives<P>(a.pool + (sp >> 32), uint32_t(sp), tt, e);
       }
       const uint32_t mask = team.ballot(flag);
-      bool fail = false;
-      if (flag) {
-        const uint32_t rank = popc(mask & ((1u << lane) - 1u));
-        const uint64_t dst = uint64_t(n) + appended + rank;
-        const uint32_t m = uint32_t(sp);
-        const uint64_t at = dst < want ? bump(&a.counters[kEdgesUsed], 2 * (m + 1), a.pool_cap) : ~uint64_t{0};
-        if (dst >= want) atomic_add(&a.counters[kReserveOverflow], 1);
-        if (at == ~uint64_t{0}) {
-          fail = true;
-        } else {
-          PolyOut<P> in{a.pool + at, 0, m + 1, false}, out{a.pool + at + m + 1, 0, m + 1, false};
-          split<P>(a.pool + (sp >> 32), m, e.line, in, out);
-          if (in.overflow || out.overflow) {
-            ++anomalies;  // only float arithmetic can break convexity
-            in.n = tmin(in.n, m + 1);
-            out.n = tmin(out.n, m + 1);
-          }
-          slots[k] = (at << 32) | in.n;
-          slots[dst] = ((at + m + 1) << 32) | out.n;
-          ++splits;
+      const uint32_t rank = popc(mask & ((1u << lane) - 1u));
+      const uint64_t dst = uint64_t(n) + appended + rank;
+      const uint32_t m = uint32_t(sp);
+      const bool room = dst < want;
+      if (flag && !room) atomic_add(&a.counters[kReserveOverflow], 1);
+      const uint32_t need = flag && room ? 2 * (m + 1) : 0;
+      const uint32_t incl = team.scan(need);
+      const uint64_t step_at = mask ? take(team.sum(need)) : 0;
+      bool fail = flag && (!room || step_at == ~uint64_t{0});
+      if (flag && !fail) {
+        const uint64_t at = step_at + incl - need;
+        PolyOut<P> in{a.pool + at, 0, m + 1, false}, out{a.pool + at + m + 1, 0, m + 1, false};
+        split<P>(a.pool + (sp >> 32), m, e.line, in, out);
+        if (in.overflow || out.overflow) {
+          ++anomalies;  // only float arithmetic can break convexity
+          in.n = tmin(in.n, m + 1);
+          out.n = tmin(out.n, m + 1);
         }
+        slots[k] = (at << 32) | in.n;
+        slots[dst] = ((at + m + 1) << 32) | out.n;
+        ++splits;
       }
       appended += popc(mask);
       if (team.ballot(fail) != 0) failed = true;
@@ -148,8 +162,8 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team) {
     team.sync();
     count = n + appended;
   }
-  if (splits) atomic_add(&a.rows[uint64_t(tile) * kTileColumns + kColClips], int64_t(splits));
-  if (anomalies) atomic_add(&a.counters[kFloatAnomalies], anomalies);
+  count_add(&a.rows[uint64_t(tile) * kTileColumns + kColClips], splits);
+  count_add(&a.counters[kFloatAnomalies], anomalies);
   if (lane == 0) {
     if (failed) atomic_add(&a.counters[kClipOverflow], 1);
     a.piece_count[j] = count;

@@ -154,6 +154,7 @@ struct HostTeam {
   TV_HD uint32_t ballot(bool p) const { return p ? 1u : 0u; }
   TV_HD uint64_t bcast(uint64_t v) const { return v; }
   TV_HD uint64_t sum(uint64_t v) const { return v; }
+  TV_HD uint32_t scan(uint32_t v) const { return v; }  // inclusive prefix sum over the lanes
   TV_HD void sync() const {}
 };
 
@@ -183,6 +184,15 @@ struct WarpTeam {
   TV_HD uint64_t sum(uint64_t v) const {
 #if defined(__CUDA_ARCH__)
     for (int d = 16; d > 0; d >>= 1) v += __shfl_xor_sync(0xffffffffu, static_cast<unsigned long long>(v), d);
+#endif
+    return v;
+  }
+  TV_HD uint32_t scan(uint32_t v) const {
+#if defined(__CUDA_ARCH__)
+    for (unsigned d = 1; d < 32; d <<= 1) {
+      const uint32_t t = __shfl_up_sync(0xffffffffu, v, d);
+      if ((threadIdx.x & 31u) >= d) v += t;
+    }
 #endif
     return v;
   }
