@@ -210,6 +210,18 @@ __global__ void k_count_pieces(PieceArgs a, uint64_t n) {
   TV_GRID_LOOP(i, n) count_pieces(a, i);
 }
 
+// The piece -> item map of the flat piece index space.
+struct PieceItemArgs {
+  const uint64_t* piece_offset;
+  uint32_t* piece_item;
+};
+TV_HD void map_pieces(const PieceItemArgs& a, uint64_t j) {
+  for (uint64_t p = a.piece_offset[j]; p < a.piece_offset[j + 1]; ++p) a.piece_item[p] = uint32_t(j);
+}
+__global__ void k_map_pieces(PieceItemArgs a, uint64_t n) {
+  TV_GRID_LOOP(i, n) map_pieces(a, i);
+}
+
 }  // namespace
 
 template <class P>
@@ -278,6 +290,8 @@ bool stage_clip(Pipeline<P>& p) {
     if (c[kReserveOverflow]) caps.slot_factor *= 4;  // bounded: reservations never exceed piece_bound(c)
   }
   if (caps.clip_edges >= (uint64_t{1} << 32)) throw std::runtime_error("cuda: clipping needs more than 2^32 polygon edges");
+  if (ok)
+    ex.launch(k_map_pieces, map_pieces, ni, PieceItemArgs{p.piece_offset.get(), p.piece_item.need(p.n_pieces + 1)});
   return ok;
 }
 

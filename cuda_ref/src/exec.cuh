@@ -270,25 +270,8 @@ class Exec {
     const uint32_t blocks = uint32_t(want < grid_blocks * 8ull ? want : grid_blocks * 8ull);
     launch_kernel(reinterpret_cast<const void*>(kernel), blocks, block, &args, n);
   }
-  // One warp per element (TV_WARP_LOOP): body(args, i, team) with a WarpTeam on the device,
-  // a HostTeam on the host.
-  template <class Args>
-  void launch_warps(void (*kernel)(Args, uint64_t), void (*body)(const Args&, uint64_t), uint64_t n,
-                    const Args& args, uint32_t block = 256) {
-    if (n == 0) return;
-    ++queued;
-    if (where == Where::cpu) {
-      for (uint64_t k = 0; k < n; ++k) body(args, host_index(k, n));
-      return;
-    }
-    // At most 4 warps per SM scheduler slot's worth: each warp takes several elements, and
-    // kernels that total per warp add once per warp.
-    const uint64_t want = (n * 32 + block - 1) / block;
-    const uint32_t blocks = uint32_t(want < grid_blocks * 2ull ? want : grid_blocks * 2ull);
-    launch_kernel(reinterpret_cast<const void*>(kernel), blocks, block, &args, n);
-  }
-  // A kernel whose grid-stride loop reads its element count from device memory (no host
-  // round trip); on the host the count is read first.
+  // A kernel whose grid-stride (or warp-stride) loop reads its element count from device
+  // memory (no host round trip); on the host the count is read first.
   template <class Args>
   void launch_dyn(void (*kernel)(Args, const uint64_t*, uint64_t), void (*body)(const Args&, uint64_t),
                   const uint64_t* count, uint64_t cap, const Args& args, uint32_t block = 256) {

@@ -1,5 +1,5 @@
-// Occlusion (SVGPU §3.3) per (tile, triangle) item, its pieces in turn (float: one warp per
-// item, its lanes judging 32 occluders at a time; exact: one thread per item): the centroid of the piece's first three
+// Occlusion (SVGPU §3.3), one thread per piece for the first kSoloOccluders entries of its
+// list, then one warp per piece still undecided, its lanes judging 32 entries at a time: the centroid of the piece's first three
 // vertices against the tile's original opaque triangles, nearest first (stable by z_min),
 // stopping at the first that hides it or at the first wholly behind it. Visible pieces get
 // their exact area (doubled area terms rounded once each, summed in fan order).
@@ -26,7 +26,13 @@ struct OccArgs {
   const OccRec* bin_occ;
   const uint32_t* bin_begin;
   const uint32_t* bin_count;
+  uint64_t* heavy;            // queued pieces
+  uint64_t* heavy_count;      // counters + kHeavyPieces
+  uint64_t heavy_cap;
 };
+
+// Occluders a piece's own thread judges; a longer search goes on in a warp.
+inline constexpr uint32_t kSoloOccluders = 32;
 
 // The bin whose half-open span holds v (the outer bins take whatever lies beyond the tile),
 // with the same monotone arithmetic as golden's.
@@ -35,16 +41,17 @@ TV_HD inline uint32_t bin_at(double v, double origin, double step, uint32_t n) {
   return k <= 0.0 ? 0u : k >= double(n - 1) ? n - 1 : uint32_t(k);
 }
 
-// The sequential scan of an occluder list, judged a team at a time: lane l judges occluder
-// k0 + l; the lowest lane whose verdict ends the search decides, and the tests counted are
-// those the sequential loop would have made up to it.
+// The sequential scan of entries [begin, end) of an occluder list, judged a team at a time:
+// lane l judges entry k0 + l; the lowest lane whose verdict ends the search decides, and the
+// tests counted are those the sequential loop would have made up to it. Returns 1: hidden,
+// 0: the search ended with the piece visible, -1: no verdict before `end`.
 template <class P, class Team>
-TV_HD bool occluded(const typename P::R& q, double qx, double qy, const TileTri<P>& tt, const TileTri<P>* tris,
-                    const OccRec* occ, uint32_t n_occ, uint32_t& tests, Team team) {
+TV_HD int scan_occluders(const typename P::R& q, double qx, double qy, const TileTri<P>& tt, const TileTri<P>* tris,
+                         const OccRec* occ, uint32_t begin, uint32_t end, uint32_t& tests, Team team) {
   const uint32_t lane = team.lane();
-  for (uint32_t k0 = 0; k0 < n_occ; k0 += Team::kSize) {
+  for (uint32_t k0 = begin; k0 < end; k0 += Team::kSize) {
     const OccVerdict v =
-        k0 + lane < n_occ ? occluder_verdict<P>(q, qx, qy, tt, tris, occ[k0 + lane]) : OccVerdict::skip;
+        k0 + lane < end ? occluder_verdict<P>(q, qx, qy, tt, tris, occ[k0 + lane]) : OccVerdict::skip;
     const uint32_t tested = team.ballot(v == OccVerdict::tested || v == OccVerdict::hides);
     const uint32_t ends = team.ballot(v == OccVerdict::hides || v == OccVerdict::ends);
     if (ends == 0) {
@@ -53,74 +60,100 @@ TV_HD bool occluded(const typename P::R& q, double qx, double qy, const TileTri<
     }
     const uint32_t first = ends & (~ends + 1u);  // lowest set bit
     tests += popc(tested & (first | (first - 1u)));
-    return (team.ballot(v == OccVerdict::hides) & first) != 0;
+    return (team.ballot(v == OccVerdict::hides) & first) != 0 ? 1 : 0;
   }
-  return false;
+  return -1;
 }
 
-// One (tile, triangle) item, piece by piece: each piece's interior point against its
-// tile's (or bin's) occluder list; per-tile counters added once per item, the frame's count of
-// visible triangles into `vis_tris` (added once per warp).
-template <class P, class Team>
-TV_HD void occlude_item(const OccArgs<P>& a, uint64_t j, Team team, uint64_t& vis_tris) {
-  PEdge<P> local[kTileCap];
-  const ItemPieces<P> it = item_pieces<P>(a.src, j, local);
-  if (it.count == 0) return;
-  const TileTri<P>& tt = a.src.tris[it.tri];
-  const bool lead = team.lane() == 0;
-  uint32_t tests = 0, visible = 0, triangles = 0;
-  for (uint64_t k = 0; k < it.count; ++k) {
-    const uint64_t p = it.first + k;
-    const PieceView<P> v = piece_of<P>(a.src, it, k, local);
-    if (v.n < 3) {  // a float polygon that degenerated: covers nothing
-      if (lead) a.visible[p] = 0;
-      continue;
-    }
-    const typename P::R q = P::interior(v.e[0].start, v.e[1].start, v.e[2].start);
-    const double qx = P::rx(q), qy = P::ry(q);
-    const OccRec* occ = a.occ + a.item_begin[it.tile];
-    uint32_t n_occ = a.occ_count[it.tile];
-    if (a.bins_x * a.bins_y > 1) {
-      const Rect r = a.src.grid.rect(it.tile);
-      const uint64_t g = (uint64_t(it.tile) * a.bins_y + bin_at(qy, double(r.y0), a.step_y, a.bins_y)) * a.bins_x +
-                         bin_at(qx, double(r.x0), a.step_x, a.bins_x);
-      n_occ = a.bin_count[g];
-      occ = a.bin_occ + a.bin_begin[g];
-    }
-    const bool hidden = occluded<P>(q, qx, qy, tt, a.src.tris, occ, n_occ, tests, team);
-    if (!lead) continue;
-    a.visible[p] = hidden ? 0 : 1;
-    if (hidden) continue;
-    ++visible;
-    triangles += v.n - 2;
-    a.area[p] = ddiv(doubled_area<P>(v.e, v.n), a.area_scale);
+// A piece's occlusion query: its interior point and the occluder list of its tile (or bin).
+template <class P>
+struct OccQuery {
+  PieceView<P> v;
+  typename P::R q;
+  double qx, qy;
+  const OccRec* occ;
+  uint32_t n_occ;
+};
+
+template <class P>
+TV_HD bool occ_query(const OccArgs<P>& a, uint64_t p, PEdge<P>* local, OccQuery<P>& o) {
+  o.v = piece_at<P>(a.src, p, local);
+  if (o.v.n < 3) return false;  // a float polygon that degenerated: covers nothing
+  o.q = P::interior(o.v.e[0].start, o.v.e[1].start, o.v.e[2].start);
+  o.qx = P::rx(o.q);
+  o.qy = P::ry(o.q);
+  const uint32_t tile = o.v.tile;
+  o.occ = a.occ + a.item_begin[tile];
+  o.n_occ = a.occ_count[tile];
+  if (a.bins_x * a.bins_y > 1) {
+    const Rect r = a.src.grid.rect(tile);
+    const uint64_t g = (uint64_t(tile) * a.bins_y + bin_at(o.qy, double(r.y0), a.step_y, a.bins_y)) * a.bins_x +
+                       bin_at(o.qx, double(r.x0), a.step_x, a.bins_x);
+    o.n_occ = a.bin_count[g];
+    o.occ = a.bin_occ + a.bin_begin[g];
   }
-  if (!lead) return;
-  int64_t* row = a.rows + uint64_t(it.tile) * kTileColumns;
-  count_add(&row[kColOcclusionTests], tests);
-  count_add(&row[kColVisiblePieces], visible);
-  vis_tris += triangles;
+  return true;
 }
 
 template <class P>
-TV_HD void occlude_item_host(const OccArgs<P>& a, uint64_t j) {
-  uint64_t vis_tris = 0;
-  occlude_item<P>(a, j, HostTeam{}, vis_tris);
-  a.counters[kVisibleTriangles] += vis_tris;
+TV_HD void occ_finish(const OccArgs<P>& a, uint64_t p, const PieceView<P>& v, bool hidden, uint32_t tests) {
+  int64_t* row = a.rows + uint64_t(v.tile) * kTileColumns;
+  count_add(&row[kColOcclusionTests], tests);
+  a.visible[p] = hidden ? 0 : 1;
+  count_add(&row[kColVisiblePieces], hidden ? 0 : 1);
+  count_add(&a.counters[kVisibleTriangles], hidden ? 0 : v.n - 2);
+  if (!hidden) a.area[p] = ddiv(doubled_area<P>(v.e, v.n), a.area_scale);
 }
 
-// Exact: one thread per item (its interior point and tests are too heavy to repeat in 32
-// lanes); float: one warp per item.
+// First pass, one thread per piece over the first kSoloOccluders entries of its list; a piece
+// still undecided is queued for the second pass.
+template <class P>
+TV_HD void occlude_piece(const OccArgs<P>& a, uint64_t p) {
+  PEdge<P> local[kTileCap];
+  OccQuery<P> o;
+  if (!occ_query<P>(a, p, local, o)) {
+    a.visible[p] = 0;
+    return;
+  }
+  const TileTri<P>& tt = a.src.tris[o.v.tri];
+  uint32_t tests = 0;
+  const uint32_t solo = tmin(o.n_occ, kSoloOccluders);
+  const int r = scan_occluders<P>(o.q, o.qx, o.qy, tt, a.src.tris, o.occ, 0, solo, tests, HostTeam{});
+  if (r < 0 && solo < o.n_occ) {
+    count_add(&a.rows[uint64_t(o.v.tile) * kTileColumns + kColOcclusionTests], tests);
+    const uint64_t at = bump_one(a.heavy_count, a.heavy_cap);
+    if (at != ~uint64_t{0}) a.heavy[at] = p;
+    return;
+  }
+  occ_finish<P>(a, p, o.v, r > 0, tests);
+}
+
+// Second pass, one team per queued piece: the rest of its list, kSize entries at a time.
+template <class P, class Team>
+TV_HD void occlude_heavy(const OccArgs<P>& a, uint64_t h, Team team) {
+  const uint64_t p = a.heavy[h];
+  PEdge<P> local[kTileCap];
+  OccQuery<P> o;
+  occ_query<P>(a, p, local, o);
+  const TileTri<P>& tt = a.src.tris[o.v.tri];
+  uint32_t tests = 0;
+  const int r = scan_occluders<P>(o.q, o.qx, o.qy, tt, a.src.tris, o.occ, kSoloOccluders, o.n_occ, tests, team);
+  if (team.lane() == 0) occ_finish<P>(a, p, o.v, r > 0, tests);
+}
+
+template <class P>
+TV_HD void occlude_heavy_host(const OccArgs<P>& a, uint64_t h) {
+  occlude_heavy<P>(a, h, HostTeam{});
+}
+
 template <class P>
 __global__ void k_occlude(OccArgs<P> a, uint64_t n) {
-  uint64_t vis_tris = 0;
-  if constexpr (P::kExact) {
-    TV_GRID_LOOP(i, n) occlude_item<P>(a, i, HostTeam{}, vis_tris);
-  } else {
-    TV_WARP_LOOP(w, n) occlude_item<P>(a, w, WarpTeam{}, vis_tris);
-  }
-  if (vis_tris >> 32) atomic_add(&a.counters[kVisibleTriangles], vis_tris);
-  else count_add(&a.counters[kVisibleTriangles], uint32_t(vis_tris));
+  TV_GRID_LOOP(i, n) occlude_piece<P>(a, i);
+}
+template <class P>
+__global__ void k_occlude_heavy(OccArgs<P> a, const uint64_t* count, uint64_t cap) {
+  const uint64_t n = *count < cap ? *count : cap;
+  TV_WARP_LOOP(w, n) occlude_heavy<P>(a, w, WarpTeam{});
 }
 
 }  // namespace
@@ -147,8 +180,12 @@ void stage_occlusion(Pipeline<P>& p) {
     a.bin_begin = p.obin_begin.get();
     a.bin_count = p.obin_count.get();
   }
-  if constexpr (P::kExact) p.ex.launch(k_occlude<P>, occlude_item_host<P>, p.n_items, a);
-  else p.ex.launch_warps(k_occlude<P>, occlude_item_host<P>, p.n_items, a);
+  a.heavy_count = p.counters.get() + kHeavyPieces;
+  a.heavy_cap = p.n_pieces;
+  a.heavy = p.heavy.need(p.n_pieces + 1);
+  p.ex.zero(a.heavy_count, 8);
+  p.ex.launch(k_occlude<P>, occlude_piece<P>, p.n_pieces, a);
+  p.ex.launch_dyn(k_occlude_heavy<P>, occlude_heavy_host<P>, a.heavy_count, a.heavy_cap, a);
 }
 
 template void stage_occlusion<ExactP>(Pipeline<ExactP>&);

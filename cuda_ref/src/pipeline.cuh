@@ -43,7 +43,7 @@ enum Counter : uint32_t {
   kVisibleTriangles,
   kMaxTilePieces,
   kPieces,          // copy of the piece total, so one copy brings back every count
-  kHeavyPieces,     // raster: pieces queued for a warp each
+  kHeavyPieces,     // occlusion, then raster: pieces queued for a warp each
   kCounterCount
 };
 
@@ -175,9 +175,10 @@ struct Pipeline {
 
   // Pieces.
   Buf<uint64_t> piece_offset;      // scan of piece_count (n_items + 1)
+  Buf<uint32_t> piece_item;        // per piece, its item
   uint64_t n_pieces = 0;
   Buf<uint8_t> piece_visible;
-  Buf<uint64_t> heavy;             // raster: queued large pieces
+  Buf<uint64_t> heavy;             // occlusion, then raster: pieces queued for a warp each
   Buf<double> piece_area;
 
   // Outputs.
@@ -191,7 +192,7 @@ struct Pipeline {
                     &tedge_id_sorted, &tile_item_begin, &tile_edge_begin, &tile_occ_count, &area_item,
                     &area_item_sorted, &piece_count, &cand_count, &cand_cursor, &cand_offset,
                     &cand_edges, &cand_scratch, &clip_items, &item_slot, &winner, &indices, &tri_draw, &sample_xy,
-                    &obin_cnt, &obin_val, &obin_val_sorted, &obin_begin, &obin_count})
+                    &obin_cnt, &obin_val, &obin_val_sorted, &obin_begin, &obin_count, &piece_item})
       b->bind(&e);
     for (auto* b : {&fan_offset, &use_key, &sil_offset, &sil_key, &sil_key_sorted,
                     &front_offset, &tri_tiles_off, &edge_tiles_off, &item_key, &item_key_sorted, &occ_key,

@@ -1,6 +1,6 @@
-// Raster and outputs: the samples of every piece (one thread per (tile, triangle) item for
-// pieces of at most kSoloSamples samples in their pixel box inside the tile, then one warp per
-// larger piece, its lanes taking the samples in turn; a sample is covered under the tie rule),
+// Raster and outputs: the samples of every piece (one thread per piece of at most
+// kSoloSamples samples in its pixel box inside the tile, then one warp per larger piece, its
+// lanes taking the samples in turn; a sample is covered under the tie rule),
 // the id buffer
 // (per sample, the last visible piece in canonical order: within a tile, the highest
 // triangle in setup order, kept by atomicMax), the per-tile sample counters, and the
@@ -64,12 +64,12 @@ TV_HD uint64_t raster_box(const RasterArgs<P>& a, const PEdge<P>* poly, uint32_t
   return covered;
 }
 
-// Piece k of an item: its pixel box (false: it covers no pixel of the tile and screen).
+// A piece's pixel box (false: it covers no pixel of the tile and screen).
 template <class P>
-TV_HD bool pixel_box(const RasterArgs<P>& a, uint32_t tile, const PieceView<P>& v, PixelBox& b) {
+TV_HD bool pixel_box(const RasterArgs<P>& a, const PieceView<P>& v, PixelBox& b) {
   if (v.n < 3) return false;
   const TileGrid& g = a.src.grid;
-  const uint32_t sb = g.sb, tx = tile % g.tiles_x, ty = tile / g.tiles_x;
+  const uint32_t sb = g.sb, tx = v.tile % g.tiles_x, ty = v.tile / g.tiles_x;
   const Rect r = bounding_box<P>(v.e, v.n);
   // A pixel's samples lie in [px 2^sb, (px + 1) 2^sb).
   const int64_t px0 = tmax<int64_t>(int64_t(tx) * g.tile_w, int64_t(r.x0) >> sb);
@@ -82,60 +82,50 @@ TV_HD bool pixel_box(const RasterArgs<P>& a, uint32_t tile, const PieceView<P>& 
 }
 
 template <class P, class Team>
-TV_HD uint64_t raster_piece(const RasterArgs<P>& a, const PieceView<P>& v, const PixelBox& b, uint32_t tri, bool vis,
-                            Team team) {
+TV_HD uint64_t raster_piece(const RasterArgs<P>& a, const PieceView<P>& v, const PixelBox& b, bool vis, Team team) {
   switch (v.n) {
-    case 3: return raster_box<3, P>(a, v.e, v.n, b, tri, vis, team);
-    case 4: return raster_box<4, P>(a, v.e, v.n, b, tri, vis, team);
-    case 5: return raster_box<5, P>(a, v.e, v.n, b, tri, vis, team);
-    case 6: return raster_box<6, P>(a, v.e, v.n, b, tri, vis, team);
-    case 7: return raster_box<7, P>(a, v.e, v.n, b, tri, vis, team);
-    case 8: return raster_box<8, P>(a, v.e, v.n, b, tri, vis, team);
-    default: return raster_box<0, P>(a, v.e, v.n, b, tri, vis, team);
+    case 3: return raster_box<3, P>(a, v.e, v.n, b, v.tri, vis, team);
+    case 4: return raster_box<4, P>(a, v.e, v.n, b, v.tri, vis, team);
+    case 5: return raster_box<5, P>(a, v.e, v.n, b, v.tri, vis, team);
+    case 6: return raster_box<6, P>(a, v.e, v.n, b, v.tri, vis, team);
+    case 7: return raster_box<7, P>(a, v.e, v.n, b, v.tri, vis, team);
+    case 8: return raster_box<8, P>(a, v.e, v.n, b, v.tri, vis, team);
+    default: return raster_box<0, P>(a, v.e, v.n, b, v.tri, vis, team);
   }
 }
 
-// First pass, one thread per (tile, triangle) item: its small pieces rastered, its large ones
-// queued; per-tile counters added once per item.
+// First pass, one thread per piece: rastered here if its pixel box holds at most
+// kSoloSamples samples, else queued for the second pass.
 template <class P>
-TV_HD void raster_item(const RasterArgs<P>& a, uint64_t j) {
+TV_HD void raster_solo(const RasterArgs<P>& a, uint64_t p) {
   PEdge<P> local[kTileCap];
-  const ItemPieces<P> it = item_pieces<P>(a.src, j, local);
-  if (it.count == 0) return;
-  uint32_t frags = 0, vis_frags = 0;
-  for (uint64_t k = 0; k < it.count; ++k) {
-    const PieceView<P> v = piece_of<P>(a.src, it, k, local);
-    PixelBox b;
-    if (!pixel_box<P>(a, it.tile, v, b)) continue;
-    if (b.w * b.h * a.n_samples > kSoloSamples) {
-      const uint64_t at = bump_one(a.heavy_count, a.heavy_cap);
-      if (at != ~uint64_t{0}) a.heavy[at] = j << 32 | k;
-      continue;
-    }
-    const bool vis = a.visible[it.first + k] != 0;
-    const uint32_t c = uint32_t(raster_piece<P>(a, v, b, it.tri, vis, HostTeam{}));
-    frags += c;
-    if (vis) vis_frags += c;
+  const PieceView<P> v = piece_at<P>(a.src, p, local);
+  PixelBox b;
+  if (!pixel_box<P>(a, v, b)) return;
+  if (b.w * b.h * a.n_samples > kSoloSamples) {
+    const uint64_t at = bump_one(a.heavy_count, a.heavy_cap);
+    if (at != ~uint64_t{0}) a.heavy[at] = p;
+    return;
   }
-  int64_t* row = a.rows + uint64_t(it.tile) * kTileColumns;
-  count_add(&row[kColFragments], frags);
-  count_add(&row[kColSamplesCovered], vis_frags);
+  const bool vis = a.visible[p] != 0;
+  const uint32_t c = uint32_t(raster_piece<P>(a, v, b, vis, HostTeam{}));
+  int64_t* row = a.rows + uint64_t(v.tile) * kTileColumns;
+  count_add(&row[kColFragments], c);
+  count_add(&row[kColSamplesCovered], vis ? c : 0);
 }
 
 // Second pass, one team per queued piece: the lanes take its samples in turn.
 template <class P, class Team>
 TV_HD void raster_heavy(const RasterArgs<P>& a, uint64_t h, Team team) {
-  const uint64_t q = a.heavy[h];
-  const uint64_t j = q >> 32, k = uint32_t(q);
+  const uint64_t p = a.heavy[h];
   PEdge<P> local[kTileCap];
-  const ItemPieces<P> it = item_pieces<P>(a.src, j, local);
-  const PieceView<P> v = piece_of<P>(a.src, it, k, local);
+  const PieceView<P> v = piece_at<P>(a.src, p, local);
   PixelBox b;
-  pixel_box<P>(a, it.tile, v, b);
-  const bool vis = a.visible[it.first + k] != 0;
-  const uint64_t c = team.sum(raster_piece<P>(a, v, b, it.tri, vis, team));
+  pixel_box<P>(a, v, b);
+  const bool vis = a.visible[p] != 0;
+  const uint64_t c = team.sum(raster_piece<P>(a, v, b, vis, team));
   if (team.lane() != 0) return;
-  int64_t* row = a.rows + uint64_t(it.tile) * kTileColumns;
+  int64_t* row = a.rows + uint64_t(v.tile) * kTileColumns;
   atomic_add(&row[kColFragments], int64_t(c));
   if (vis) atomic_add(&row[kColSamplesCovered], int64_t(c));
 }
@@ -185,7 +175,7 @@ TV_HD void fold_area(const OutArgs<P>& a, uint64_t q) {
 
 template <class P>
 __global__ void k_raster(RasterArgs<P> a, uint64_t n) {
-  TV_GRID_LOOP(i, n) raster_item<P>(a, i);
+  TV_GRID_LOOP(i, n) raster_solo<P>(a, i);
 }
 template <class P>
 __global__ void k_raster_heavy(RasterArgs<P> a, const uint64_t* count, uint64_t cap) {
@@ -220,7 +210,8 @@ void stage_raster(Pipeline<P>& p) {
   a.heavy_count = p.counters.get() + kHeavyPieces;
   a.heavy_cap = p.n_pieces;
   a.heavy = p.heavy.need(p.n_pieces + 1);
-  ex.launch(k_raster<P>, raster_item<P>, p.n_items, a);
+  ex.zero(a.heavy_count, 8);
+  ex.launch(k_raster<P>, raster_solo<P>, p.n_pieces, a);
   ex.launch_dyn(k_raster_heavy<P>, raster_heavy_host<P>, a.heavy_count, a.heavy_cap, a);
 
   OutArgs<P> o{};
