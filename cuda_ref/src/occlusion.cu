@@ -31,8 +31,11 @@ struct OccArgs {
   uint64_t heavy_cap;
 };
 
-// Occluders a piece's own thread judges; a longer search goes on in a warp.
-inline constexpr uint32_t kSoloOccluders = 32;
+// Occluders a piece's own thread judges; a longer search goes on in a warp. Exact: all of
+// them (its interior point is too costly to repeat in 32 lanes: measured, the warps lost more
+// than they won).
+template <class P>
+inline constexpr uint32_t kSoloOccluders = P::kExact ? 0xffffffffu : 32;
 
 // The bin whose half-open span holds v (the outer bins take whatever lies beyond the tile),
 // with the same monotone arithmetic as golden's.
@@ -117,7 +120,7 @@ TV_HD void occlude_piece(const OccArgs<P>& a, uint64_t p) {
   }
   const TileTri<P>& tt = a.src.tris[o.v.tri];
   uint32_t tests = 0;
-  const uint32_t solo = tmin(o.n_occ, kSoloOccluders);
+  const uint32_t solo = tmin(o.n_occ, kSoloOccluders<P>);
   const int r = scan_occluders<P>(o.q, o.qx, o.qy, tt, a.src.tris, o.occ, 0, solo, tests, HostTeam{});
   if (r < 0 && solo < o.n_occ) {
     count_add(&a.rows[uint64_t(o.v.tile) * kTileColumns + kColOcclusionTests], tests);
@@ -137,7 +140,7 @@ TV_HD void occlude_heavy(const OccArgs<P>& a, uint64_t h, Team team) {
   occ_query<P>(a, p, local, o);
   const TileTri<P>& tt = a.src.tris[o.v.tri];
   uint32_t tests = 0;
-  const int r = scan_occluders<P>(o.q, o.qx, o.qy, tt, a.src.tris, o.occ, kSoloOccluders, o.n_occ, tests, team);
+  const int r = scan_occluders<P>(o.q, o.qx, o.qy, tt, a.src.tris, o.occ, kSoloOccluders<P>, o.n_occ, tests, team);
   if (team.lane() == 0) occ_finish<P>(a, p, o.v, r > 0, tests);
 }
 
