@@ -134,11 +134,11 @@ if os.path.exists(ncu):
         print(f"  {v:9.1f}  {k}")
     print(f"  {sum(per.values()):9.1f}  total")
 stages = ["setup", "silhouettes", "binning", "cull", "clip", "occlusion", "raster"]
-print("run                       total  " + " ".join(f"{s[:7]:>7}" for s in stages) + "   ops syncs")
+print("run (ms)                  graph  " + " ".join(f"{s[:7]:>7}" for s in stages) + "   stream   ops syncs")
 for name, d in runs.items():
     st = d["stage_ms"]
     print(f"{name:24s} {d['total_ms']:7.3f}  " + " ".join(f"{st.get(s, 0):7.3f}" for s in stages) +
-          f"  {d.get('queued_operations', 0):4d} {d.get('host_syncs', 0):5d}")
+          f"  {d.get('stream_total_ms', 0):7.3f}  {d.get('queued_operations', 0):4d} {d.get('host_syncs', 0):5d}")
 PY
   return "$rc"
 }

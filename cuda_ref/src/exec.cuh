@@ -236,6 +236,17 @@ class Exec {
   uint64_t live_bytes() const { return m_live; }
   // Work queued and host round trips since the last reset (per-run accounting).
   uint32_t queued = 0, syncs = 0;
+
+  // Host reads of device values inside a run (sizes, overflow counters): `direct` reads each
+  // (a round trip); `log` does too and appends the bytes to read_log; `replay`, while a run is
+  // captured into a CUDA graph, returns the bytes the last logged run read and queues a copy
+  // of the device's current value at the same offset of `read_check`, so that every replay
+  // of the graph can be checked against the log (same frame, same sizes).
+  enum class Reads { direct, log, replay };
+  Reads reads = Reads::direct;
+  std::vector<uint8_t> read_log;
+  size_t read_pos = 0;
+  uint8_t* read_check = nullptr;
   uint64_t peak_bytes() const { return m_peak; }
 
   void upload(void* dst, const void* src, size_t bytes);

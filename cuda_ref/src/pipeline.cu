@@ -68,22 +68,37 @@ void Exec::upload(void* dst, const void* src, size_t bytes) {
 
 void Exec::download(void* dst, const void* src, size_t bytes) {
   if (bytes == 0) return;
+  if (reads == Reads::replay) {
+    if (read_pos + bytes > read_log.size()) throw std::runtime_error("cuda: a captured run reads more than its log");
+    std::memcpy(dst, read_log.data() + read_pos, bytes);
+    copy(read_check + read_pos, src, bytes);
+    read_pos += bytes;
+    return;
+  }
   ++syncs;
   if (where == Where::cpu) {
     std::memcpy(dst, src, bytes);
-    return;
+  } else {
+    TV_CUDA(cudaMemcpyAsync(dst, src, bytes, cudaMemcpyDeviceToHost, stream));
+    TV_CUDA(cudaStreamSynchronize(stream));
   }
-  TV_CUDA(cudaMemcpyAsync(dst, src, bytes, cudaMemcpyDeviceToHost, stream));
-  TV_CUDA(cudaStreamSynchronize(stream));
+  if (reads == Reads::log) read_log.insert(read_log.end(), static_cast<uint8_t*>(dst), static_cast<uint8_t*>(dst) + bytes);
 }
 
 void Exec::read_many(std::initializer_list<std::pair<uint64_t*, const uint64_t*>> items) {
+  if (reads == Reads::replay) {
+    for (const auto& [dst, src] : items) download(dst, src, 8);
+    return;
+  }
   ++syncs;
   for (const auto& [dst, src] : items) {
     if (where == Where::cpu) *dst = *src;
     else TV_CUDA(cudaMemcpyAsync(dst, src, 8, cudaMemcpyDeviceToHost, stream));
   }
   if (where == Where::gpu) TV_CUDA(cudaStreamSynchronize(stream));
+  if (reads == Reads::log)
+    for (const auto& [dst, src] : items)
+      read_log.insert(read_log.end(), reinterpret_cast<uint8_t*>(dst), reinterpret_cast<uint8_t*>(dst) + 8);
 }
 
 void Exec::copy(void* dst, const void* src, size_t bytes) {
@@ -107,7 +122,7 @@ void Exec::fill_ones(void* p, size_t bytes) {
 }
 
 void Exec::sync() {
-  if (where == Where::gpu) TV_CUDA(cudaStreamSynchronize(stream));
+  if (where == Where::gpu && reads != Reads::replay) TV_CUDA(cudaStreamSynchronize(stream));
 }
 
 uint64_t Exec::host_index(uint64_t k, uint64_t n) const {
@@ -221,8 +236,10 @@ class Timer {
       if (e) cudaEventDestroy(e);
   }
   void mark(int k) {
-    if (m_ex.where == Where::gpu) TV_CUDA(cudaEventRecord(m_ev[k], m_ex.stream));
-    else m_host[k] = std::chrono::steady_clock::now();
+    // While a graph is captured, an external event record becomes a node of the graph.
+    if (m_ex.where == Where::cpu) m_host[k] = std::chrono::steady_clock::now();
+    else if (m_ex.reads == Exec::Reads::replay) TV_CUDA(cudaEventRecordWithFlags(m_ev[k], m_ex.stream, cudaEventRecordExternal));
+    else TV_CUDA(cudaEventRecord(m_ev[k], m_ex.stream));
   }
   // Stage k's time (between marks k and k + 1), after the stream has finished.
   double ms(int a, int b) {
@@ -250,6 +267,8 @@ double median(std::vector<double> v) {
 template <class P>
 bool run_once(Pipeline<P>& p, Timer& t) {
   p.ex.queued = p.ex.syncs = 0;
+  if (p.ex.reads == Exec::Reads::replay) p.ex.read_pos = 0;
+  else p.ex.read_log.clear();
   p.ex.zero(p.counters.get(), kCounterCount * 8);
   t.mark(0);
   stage_setup(p);
@@ -269,6 +288,63 @@ bool run_once(Pipeline<P>& p, Timer& t) {
   p.ex.sync();
   return true;
 }
+
+// The whole frame as one CUDA graph: captured from a run whose host reads return what the
+// last synchronous run read (Exec::Reads::replay), so no launch waits for the host; every
+// replay copies the values those reads would have returned and checks them against the log.
+class FrameGraph {
+ public:
+  explicit FrameGraph(Exec& ex) : m_ex(ex) {}
+  ~FrameGraph() {
+    if (m_exec) cudaGraphExecDestroy(m_exec);
+    if (m_graph) cudaGraphDestroy(m_graph);
+    if (m_ex.read_check) m_ex.release(m_ex.read_check, m_check_bytes);
+    m_ex.read_check = nullptr;
+  }
+  FrameGraph(const FrameGraph&) = delete;
+  FrameGraph& operator=(const FrameGraph&) = delete;
+
+  template <class Run>
+  void capture(Run&& run) {
+    m_check_bytes = m_ex.read_log.size() + 8;
+    m_ex.read_check = static_cast<uint8_t*>(m_ex.alloc(m_check_bytes));
+    m_ex.reads = Exec::Reads::replay;
+    TV_CUDA(cudaStreamBeginCapture(m_ex.stream, cudaStreamCaptureModeRelaxed));
+    bool ok = false;
+    try {
+      ok = run();
+    } catch (...) {
+      cudaGraph_t g = nullptr;
+      cudaStreamEndCapture(m_ex.stream, &g);
+      if (g) cudaGraphDestroy(g);
+      m_ex.reads = Exec::Reads::direct;
+      throw;
+    }
+    m_ex.reads = Exec::Reads::direct;
+    TV_CUDA(cudaStreamEndCapture(m_ex.stream, &m_graph));
+    if (!ok || m_ex.read_pos != m_ex.read_log.size())
+      throw std::runtime_error("cuda: the captured run did not repeat the logged run's reads");
+    TV_CUDA(cudaGraphInstantiate(&m_exec, m_graph, 0));
+    size_t nodes = 0;
+    TV_CUDA(cudaGraphGetNodes(m_graph, nullptr, &nodes));
+    m_nodes = uint32_t(nodes);
+  }
+  void replay() {
+    TV_CUDA(cudaGraphLaunch(m_exec, m_ex.stream));
+    TV_CUDA(cudaStreamSynchronize(m_ex.stream));
+    std::vector<uint8_t> got(m_ex.read_log.size());
+    m_ex.download(got.data(), m_ex.read_check, got.size());
+    if (got != m_ex.read_log) throw std::runtime_error("cuda: a graph replay read other sizes than its capture");
+  }
+  uint32_t nodes() const { return m_nodes; }
+
+ private:
+  Exec& m_ex;
+  cudaGraph_t m_graph = nullptr;
+  cudaGraphExec_t m_exec = nullptr;
+  size_t m_check_bytes = 0;
+  uint32_t m_nodes = 0;
+};
 
 __global__ void k_empty(uint64_t* p) {
   if (p && threadIdx.x == 1024) *p = 0;  // never: keeps the launch from being optimised away
@@ -323,29 +399,46 @@ CudaResult run(const trace::Frame& frame, const CudaConfig& cfg) {
   r.upload_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 
   Timer timer(ex);
+  ex.reads = Exec::Reads::log;
   // First run: grow and retry until no device counter overflows.
   while (!run_once(p, timer)) {
     if (++r.retries > 32) throw std::runtime_error("cuda: buffers still overflow after 32 retries");
   }
   for (uint32_t w = 1; w < cfg.warmup; ++w)
     if (!run_once(p, timer)) ++r.retries;
-  std::vector<std::vector<double>> stage(kStageCount);
-  std::vector<double> total;
   const uint32_t runs = std::max<uint32_t>(cfg.runs, 1);
-  for (uint32_t k = 0; k < runs;) {
-    if (!run_once(p, timer)) {  // cannot happen with learned capacities, but never time a partial run
-      ++r.retries;
-      continue;
+  // Median stage and total times of `runs` runs of `one` (false: not timed, run again).
+  auto timed = [&](auto&& one, std::vector<StageTime>& stage_ms, double& total_ms) {
+    std::vector<std::vector<double>> stage(kStageCount);
+    std::vector<double> total;
+    for (uint32_t k = 0; k < runs;) {
+      if (!one()) {  // cannot happen with learned capacities, but never time a partial run
+        ++r.retries;
+        continue;
+      }
+      for (int s = 0; s < kStageCount; ++s) stage[s].push_back(timer.ms(s, s + 1));
+      total.push_back(timer.ms(0, kStageCount));
+      ++k;
     }
-    r.queued_operations = ex.queued;
-    r.host_syncs = ex.syncs;
-    for (int s = 0; s < kStageCount; ++s) stage[s].push_back(timer.ms(s, s + 1));
-    total.push_back(timer.ms(0, kStageCount));
-    ++k;
-  }
+    for (int s = 0; s < kStageCount; ++s) stage_ms.push_back({kStages[s], median(stage[s])});
+    total_ms = median(total);
+  };
+  // The stream: each stage's work queued as it comes, the host reading sizes between stages.
+  timed([&] { return run_once(p, timer); }, r.stream_stage_ms, r.stream_total_ms);
+  r.queued_operations = ex.queued;
+  r.host_syncs = ex.syncs;
   r.runs = runs;
-  for (int s = 0; s < kStageCount; ++s) r.stage_ms.push_back({kStages[s], median(stage[s])});
-  r.total_ms = median(total);
+  if (ex.where == Where::gpu) {
+    FrameGraph graph(ex);
+    graph.capture([&] { return run_once(p, timer); });
+    r.graph_nodes = graph.nodes();
+    graph.replay();  // warm-up
+    timed([&] { graph.replay(); return true; }, r.stage_ms, r.total_ms);
+  } else {
+    r.stage_ms = r.stream_stage_ms;
+    r.total_ms = r.stream_total_ms;
+  }
+  ex.reads = Exec::Reads::direct;
 
   // Results of the last run.
   t0 = std::chrono::steady_clock::now();

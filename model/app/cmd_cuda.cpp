@@ -85,8 +85,11 @@ int run(const CudaArgs& a, const trace::Frame& frame, uint32_t tw, uint32_t th) 
                            {"max_tile_pieces", r.max_tile_pieces},
                            {"deep_pairs", r.deep_pairs},
                            {"float_anomalies", r.float_anomalies}};
-  nlohmann::json stages = nlohmann::json::object();
-  for (const auto& s : r.stage_ms) stages[s.name] = s.ms;
+  auto stage_json = [](const std::vector<tilevis::cuda::StageTime>& v) {
+    nlohmann::json j = nlohmann::json::object();
+    for (const auto& s : v) j[s.name] = s.ms;
+    return j;
+  };
   nlohmann::json config = visibility_config(tw, th, cfg.occlusion_bin_w, cfg.occlusion_bin_h, r.samples, a.depth_bits);
   config["precision"] = a.precision;
   config["device"] = a.device;
@@ -96,9 +99,15 @@ int run(const CudaArgs& a, const trace::Frame& frame, uint32_t tw, uint32_t th) 
                {"config", config},
                {"totals", totals},
                {"device", r.device_name},
-               {"stage_ms", stages},
+               {"stage_ms", stage_json(r.stage_ms)},
                {"total_ms", r.total_ms},
-               {"timing", a.device == "gpu" ? "CUDA events, median of runs after warm-up" : "host clock (emulation)"},
+               {"stream_stage_ms", stage_json(r.stream_stage_ms)},
+               {"stream_total_ms", r.stream_total_ms},
+               {"graph_nodes", r.graph_nodes},
+               {"timing", a.device == "gpu" ? "CUDA events, median of runs after warm-up: the frame as one CUDA graph "
+                                              "(sizes as the first runs read them; every replay checked); stream_*: "
+                                              "queued stage by stage, the host reading sizes in between"
+                                            : "host clock (emulation)"},
                {"runs", r.runs},
                {"upload_ms", r.upload_ms},
                {"download_ms", r.download_ms},
@@ -117,7 +126,10 @@ int run(const CudaArgs& a, const trace::Frame& frame, uint32_t tw, uint32_t th) 
              a.trace, a.frame, tw, th, a.precision, r.device_name, r.triangles_in, r.silhouette_edges,
              r.candidate_pairs, r.clip_polygons, r.pieces, r.visible_pieces, r.total_ms, r.runs,
              double(r.peak_device_bytes) / (1 << 20), a.out);
-  for (const auto& s : r.stage_ms) fmt::print("  {:<12} {:9.3f} ms\n", s.name, s.ms);
+  for (size_t k = 0; k < r.stage_ms.size(); ++k)
+    fmt::print("  {:<12} {:9.3f} ms   (stream {:.3f} ms)\n", r.stage_ms[k].name, r.stage_ms[k].ms, r.stream_stage_ms[k].ms);
+  fmt::print("  {:<12} {:9.3f} ms   (stream {:.3f} ms, {} host round trips)\n", "total", r.total_ms, r.stream_total_ms,
+             r.host_syncs);
   return 0;
 }
 #endif

@@ -60,8 +60,13 @@ struct CudaResult {
   uint64_t deep_pairs = 0;       // pairs past the cheap tests (test 6, bounding boxes, test 4)
   uint64_t float_anomalies = 0;  // float only: polygons that outgrew their bound (non-convex results)
 
-  std::vector<StageTime> stage_ms;  // medians
-  double total_ms = 0;              // median of the whole pipeline (trace in device memory -> id raster)
+  // Medians of the whole pipeline (trace in device memory -> id raster). GPU: the frame as one
+  // CUDA graph, replayed (its host reads of sizes answered by the first runs; each replay is
+  // checked against them); stream_*: the same work queued stage by stage with the host reading
+  // sizes in between (host_syncs round trips). cpu: both are the host emulation's times.
+  std::vector<StageTime> stage_ms, stream_stage_ms;
+  double total_ms = 0, stream_total_ms = 0;
+  uint32_t graph_nodes = 0;
   double upload_ms = 0, download_ms = 0;
   uint32_t runs = 0;
   uint32_t retries = 0;             // grow-and-retry rounds (first run)
