@@ -64,8 +64,12 @@ TV_HD void clip_list(const ClipArgs<P>& a, uint64_t j) {
 // The most pieces c lines can cut a convex region into: 1 + c + c (c - 1) / 2.
 TV_HD inline uint64_t piece_bound(uint64_t c) { return 1 + c + c * (c - 1) / 2; }
 
+// A team's piece slots live in `stage` (the warp's shared memory) while it clips, if they fit,
+// and are copied to slot_poly at the end: each step reads and writes them.
+inline constexpr uint32_t kStageSlots = 256;
+
 template <class P, class Team>
-TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team) {
+TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team, uint64_t* stage) {
   const uint32_t lane = team.lane();
   const uint32_t j = a.clip_items[w];
   const uint32_t c = a.cand_count[j], off = a.cand_offset[j];
@@ -109,14 +113,14 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team) {
     if (lane == 0) atomic_add(&a.counters[kClipOverflow], 1);
     return;
   }
+  uint64_t* const slots = stage && want <= kStageSlots ? stage : a.slot_poly + base;
   if (lane == 0) {
     bool overflow = false;
     const uint32_t n = tile_polygon<P>(tt, a.grid.rect(tile), a.pool + poly_at, overflow);
-    a.slot_poly[base] = (poly_at << 32) | n;
+    slots[0] = (poly_at << 32) | n;
     a.item_slot[j] = uint32_t(base);
   }
   team.sync();
-  uint64_t* slots = a.slot_poly + base;
   uint32_t count = 1, splits = 0, anomalies = 0;
   bool failed = false;
   uint32_t next_id = a.cand_sorted[off];
@@ -162,6 +166,9 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team) {
     team.sync();
     count = n + appended;
   }
+  if (slots != a.slot_poly + base)
+    for (uint32_t k = lane; k < count; k += Team::kSize) a.slot_poly[base + k] = slots[k];
+  team.sync();
   count_add(&a.rows[uint64_t(tile) * kTileColumns + kColClips], splits);
   count_add(&a.counters[kFloatAnomalies], anomalies);
   if (lane == 0) {
@@ -172,7 +179,7 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team) {
 
 template <class P>
 TV_HD void clip_item_host(const ClipArgs<P>& a, uint64_t w) {
-  clip_item<P>(a, w, HostTeam{});
+  clip_item<P>(a, w, HostTeam{}, nullptr);
 }
 
 template <class P>
@@ -184,12 +191,15 @@ template <class P>
 __global__ void k_clip_list(ClipArgs<P> a, uint64_t n) {
   TV_GRID_LOOP(i, n) clip_list<P>(a, i);
 }
+inline constexpr uint32_t kClipBlock = 128;
+
 template <class P>
 __global__ void k_clip_items(ClipArgs<P> a, const uint64_t* count, uint64_t cap) {
   const uint64_t n = *count < cap ? *count : cap;
   const uint64_t warp = (uint64_t(blockIdx.x) * blockDim.x + threadIdx.x) / 32;
   const uint64_t warps = uint64_t(gridDim.x) * blockDim.x / 32;
-  for (uint64_t w = warp; w < n; w += warps) clip_item<P>(a, w, WarpTeam{});
+  __shared__ uint64_t stage[kClipBlock / 32][kStageSlots];
+  for (uint64_t w = warp; w < n; w += warps) clip_item<P>(a, w, WarpTeam{}, stage[threadIdx.x / 32]);
 }
 
 // After clipping: the pieces of every item, their prefix sum (the flat piece index space of
@@ -262,7 +272,7 @@ bool stage_clip(Pipeline<P>& p) {
     ex.launch_dyn(k_clip_items<P>, clip_item_host<P>, p.counters.get() + kClipItems, ni, a);
   } else {
     ++ex.queued;
-    k_clip_items<P><<<ex.grid_blocks * 2, 128, 0, ex.stream>>>(a, p.counters.get() + kClipItems, ni);
+    k_clip_items<P><<<ex.grid_blocks * 2, kClipBlock, 0, ex.stream>>>(a, p.counters.get() + kClipItems, ni);
     TV_CUDA(cudaGetLastError());
   }
   ex.launch(k_count_pieces, count_pieces, ni, PieceArgs{p.piece_count.get(), a.item_key, a.rows, a.counters});

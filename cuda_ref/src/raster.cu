@@ -34,61 +34,61 @@ struct PixelBox {
   uint32_t w, h;
 };
 
-// Coverage of a piece over its pixel box; returns this lane's covered samples. N > 0: N
+// Coverage of a piece over its pixel box; returns this lane's covered samples. The team's
+// lanes take runs of up to kRun pixels of a row at one sample position, in turn. N > 0: N
 // edges, held in registers; N = 0: any edge count, each sample tested as covers() does.
-// Float: the team's lanes take the box's samples in turn. Exact: they take runs of up to
-// kRun pixels of a row (one sample position), the edge functions evaluated at the run's
-// first pixel and stepped along it, e(x + 2^sb) = e(x) + a 2^sb: exact in int64 (|e| < 2^49,
-// |a 2^sb| <= 2^32), the same integer test as covers() under the tie rule.
-inline constexpr uint32_t kRun = 8;
+// Exact: the edge functions evaluated at the run's first pixel and stepped along it,
+// e(x + 2^sb) = e(x) + a 2^sb: exact in int64 (|e| < 2^49, |a 2^sb| <= 2^32), the same
+// integer test as covers() under the tie rule (e > 0, or e = 0 on an owned boundary: e > -1).
+// Float: every sample evaluated as covers() does.
+inline constexpr uint32_t kRun = 32;
 
 template <int N, class P, class Team>
 TV_HD uint64_t raster_box(const RasterArgs<P>& a, const PEdge<P>* poly, uint32_t n, const PixelBox& b, uint32_t tri,
                           bool vis, Team team) {
   [[maybe_unused]] typename P::Line l[N > 0 ? N : 1];
-  if constexpr (N > 0)
-    for (int i = 0; i < N; ++i) l[i] = poly[i].line;
+  [[maybe_unused]] int64_t step[N > 0 ? N : 1], floor[N > 0 ? N : 1];
   const uint32_t S = a.n_samples, sb = a.src.grid.sb;
-  uint64_t covered = 0;
-  auto hit = [&](int64_t px, int64_t py, uint32_t k) {
-    ++covered;
-    if (vis) atomic_max(&a.winner[(uint64_t(py) * a.width + uint64_t(px)) * S + k], tri + 1);
-  };
-  if constexpr (P::kExact && N > 0) {
-    const uint32_t runs = (b.w + kRun - 1) / kRun;
-    const uint32_t units = runs * b.h * S;  // <= 4096 * 4096 * 16 / kRun
-    for (uint32_t u = team.lane(); u < units; u += Team::kSize) {
-      const uint32_t run = u % runs, k = (u / runs) % S, row = u / runs / S;
-      const int64_t px0 = b.px0 + int64_t(run) * kRun, py = b.py0 + row;
-      const int64_t px_end = tmin<int64_t>(px0 + kRun, b.px0 + b.w);
-      const uint32_t sxy = a.sample_xy[k];
-      const int64_t x0 = (px0 << sb) + (sxy & 0xffffu), y = (py << sb) + (sxy >> 16);
-      int64_t e[N];
-      for (int i = 0; i < N; ++i) e[i] = l[i].a * x0 + l[i].b * y + l[i].c;
-      for (int64_t px = px0; px < px_end; ++px) {
-        bool in = true;
-        for (int i = 0; i < N; ++i) {
-          in &= e[i] > 0 || (e[i] == 0 && l[i].owns_boundary());
-          e[i] += l[i].a << sb;
-        }
-        if (in) hit(px, py, k);
+  if constexpr (N > 0)
+    for (int i = 0; i < N; ++i) {
+      l[i] = poly[i].line;
+      if constexpr (P::kExact) {
+        step[i] = l[i].a << sb;
+        floor[i] = l[i].owns_boundary() ? -1 : 0;
       }
     }
-    return covered;
-  }
-  const uint32_t cells = b.w * b.h * S;  // <= 4096 * 4096 * 16
-  for (uint32_t c = team.lane(); c < cells; c += Team::kSize) {
-    const uint32_t k = c % S, pix = c / S;
-    const int64_t px = b.px0 + int64_t(pix % b.w), py = b.py0 + int64_t(pix / b.w);
+  const uint32_t runs = (b.w + kRun - 1) / kRun;
+  const uint32_t units = runs * b.h * S;  // <= 4096 * 4096 * 16
+  uint64_t covered = 0;
+  for (uint32_t u = team.lane(); u < units; u += Team::kSize) {
+    const uint32_t run = runs == 1 ? 0 : u % runs, rest = runs == 1 ? u : u / runs;
+    const uint32_t k = S == 1 ? 0 : rest % S, row = S == 1 ? rest : rest / S;
+    const int64_t px0 = b.px0 + int64_t(run) * kRun, py = b.py0 + row;
+    const int64_t px_end = tmin<int64_t>(px0 + kRun, b.px0 + b.w);
     const uint32_t sxy = a.sample_xy[k];
-    const Pt s{int32_t((px << sb) + (sxy & 0xffffu)), int32_t((py << sb) + (sxy >> 16))};
-    bool in = true;
-    if constexpr (N > 0) {
-      for (int i = 0; i < N; ++i) in &= P::in_half(l[i], s);
-    } else {
-      in = covers<P>(poly, n, s);
+    const int64_t x0 = (px0 << sb) + (sxy & 0xffffu), y = (py << sb) + (sxy >> 16);
+    [[maybe_unused]] int64_t e[N > 0 ? N : 1];
+    if constexpr (P::kExact && N > 0)
+      for (int i = 0; i < N; ++i) e[i] = l[i].a * x0 + l[i].b * y + l[i].c;
+    for (int64_t px = px0; px < px_end; ++px) {
+      bool in = true;
+      if constexpr (P::kExact && N > 0) {
+        for (int i = 0; i < N; ++i) {
+          in &= e[i] > floor[i];
+          e[i] += step[i];
+        }
+      } else {
+        const Pt s{int32_t(x0 + ((px - px0) << sb)), int32_t(y)};
+        if constexpr (N > 0) {
+          for (int i = 0; i < N; ++i) in &= P::in_half(l[i], s);
+        } else {
+          in = covers<P>(poly, n, s);
+        }
+      }
+      if (!in) continue;
+      ++covered;
+      if (vis) atomic_max(&a.winner[(uint64_t(py) * a.width + uint64_t(px)) * S + k], tri + 1);
     }
-    if (in) hit(px, py, k);
   }
   return covered;
 }
