@@ -279,10 +279,15 @@ void stage_binning(Pipeline<P>& p) {
   a.edge_off = p.edge_tiles_off.need(p.n_edges + 1);
   a.rows = rows;
   a.occ_count = occ_count;
+  // Triangles on the main stream, edges beside them (side stream 0) until cull; the occluder
+  // lists (side 1) until occlusion; the visible-area order (side 2) until the fold.
   ex.launch(k_bin_tri_count<P>, bin_tri_count<P>, p.n_tris, a);
-  ex.launch(k_bin_edge_count<P>, bin_edge_count<P>, p.n_edges, a);
   ex.exclusive_scan(a.tri_tiles, p.tri_tiles_off.get(), p.n_tris);
+  ex.branch(0);
+  ex.launch(k_bin_edge_count<P>, bin_edge_count<P>, p.n_edges, a);
   ex.exclusive_scan(a.edge_tiles, p.edge_tiles_off.get(), p.n_edges);
+  ex.on_main();
+  ex.merge(0);
   // sync: the numbers of (tile, triangle) and (tile, edge) pairs.
   ex.read_many({{&p.n_items, p.tri_tiles_off.get() + p.n_tris}, {&p.n_tile_edges, p.edge_tiles_off.get() + p.n_edges}});
   if (p.n_items >= 0xffffffffull) throw std::runtime_error("cuda: more than 2^32 - 2 (tile, triangle) pairs");
@@ -294,25 +299,28 @@ void stage_binning(Pipeline<P>& p) {
   a.occ_tri = p.occ_tri.need(ni + 1);
   a.tedge_key = p.tedge_key.need(ne + 1);
   a.tedge_id = p.tedge_id.need(ne + 1);
-  ex.launch(k_bin_tri_emit<P>, bin_tri_emit<P>, p.n_tris, a);
-  ex.launch(k_bin_edge_emit<P>, bin_edge_emit<P>, p.n_edges, a);
-
   const int tile_bits = int(bits_for(tiles));
   const int d = int(p.f.depth_bits);
-  ex.sort_pairs(a.item_key, p.item_key_sorted.need(ni + 1), a.item_tri, p.item_tri_sorted.need(ni + 1), ni, tile_bits);
-  ex.sort_pairs(a.occ_key, p.occ_key_sorted.need(ni + 1), a.occ_tri, p.occ_tri_sorted.need(ni + 1), ni,
-                tile_bits + d + 1);
-  ex.sort_pairs(a.tedge_key, p.tedge_key_sorted.need(ne + 1), a.tedge_id, p.tedge_id_sorted.need(ne + 1), ne,
-                tile_bits + d);
-
   uint32_t* item_begin = p.tile_item_begin.need(tiles);
   uint32_t* edge_begin = p.tile_edge_begin.need(tiles);
-  ex.zero(item_begin, tiles * 4ull);
+  ex.branch(0);
+  ex.launch(k_bin_edge_emit<P>, bin_edge_emit<P>, p.n_edges, a);
+  ex.sort_pairs(a.tedge_key, p.tedge_key_sorted.need(ne + 1), a.tedge_id, p.tedge_id_sorted.need(ne + 1), ne,
+                tile_bits + d);
   ex.zero(edge_begin, tiles * 4ull);
-  ex.launch(k_tile_begin, tile_begin, ni, RangeArgs{p.item_key_sorted.get(), 0, ni, item_begin});
   ex.launch(k_tile_begin, tile_begin, ne, RangeArgs{p.tedge_key_sorted.get(), uint32_t(d), ne, edge_begin});
-  ex.launch(k_gather_occ<P>, gather_occ<P>, ni, OccGatherArgs<P>{p.tris.get(), p.occ_tri_sorted.get(), p.occ_rec.need(ni + 1)});
   ex.launch(k_gather_box<P>, gather_box<P>, ne, BoxArgs<P>{p.edges.get(), p.tedge_id_sorted.get(), p.tedge_box.need(ne + 1)});
+  ex.on_main();
+
+  ex.launch(k_bin_tri_emit<P>, bin_tri_emit<P>, p.n_tris, a);
+  ex.branch(1);
+  ex.sort_pairs(a.occ_key, p.occ_key_sorted.need(ni + 1), a.occ_tri, p.occ_tri_sorted.need(ni + 1), ni,
+                tile_bits + d + 1);
+  ex.launch(k_gather_occ<P>, gather_occ<P>, ni, OccGatherArgs<P>{p.tris.get(), p.occ_tri_sorted.get(), p.occ_rec.need(ni + 1)});
+  ex.on_main();
+  ex.sort_pairs(a.item_key, p.item_key_sorted.need(ni + 1), a.item_tri, p.item_tri_sorted.need(ni + 1), ni, tile_bits);
+  ex.zero(item_begin, tiles * 4ull);
+  ex.launch(k_tile_begin, tile_begin, ni, RangeArgs{p.item_key_sorted.get(), 0, ni, item_begin});
 
   // Finer occlusion bins: (bin, record) pairs counted, emitted in record order, sorted
   // stably by bin (so records keep their tile order in each bin), gathered.
@@ -320,6 +328,7 @@ void stage_binning(Pipeline<P>& p) {
   const uint32_t bw = c.occlusion_bin_w && c.occlusion_bin_w < c.tile_w ? c.occlusion_bin_w : c.tile_w;
   const uint32_t bh = c.occlusion_bin_h && c.occlusion_bin_h < c.tile_h ? c.occlusion_bin_h : c.tile_h;
   if (bw != c.tile_w || bh != c.tile_h) {
+    ex.merge(1);  // on the main stream: the pair count is read
     p.obin_w = bw;
     p.obin_h = bh;
     p.obins_x = (c.tile_w + bw - 1) / bw;
@@ -355,9 +364,14 @@ void stage_binning(Pipeline<P>& p) {
   }
 
   AreaKeyArgs<P> ak{p.tris.get(), p.item_tri_sorted.get(), p.area_key.need(ni + 1), p.area_item.need(ni + 1)};
+  ex.branch(2);
   ex.launch(k_area_key<P>, area_key<P>, ni, ak);
   ex.sort_pairs(ak.key, p.area_key_sorted.need(ni + 1), ak.item, p.area_item_sorted.need(ni + 1), ni,
                 int(bits_for(p.f.n_triangles)));
+  // The key list ends with a sentinel no id equals, so a run's walk in the fold stops there.
+  ex.fill_ones(p.area_key_sorted.get() + ni, 8);
+  ex.on_main();
+  ex.merge(0);  // cull reads the edge lists
 }
 
 template void stage_binning<ExactP>(Pipeline<ExactP>&);

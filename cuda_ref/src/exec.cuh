@@ -227,7 +227,19 @@ class Exec {
 
   const Where where;
   const bool shuffle;
+  // The stream work is queued on: the frame's main stream, or a side stream between branch()
+  // and on_main(). A side stream's work starts after the main stream's work queued before the
+  // branch and runs beside what the main stream does next; merge(k) makes the main stream wait
+  // for side k (each branch is merged before the run ends: merge_all). The host emulation runs
+  // everything in order. Host reads happen on the main stream, after the merges they need.
+  static constexpr int kSides = 3;
   cudaStream_t stream = nullptr;
+  cudaStream_t main_stream = nullptr;
+  void branch(int k);
+  void on_main();
+  void merge(int k);
+  void merge_all();
+  void begin_frame() { m_event_next = 0; }
   uint32_t grid_blocks = 0;  // blocks of 256 that fill the GPU (grid-stride kernels)
   std::string device_name;
 
@@ -308,10 +320,16 @@ class Exec {
   template <class T>
   void scan_into(const uint32_t* in, T* out, uint64_t n);  // both exclusive_scan overloads
   void launch_kernel(const void* fn, uint32_t blocks, uint32_t block, const void* args, uint64_t n);
-  void* temp(size_t bytes);
+  void* temp(size_t bytes);  // scratch of CUB calls, one per stream (branches run at once)
+  cudaEvent_t next_event();
   uint64_t m_live = 0, m_peak = 0;
-  void* m_temp = nullptr;
-  size_t m_temp_bytes = 0;
+  cudaStream_t m_side[kSides] = {};
+  int m_cur = 0;             // 0: main stream, k + 1: side k
+  bool m_pending[kSides] = {};
+  std::vector<cudaEvent_t> m_events;
+  size_t m_event_next = 0;
+  void* m_temp[kSides + 1] = {};
+  size_t m_temp_bytes[kSides + 1] = {};
   uint64_t m_seed = 0x9e3779b97f4a7c15ull;
 };
 

@@ -187,6 +187,7 @@ void stage_occlusion(Pipeline<P>& p) {
   a.heavy_cap = p.n_pieces;
   a.heavy = p.heavy.need(p.n_pieces + 1);
   p.ex.zero(a.heavy_count, 8);
+  p.ex.merge(1);  // the occluder lists (binning)
   p.ex.launch(k_occlude<P>, occlude_piece<P>, p.n_pieces, a);
   p.ex.launch_dyn(k_occlude_heavy<P>, occlude_heavy_host<P>, a.heavy_count, a.heavy_cap, a);
 }

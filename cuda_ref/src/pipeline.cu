@@ -33,12 +33,55 @@ Exec::Exec(Where w, bool shuf) : where(w), shuffle(shuf) {
   TV_CUDA(cudaGetDeviceProperties(&prop, 0));
   device_name = prop.name;
   grid_blocks = uint32_t(prop.multiProcessorCount) * 2;
-  TV_CUDA(cudaStreamCreateWithFlags(&stream, cudaStreamNonBlocking));
+  TV_CUDA(cudaStreamCreateWithFlags(&main_stream, cudaStreamNonBlocking));
+  for (auto& s : m_side) TV_CUDA(cudaStreamCreateWithFlags(&s, cudaStreamNonBlocking));
+  stream = main_stream;
 }
 
 Exec::~Exec() {
-  if (m_temp) release(m_temp, m_temp_bytes);
-  if (stream) cudaStreamDestroy(stream);
+  for (int k = 0; k <= kSides; ++k)
+    if (m_temp[k]) release(m_temp[k], m_temp_bytes[k]);
+  for (auto e : m_events) cudaEventDestroy(e);
+  for (auto s : m_side)
+    if (s) cudaStreamDestroy(s);
+  if (main_stream) cudaStreamDestroy(main_stream);
+}
+
+cudaEvent_t Exec::next_event() {
+  if (m_event_next == m_events.size()) {
+    cudaEvent_t e;
+    TV_CUDA(cudaEventCreateWithFlags(&e, cudaEventDisableTiming));
+    m_events.push_back(e);
+  }
+  return m_events[m_event_next++];
+}
+
+void Exec::branch(int k) {
+  if (where == Where::cpu) return;
+  const cudaEvent_t e = next_event();
+  TV_CUDA(cudaEventRecord(e, main_stream));
+  TV_CUDA(cudaStreamWaitEvent(m_side[k], e, 0));
+  stream = m_side[k];
+  m_cur = k + 1;
+  m_pending[k] = true;
+}
+
+void Exec::on_main() {
+  stream = main_stream;
+  m_cur = 0;
+}
+
+void Exec::merge(int k) {
+  if (where == Where::cpu || !m_pending[k]) return;
+  const cudaEvent_t e = next_event();
+  TV_CUDA(cudaEventRecord(e, m_side[k]));
+  TV_CUDA(cudaStreamWaitEvent(main_stream, e, 0));
+  m_pending[k] = false;
+}
+
+void Exec::merge_all() {
+  on_main();
+  for (int k = 0; k < kSides; ++k) merge(k);
 }
 
 void* Exec::alloc(size_t bytes) {
@@ -79,8 +122,8 @@ void Exec::download(void* dst, const void* src, size_t bytes) {
   if (where == Where::cpu) {
     std::memcpy(dst, src, bytes);
   } else {
-    TV_CUDA(cudaMemcpyAsync(dst, src, bytes, cudaMemcpyDeviceToHost, stream));
-    TV_CUDA(cudaStreamSynchronize(stream));
+    TV_CUDA(cudaMemcpyAsync(dst, src, bytes, cudaMemcpyDeviceToHost, main_stream));
+    TV_CUDA(cudaStreamSynchronize(main_stream));
   }
   if (reads == Reads::log) read_log.insert(read_log.end(), static_cast<uint8_t*>(dst), static_cast<uint8_t*>(dst) + bytes);
 }
@@ -93,9 +136,9 @@ void Exec::read_many(std::initializer_list<std::pair<uint64_t*, const uint64_t*>
   ++syncs;
   for (const auto& [dst, src] : items) {
     if (where == Where::cpu) *dst = *src;
-    else TV_CUDA(cudaMemcpyAsync(dst, src, 8, cudaMemcpyDeviceToHost, stream));
+    else TV_CUDA(cudaMemcpyAsync(dst, src, 8, cudaMemcpyDeviceToHost, main_stream));
   }
-  if (where == Where::gpu) TV_CUDA(cudaStreamSynchronize(stream));
+  if (where == Where::gpu) TV_CUDA(cudaStreamSynchronize(main_stream));
   if (reads == Reads::log)
     for (const auto& [dst, src] : items)
       read_log.insert(read_log.end(), reinterpret_cast<uint8_t*>(dst), reinterpret_cast<uint8_t*>(dst) + 8);
@@ -122,7 +165,7 @@ void Exec::fill_ones(void* p, size_t bytes) {
 }
 
 void Exec::sync() {
-  if (where == Where::gpu && reads != Reads::replay) TV_CUDA(cudaStreamSynchronize(stream));
+  if (where == Where::gpu && reads != Reads::replay) TV_CUDA(cudaStreamSynchronize(main_stream));
 }
 
 uint64_t Exec::host_index(uint64_t k, uint64_t n) const {
@@ -143,12 +186,17 @@ void Exec::launch_kernel(const void* fn, uint32_t blocks, uint32_t block, const 
 }
 
 void* Exec::temp(size_t bytes) {
-  if (bytes > m_temp_bytes) {
-    if (m_temp) release(m_temp, m_temp_bytes);
-    m_temp_bytes = bytes + bytes / 4 + 256;
-    m_temp = alloc(m_temp_bytes);
+  void*& t = m_temp[m_cur];
+  size_t& have = m_temp_bytes[m_cur];
+  if (bytes > have) {
+    if (t) {
+      TV_CUDA(cudaStreamSynchronize(stream));  // the scratch may still be in use
+      release(t, have);
+    }
+    have = bytes + bytes / 4 + 256;
+    t = alloc(have);
   }
-  return m_temp;
+  return t;
 }
 
 namespace {
@@ -238,8 +286,9 @@ class Timer {
   void mark(int k) {
     // While a graph is captured, an external event record becomes a node of the graph.
     if (m_ex.where == Where::cpu) m_host[k] = std::chrono::steady_clock::now();
-    else if (m_ex.reads == Exec::Reads::replay) TV_CUDA(cudaEventRecordWithFlags(m_ev[k], m_ex.stream, cudaEventRecordExternal));
-    else TV_CUDA(cudaEventRecord(m_ev[k], m_ex.stream));
+    else if (m_ex.reads == Exec::Reads::replay)
+      TV_CUDA(cudaEventRecordWithFlags(m_ev[k], m_ex.main_stream, cudaEventRecordExternal));
+    else TV_CUDA(cudaEventRecord(m_ev[k], m_ex.main_stream));
   }
   // Stage k's time (between marks k and k + 1), after the stream has finished.
   double ms(int a, int b) {
@@ -269,6 +318,7 @@ bool run_once(Pipeline<P>& p, Timer& t) {
   p.ex.queued = p.ex.syncs = 0;
   if (p.ex.reads == Exec::Reads::replay) p.ex.read_pos = 0;
   else p.ex.read_log.clear();
+  p.ex.begin_frame();
   p.ex.zero(p.counters.get(), kCounterCount * 8);
   t.mark(0);
   stage_setup(p);
@@ -279,11 +329,16 @@ bool run_once(Pipeline<P>& p, Timer& t) {
   t.mark(3);
   stage_cull(p);
   t.mark(4);
-  if (!stage_clip(p)) return false;
+  if (!stage_clip(p)) {  // a pool overflowed: finish the branches before the run is repeated
+    p.ex.merge_all();
+    p.ex.sync();
+    return false;
+  }
   t.mark(5);
   stage_occlusion(p);
   t.mark(6);
   stage_raster(p);
+  p.ex.merge_all();
   t.mark(7);
   p.ex.sync();
   return true;
@@ -309,19 +364,19 @@ class FrameGraph {
     m_check_bytes = m_ex.read_log.size() + 8;
     m_ex.read_check = static_cast<uint8_t*>(m_ex.alloc(m_check_bytes));
     m_ex.reads = Exec::Reads::replay;
-    TV_CUDA(cudaStreamBeginCapture(m_ex.stream, cudaStreamCaptureModeRelaxed));
+    TV_CUDA(cudaStreamBeginCapture(m_ex.main_stream, cudaStreamCaptureModeRelaxed));
     bool ok = false;
     try {
       ok = run();
     } catch (...) {
       cudaGraph_t g = nullptr;
-      cudaStreamEndCapture(m_ex.stream, &g);
+      cudaStreamEndCapture(m_ex.main_stream, &g);
       if (g) cudaGraphDestroy(g);
       m_ex.reads = Exec::Reads::direct;
       throw;
     }
     m_ex.reads = Exec::Reads::direct;
-    TV_CUDA(cudaStreamEndCapture(m_ex.stream, &m_graph));
+    TV_CUDA(cudaStreamEndCapture(m_ex.main_stream, &m_graph));
     if (!ok || m_ex.read_pos != m_ex.read_log.size())
       throw std::runtime_error("cuda: the captured run did not repeat the logged run's reads");
     TV_CUDA(cudaGraphInstantiate(&m_exec, m_graph, 0));
@@ -330,8 +385,8 @@ class FrameGraph {
     m_nodes = uint32_t(nodes);
   }
   void replay() {
-    TV_CUDA(cudaGraphLaunch(m_exec, m_ex.stream));
-    TV_CUDA(cudaStreamSynchronize(m_ex.stream));
+    TV_CUDA(cudaGraphLaunch(m_exec, m_ex.main_stream));
+    TV_CUDA(cudaStreamSynchronize(m_ex.main_stream));
     std::vector<uint8_t> got(m_ex.read_log.size());
     m_ex.download(got.data(), m_ex.read_check, got.size());
     if (got != m_ex.read_log) throw std::runtime_error("cuda: a graph replay read other sizes than its capture");
@@ -357,11 +412,11 @@ void measure_launch_costs(Exec& ex, CudaResult& r) {
   cudaEvent_t a, b;
   TV_CUDA(cudaEventCreate(&a));
   TV_CUDA(cudaEventCreate(&b));
-  for (int k = 0; k < 100; ++k) k_empty<<<1, 32, 0, ex.stream>>>(d);
-  TV_CUDA(cudaEventRecord(a, ex.stream));
+  for (int k = 0; k < 100; ++k) k_empty<<<1, 32, 0, ex.main_stream>>>(d);
+  TV_CUDA(cudaEventRecord(a, ex.main_stream));
   constexpr int kLaunches = 2000;
-  for (int k = 0; k < kLaunches; ++k) k_empty<<<1, 32, 0, ex.stream>>>(d);
-  TV_CUDA(cudaEventRecord(b, ex.stream));
+  for (int k = 0; k < kLaunches; ++k) k_empty<<<1, 32, 0, ex.main_stream>>>(d);
+  TV_CUDA(cudaEventRecord(b, ex.main_stream));
   TV_CUDA(cudaEventSynchronize(b));
   float ms = 0;
   TV_CUDA(cudaEventElapsedTime(&ms, a, b));
@@ -369,9 +424,9 @@ void measure_launch_costs(Exec& ex, CudaResult& r) {
   constexpr int kTrips = 200;
   const auto t0 = std::chrono::steady_clock::now();
   for (int k = 0; k < kTrips; ++k) {
-    k_empty<<<1, 32, 0, ex.stream>>>(d);
-    TV_CUDA(cudaMemcpyAsync(&h, d, 8, cudaMemcpyDeviceToHost, ex.stream));
-    TV_CUDA(cudaStreamSynchronize(ex.stream));
+    k_empty<<<1, 32, 0, ex.main_stream>>>(d);
+    TV_CUDA(cudaMemcpyAsync(&h, d, 8, cudaMemcpyDeviceToHost, ex.main_stream));
+    TV_CUDA(cudaStreamSynchronize(ex.main_stream));
   }
   r.round_trip_us = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count() / kTrips;
   cudaEventDestroy(a);

@@ -247,9 +247,7 @@ void stage_raster(Pipeline<P>& p) {
   o.winner = a.winner;
   o.tris = p.tris.get();
   o.ids = p.ids.need(n_samples + 1);
-  // The key list ends with a sentinel no id equals, so a run's walk stops without a bound check.
-  o.area_key = p.area_key_sorted.get();
-  ex.fill_ones(p.area_key_sorted.get() + p.n_items, 8);
+  o.area_key = p.area_key_sorted.get();  // ends with a sentinel (binning)
   o.area_item = p.area_item_sorted.get();
   o.piece_offset = p.piece_offset.get();
   o.visible = p.piece_visible.get();
@@ -257,6 +255,7 @@ void stage_raster(Pipeline<P>& p) {
   o.area = p.area.need(p.f.n_triangles + 1);
   ex.zero(o.area, p.f.n_triangles * 8);
   ex.launch(k_write_id<P>, write_id<P>, n_samples, o);
+  ex.merge(2);  // the visible-area order (binning)
   ex.launch(k_fold_area<P>, fold_area<P>, p.n_items, o);
 }
 

@@ -162,16 +162,22 @@ void stage_silhouettes(Pipeline<P>& p) {
   ex.launch(k_hash_judge, hash_judge, uses, h);
   ex.exclusive_scan(h.flag, p.sil_offset.get(), uses);
 
-  // Front triangles, scanned here so that one read brings back both counts.
+  // Front triangles beside the hash (side stream 0), scanned here so that one read brings back
+  // both counts.
   FrontArgs<P> fa{p.setup.get(), p.front_flag.need(p.n_setup + 1), p.front_offset.need(p.n_setup + 1), nullptr};
+  ex.branch(0);
   ex.launch(k_front_flag<P>, front_flag<P>, p.n_setup, fa);
   ex.exclusive_scan(fa.flag, p.front_offset.get(), p.n_setup);
+  ex.on_main();
+  ex.merge(0);
 
   // sync: silhouette and front-triangle counts size the tile stage.
   ex.read_many({{&p.n_edges, p.sil_offset.get() + uses}, {&p.n_tris, p.front_offset.get() + p.n_setup}});
 
   fa.tris = p.tris.need(p.n_tris + 1);
+  ex.branch(0);
   ex.launch(k_front_build<P>, front_build<P>, p.n_setup, fa);
+  ex.on_main();
 
   h.sil_key = p.sil_key.need(p.n_edges + 1);
   h.sil_use = p.sil_use.need(p.n_edges + 1);
@@ -181,6 +187,7 @@ void stage_silhouettes(Pipeline<P>& p) {
                 p.n_edges, end_bit > 64 ? 64 : end_bit);
   EdgeArgs<P> ea{p.setup.get(), p.sil_use_sorted.get(), p.edges.need(p.n_edges + 1)};
   ex.launch(k_build_edge<P>, build_edge<P>, p.n_edges, ea);
+  ex.merge(0);
 }
 
 template void stage_silhouettes<ExactP>(Pipeline<ExactP>&);
