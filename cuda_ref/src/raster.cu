@@ -1,10 +1,12 @@
-// Raster and outputs: the samples of every piece (one thread per piece of at most
-// kSoloSamples samples in its pixel box inside the tile, then one warp per larger piece, its
-// lanes taking the samples in turn; a sample is covered under the tie rule),
-// the id buffer
-// (per sample, the last visible piece in canonical order: within a tile, the highest
-// triangle in setup order, kept by atomicMax), the per-tile sample counters, and the
-// visible area per original triangle folded in canonical order (items sorted by id).
+// Raster and outputs: the samples of every piece, a tile at a time (a block takes up to
+// kTilePieces of one tile's pieces, their edges in shared memory, and its threads take the
+// tile's samples, each testing its samples against every piece in turn: no piece's size holds
+// up a warp, one id write per sample and block); a piece with more than kTileEdges edges goes
+// to a queue, one warp each, its lanes taking runs of its pixels. A sample is covered under
+// the tie rule. Then the id buffer (per sample, the last visible piece in canonical order:
+// within a tile, the highest triangle in setup order, kept by atomicMax), the per-tile
+// sample counters, and the visible area per original triangle folded in canonical order
+// (items sorted by id).
 #include "pieces.cuh"
 
 namespace tilevis::cuda {
@@ -18,14 +20,15 @@ struct RasterArgs {
   uint32_t n_samples, width, height;
   int64_t* rows;
   uint32_t* winner;
-  uint64_t* heavy;            // queued pieces: item << 32 | piece within the item
+  uint64_t* heavy;            // queued pieces (more than kTileEdges edges)
   uint64_t* heavy_count;      // counters + kHeavyPieces
   uint64_t heavy_cap;
+  const uint32_t* item_begin;  // per tile, its first item
+  const uint64_t* unit_off;    // per tile, its first work unit (scan; the total at [n_tiles])
+  uint32_t n_tiles;
 };
 
-// Pieces with more samples than this in their pixel box go to the second pass (one warp each);
-// the rest are rastered by their item's thread.
-inline constexpr uint32_t kSoloSamples = 64;
+inline constexpr uint32_t kTileEdges = 12, kTilePieces = 64, kRasterBlock = 256;
 
 // The pixels [px0, px0 + w) x [py0, py0 + h) of a piece's bounding box inside the tile and
 // the screen.
@@ -123,24 +126,133 @@ TV_HD uint64_t raster_piece(const RasterArgs<P>& a, const PieceView<P>& v, const
   }
 }
 
-// First pass, one thread per piece: rastered here if its pixel box holds at most
-// kSoloSamples samples, else queued for the second pass.
+// A piece as a tile block holds it in shared memory.
 template <class P>
-TV_HD void raster_solo(const RasterArgs<P>& a, uint64_t p) {
+struct TilePiece {
+  typename P::Line l[kTileEdges];
+  int32_t px0, py0, px1, py1;  // its pixel box, inclusive (px1 < px0: nothing to raster here)
+  uint32_t n, tri;
+  bool vis;
+};
+
+template <class P>
+TV_HD void load_piece(const RasterArgs<P>& a, uint64_t p, TilePiece<P>& tp) {
   PEdge<P> local[kTileCap];
   const PieceView<P> v = piece_at<P>(a.src, p, local);
+  tp.px0 = 0;
+  tp.px1 = -1;
   PixelBox b;
   if (!pixel_box<P>(a, v, b)) return;
-  if (b.w * b.h * a.n_samples > kSoloSamples) {
+  if (v.n > kTileEdges) {
     const uint64_t at = bump_one(a.heavy_count, a.heavy_cap);
     if (at != ~uint64_t{0}) a.heavy[at] = p;
     return;
   }
-  const bool vis = a.visible[p] != 0;
-  const uint32_t c = uint32_t(raster_piece<P>(a, v, b, vis, HostTeam{}));
-  int64_t* row = a.rows + uint64_t(v.tile) * kTileColumns;
-  count_add(&row[kColFragments], c);
-  count_add(&row[kColSamplesCovered], vis ? c : 0);
+  for (uint32_t i = 0; i < v.n; ++i) tp.l[i] = v.e[i].line;
+  tp.n = v.n;
+  tp.px0 = int32_t(b.px0);
+  tp.py0 = int32_t(b.py0);
+  tp.px1 = int32_t(b.px0 + b.w - 1);
+  tp.py1 = int32_t(b.py0 + b.h - 1);
+  tp.tri = v.tri;
+  tp.vis = a.visible[p] != 0;
+}
+
+// A work unit: up to kTilePieces consecutive pieces of one tile, and the tile's pixels inside
+// the screen.
+struct TileUnit {
+  uint32_t tile, count;
+  uint64_t first;  // piece
+  int32_t px0, py0;
+  uint32_t w, h;
+};
+
+template <class P>
+TV_HD TileUnit tile_unit(const RasterArgs<P>& a, uint64_t u) {
+  uint32_t lo = 0, hi = a.n_tiles;  // the last tile whose first unit is <= u
+  while (hi - lo > 1) {
+    const uint32_t mid = (lo + hi) / 2;
+    if (a.unit_off[mid] <= u) lo = mid;
+    else hi = mid;
+  }
+  const TileGrid& g = a.src.grid;
+  TileUnit t;
+  t.tile = lo;
+  const uint64_t chunk = u - a.unit_off[lo];
+  const uint64_t pieces = uint64_t(a.rows[uint64_t(lo) * kTileColumns + kColPieces]);
+  t.first = a.src.piece_offset[a.item_begin[lo]] + chunk * kTilePieces;
+  t.count = uint32_t(tmin<uint64_t>(kTilePieces, pieces - chunk * kTilePieces));
+  t.px0 = int32_t((lo % g.tiles_x) * g.tile_w);
+  t.py0 = int32_t((lo / g.tiles_x) * g.tile_h);
+  t.w = tmin(g.tile_w, a.width - uint32_t(t.px0));
+  t.h = tmin(g.tile_h, a.height - uint32_t(t.py0));
+  return t;
+}
+
+// Sample `idx` of the unit's tile (pixels row by row, samples innermost) against its pieces.
+template <class P>
+TV_HD void raster_sample(const RasterArgs<P>& a, const TileUnit& t, const TilePiece<P>* pcs, uint32_t idx,
+                         uint32_t& frags, uint32_t& vis_frags) {
+  const uint32_t S = a.n_samples, sb = a.src.grid.sb;
+  const uint32_t k = S == 1 ? 0 : idx % S, pix = S == 1 ? idx : idx / S;
+  const int32_t px = t.px0 + int32_t(pix % t.w), py = t.py0 + int32_t(pix / t.w);
+  const uint32_t sxy = a.sample_xy[k];
+  const Pt s{int32_t((int64_t(px) << sb) + (sxy & 0xffffu)), int32_t((int64_t(py) << sb) + (sxy >> 16))};
+  uint32_t win = 0;
+  for (uint32_t q = 0; q < t.count; ++q) {
+    const TilePiece<P>& tp = pcs[q];
+    if (px < tp.px0 || px > tp.px1 || py < tp.py0 || py > tp.py1) continue;
+    bool in = true;
+    for (uint32_t i = 0; i < tp.n && in; ++i) in = P::in_half(tp.l[i], s);
+    if (!in) continue;
+    ++frags;
+    if (!tp.vis) continue;
+    ++vis_frags;
+    win = tmax(win, tp.tri + 1);
+  }
+  if (win) atomic_max(&a.winner[(uint64_t(py) * a.width + uint64_t(px)) * S + k], win);
+}
+
+template <class P>
+__global__ void __launch_bounds__(kRasterBlock) k_raster_tiles(RasterArgs<P> a, const uint64_t* count, uint64_t) {
+  __shared__ TilePiece<P> pcs[kTilePieces];
+  const uint64_t n = *count;
+  for (uint64_t u = blockIdx.x; u < n; u += gridDim.x) {
+    const TileUnit t = tile_unit<P>(a, u);
+    if (threadIdx.x < t.count) load_piece<P>(a, t.first + threadIdx.x, pcs[threadIdx.x]);
+    __syncthreads();
+    uint32_t frags = 0, vis_frags = 0;
+    for (uint32_t idx = threadIdx.x; idx < t.w * t.h * a.n_samples; idx += blockDim.x)
+      raster_sample<P>(a, t, pcs, idx, frags, vis_frags);
+    int64_t* row = a.rows + uint64_t(t.tile) * kTileColumns;
+    count_add(&row[kColFragments], frags);
+    count_add(&row[kColSamplesCovered], vis_frags);
+    __syncthreads();
+  }
+}
+
+template <class P>
+void raster_unit_host(const RasterArgs<P>& a, uint64_t u) {
+  static thread_local std::vector<TilePiece<P>> pcs(kTilePieces);
+  const TileUnit t = tile_unit<P>(a, u);
+  for (uint32_t q = 0; q < t.count; ++q) load_piece<P>(a, t.first + q, pcs[q]);
+  uint32_t frags = 0, vis_frags = 0;
+  for (uint32_t idx = 0; idx < t.w * t.h * a.n_samples; ++idx) raster_sample<P>(a, t, pcs.data(), idx, frags, vis_frags);
+  int64_t* row = a.rows + uint64_t(t.tile) * kTileColumns;
+  count_add(&row[kColFragments], frags);
+  count_add(&row[kColSamplesCovered], vis_frags);
+}
+
+// Work units per tile: its pieces in chunks of kTilePieces.
+struct UnitArgs {
+  const int64_t* rows;
+  uint32_t* units;
+};
+TV_HD void tile_units(const UnitArgs& a, uint64_t t) {
+  a.units[t] = uint32_t((uint64_t(a.rows[t * kTileColumns + kColPieces]) + kTilePieces - 1) / kTilePieces);
+}
+__global__ void k_tile_units(UnitArgs a, uint64_t n) {
+  TV_GRID_LOOP(i, n) tile_units(a, i);
 }
 
 // Second pass, one team per queued piece: the lanes take its samples in turn.
@@ -203,10 +315,6 @@ TV_HD void fold_area(const OutArgs<P>& a, uint64_t q) {
 }
 
 template <class P>
-__global__ void k_raster(RasterArgs<P> a, uint64_t n) {
-  TV_GRID_LOOP(i, n) raster_solo<P>(a, i);
-}
-template <class P>
 __global__ void k_raster_heavy(RasterArgs<P> a, const uint64_t* count, uint64_t cap) {
   const uint64_t n = *count < cap ? *count : cap;
   TV_WARP_LOOP(w, n) raster_heavy<P>(a, w, WarpTeam{});
@@ -240,7 +348,13 @@ void stage_raster(Pipeline<P>& p) {
   a.heavy_cap = p.n_pieces;
   a.heavy = p.heavy.need(p.n_pieces + 1);
   ex.zero(a.heavy_count, 8);
-  ex.launch(k_raster<P>, raster_solo<P>, p.n_pieces, a);
+  a.item_begin = p.tile_item_begin.get();
+  a.n_tiles = p.n_tiles;
+  uint32_t* units = p.tile_units.need(p.n_tiles + 1);
+  ex.launch(k_tile_units, tile_units, p.n_tiles, UnitArgs{a.rows, units});
+  ex.exclusive_scan(units, p.unit_off.need(p.n_tiles + 1), p.n_tiles);
+  a.unit_off = p.unit_off.get();
+  ex.launch_dyn(k_raster_tiles<P>, raster_unit_host<P>, a.unit_off + p.n_tiles, ~uint64_t{0}, a, kRasterBlock);
   ex.launch_dyn(k_raster_heavy<P>, raster_heavy_host<P>, a.heavy_count, a.heavy_cap, a);
 
   OutArgs<P> o{};
