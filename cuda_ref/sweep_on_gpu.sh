@@ -133,7 +133,7 @@ if os.path.exists(ncu):
     for k, v in sorted(per.items(), key=lambda kv: -kv[1])[:25]:
         print(f"  {v:9.1f}  {k}")
     print(f"  {sum(per.values()):9.1f}  total")
-stages = ["setup", "silhouettes", "binning", "cull", "clip", "occlusion", "raster"]
+stages = ["setup", "silhouettes", "binning", "cull", "clip", "occlusion", "raster", "unclipped_pieces"]
 print("run (ms)                  graph  " + " ".join(f"{s[:7]:>7}" for s in stages) + "   stream   ops syncs")
 for name, d in runs.items():
     st = d["stage_ms"]

@@ -31,6 +31,7 @@ struct ClipArgs {
   uint32_t* clip_items;
   uint32_t* item_slot;
   uint64_t* slot_poly;  // edge offset << 32 | edge count
+  uint32_t* slot_item;  // the item of each used slot; kNone in reserved slots left unused
   uint64_t slot_cap;
   PEdge<P>* pool;
   uint64_t pool_cap;
@@ -111,6 +112,8 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team, uint64_t* stag
   const uint64_t poly_at = base == ~uint64_t{0} ? base : take(kTileCap);
   if (poly_at == ~uint64_t{0}) {
     if (lane == 0) atomic_add(&a.counters[kClipOverflow], 1);
+    if (base != ~uint64_t{0})
+      for (uint64_t k = lane; k < want; k += Team::kSize) a.slot_item[base + k] = kNone;
     return;
   }
   uint64_t* const slots = stage && want <= kStageSlots ? stage : a.slot_poly + base;
@@ -166,8 +169,10 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team, uint64_t* stag
     team.sync();
     count = n + appended;
   }
-  if (slots != a.slot_poly + base)
-    for (uint32_t k = lane; k < count; k += Team::kSize) a.slot_poly[base + k] = slots[k];
+  for (uint64_t k = lane; k < want; k += Team::kSize) {
+    if (k < count && slots != a.slot_poly + base) a.slot_poly[base + k] = slots[k];
+    a.slot_item[base + k] = k < count ? j : kNone;
+  }
   team.sync();
   count_add(&a.rows[uint64_t(tile) * kTileColumns + kColClips], splits);
   count_add(&a.counters[kFloatAnomalies], anomalies);
@@ -202,8 +207,7 @@ __global__ void k_clip_items(ClipArgs<P> a, const uint64_t* count, uint64_t cap)
   for (uint64_t w = warp; w < n; w += warps) clip_item<P>(a, w, WarpTeam{}, stage[threadIdx.x / 32]);
 }
 
-// After clipping: the pieces of every item, their prefix sum (the flat piece index space of
-// occlusion and raster), per-tile piece counts and the largest piece count of a triangle.
+// After clipping: per-tile piece counts and the largest piece count of a triangle.
 struct PieceArgs {
   const uint32_t* piece_count;
   const uint64_t* item_key;
@@ -218,18 +222,6 @@ TV_HD void count_pieces(const PieceArgs& a, uint64_t j) {
 }
 __global__ void k_count_pieces(PieceArgs a, uint64_t n) {
   TV_GRID_LOOP(i, n) count_pieces(a, i);
-}
-
-// The piece -> item map of the flat piece index space.
-struct PieceItemArgs {
-  const uint64_t* piece_offset;
-  uint32_t* piece_item;
-};
-TV_HD void map_pieces(const PieceItemArgs& a, uint64_t j) {
-  for (uint64_t p = a.piece_offset[j]; p < a.piece_offset[j + 1]; ++p) a.piece_item[p] = uint32_t(j);
-}
-__global__ void k_map_pieces(PieceItemArgs a, uint64_t n) {
-  TV_GRID_LOOP(i, n) map_pieces(a, i);
 }
 
 }  // namespace
@@ -256,6 +248,7 @@ bool stage_clip(Pipeline<P>& p) {
   a.clip_items = p.clip_items.need(ni + 1);
   a.item_slot = p.item_slot.need(ni + 1);
   a.slot_poly = p.slot_poly.need(p.caps.clip_slots);
+  a.slot_item = p.slot_item.need(p.caps.clip_slots);
   a.slot_cap = p.caps.clip_slots;
   a.pool = p.clip_edges.need(p.caps.clip_edges);
   a.pool_cap = p.caps.clip_edges;
@@ -276,13 +269,11 @@ bool stage_clip(Pipeline<P>& p) {
     TV_CUDA(cudaGetLastError());
   }
   ex.launch(k_count_pieces, count_pieces, ni, PieceArgs{p.piece_count.get(), a.item_key, a.rows, a.counters});
-  ex.exclusive_scan(p.piece_count.get(), p.piece_offset.need(ni + 1), ni);
 
-  // sync: overflow counters and the piece count, in one copy.
-  uint64_t c[kCounterCount];
-  ex.copy(p.counters.get() + kPieces, p.piece_offset.get() + ni, 8);
+  // sync: the overflow counters (those before kFloatAnomalies: only setup, cull and clip, all
+  // finished here, write them; the unclipped pieces' occlusion may be running beside).
+  uint64_t c[kFloatAnomalies];
   ex.download(c, p.counters.get(), sizeof(c));
-  p.n_pieces = c[kPieces];
   bool ok = true;
   Capacities& caps = p.caps;
   auto grow = [&](uint64_t& cap, uint64_t used) {
@@ -300,8 +291,6 @@ bool stage_clip(Pipeline<P>& p) {
     if (c[kReserveOverflow]) caps.slot_factor *= 4;  // bounded: reservations never exceed piece_bound(c)
   }
   if (caps.clip_edges >= (uint64_t{1} << 32)) throw std::runtime_error("cuda: clipping needs more than 2^32 polygon edges");
-  if (ok)
-    ex.launch(k_map_pieces, map_pieces, ni, PieceItemArgs{p.piece_offset.get(), p.piece_item.need(p.n_pieces + 1)});
   return ok;
 }
 

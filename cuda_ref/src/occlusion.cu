@@ -1,8 +1,10 @@
-// Occlusion (SVGPU §3.3), one thread per piece for the first kSoloOccluders entries of its
-// list, then one warp per piece still undecided, its lanes judging 32 entries at a time: the centroid of the piece's first three
-// vertices against the tile's original opaque triangles, nearest first (stable by z_min),
-// stopping at the first that hides it or at the first wholly behind it. Visible pieces get
-// their exact area (doubled area terms rounded once each, summed in fan order).
+// Occlusion (SVGPU §3.3), in two passes over pieces (pieces.cuh: the unclipped items' beside
+// the clipping, then the clipped ones'): the centroid of the piece's first three vertices
+// against the tile's original opaque triangles, nearest first (stable by z_min), stopping at
+// the first that hides it or at the first wholly behind it; one thread per piece for the first
+// kSoloOccluders entries of its list, then one warp per piece still undecided, its lanes
+// judging 32 entries at a time. Visible pieces get their exact area (doubled area terms
+// rounded once each, summed in fan order).
 #include "pieces.cuh"
 
 namespace tilevis::cuda {
@@ -26,8 +28,9 @@ struct OccArgs {
   const OccRec* bin_occ;
   const uint32_t* bin_begin;
   const uint32_t* bin_count;
+  uint64_t base;              // the pass's first piece id (pieces.cuh)
   uint64_t* heavy;            // queued pieces
-  uint64_t* heavy_count;      // counters + kHeavyPieces
+  uint64_t* heavy_count;
   uint64_t heavy_cap;
 };
 
@@ -111,7 +114,8 @@ TV_HD void occ_finish(const OccArgs<P>& a, uint64_t p, const PieceView<P>& v, bo
 // First pass, one thread per piece over the first kSoloOccluders entries of its list; a piece
 // still undecided is queued for the second pass.
 template <class P>
-TV_HD void occlude_piece(const OccArgs<P>& a, uint64_t p) {
+TV_HD void occlude_piece(const OccArgs<P>& a, uint64_t i) {
+  const uint64_t p = a.base + i;
   PEdge<P> local[kTileCap];
   OccQuery<P> o;
   if (!occ_query<P>(a, p, local, o)) {
@@ -150,7 +154,8 @@ TV_HD void occlude_heavy_host(const OccArgs<P>& a, uint64_t h) {
 }
 
 template <class P>
-__global__ void k_occlude(OccArgs<P> a, uint64_t n) {
+__global__ void k_occlude(OccArgs<P> a, const uint64_t* count, uint64_t cap) {
+  const uint64_t n = *count < cap ? *count : cap;
   TV_GRID_LOOP(i, n) occlude_piece<P>(a, i);
 }
 template <class P>
@@ -162,15 +167,15 @@ __global__ void k_occlude_heavy(OccArgs<P> a, const uint64_t* count, uint64_t ca
 }  // namespace
 
 template <class P>
-void stage_occlusion(Pipeline<P>& p) {
+void stage_occlusion(Pipeline<P>& p, Pass pass) {
   OccArgs<P> a{};
   a.src = piece_source(p);
   a.occ = p.occ_rec.get();
   a.item_begin = p.tile_item_begin.get();
   a.occ_count = p.tile_occ_count.get();
   a.rows = p.tile_rows.get();
-  a.visible = p.piece_visible.need(p.n_pieces + 1);
-  a.area = p.piece_area.need(p.n_pieces + 1);
+  a.visible = p.piece_visible.need(p.n_items + p.caps.clip_slots + 1);
+  a.area = p.piece_area.need(p.n_items + p.caps.clip_slots + 1);
   a.counters = p.counters.get();
   const double s = double(1u << p.f.subpixel_bits);
   a.area_scale = 2.0 * s * s;
@@ -183,16 +188,17 @@ void stage_occlusion(Pipeline<P>& p) {
     a.bin_begin = p.obin_begin.get();
     a.bin_count = p.obin_count.get();
   }
-  a.heavy_count = p.counters.get() + kHeavyPieces;
-  a.heavy_cap = p.n_pieces;
-  a.heavy = p.heavy.need(p.n_pieces + 1);
+  const PassRange r = pass_range(p, pass);
+  a.base = r.base;
+  a.heavy = r.heavy;
+  a.heavy_count = r.heavy_count;
+  a.heavy_cap = r.cap;
   p.ex.zero(a.heavy_count, 8);
-  p.ex.merge(1);  // the occluder lists (binning)
-  p.ex.launch(k_occlude<P>, occlude_piece<P>, p.n_pieces, a);
+  p.ex.launch_dyn(k_occlude<P>, occlude_piece<P>, r.count, r.cap, a);
   p.ex.launch_dyn(k_occlude_heavy<P>, occlude_heavy_host<P>, a.heavy_count, a.heavy_cap, a);
 }
 
-template void stage_occlusion<ExactP>(Pipeline<ExactP>&);
-template void stage_occlusion<FloatP>(Pipeline<FloatP>&);
+template void stage_occlusion<ExactP>(Pipeline<ExactP>&, Pass);
+template void stage_occlusion<FloatP>(Pipeline<FloatP>&, Pass);
 
 }  // namespace tilevis::cuda

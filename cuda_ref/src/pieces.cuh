@@ -1,48 +1,56 @@
-// The flat piece index space shared by occlusion and raster: item j owns the pieces
-// piece_offset[j] <= p < piece_offset[j + 1] (piece_item[p] = j). An item without candidates
-// has one piece, its triangle clipped to the tile, recomputed here rather than stored;
-// clipped items keep theirs in the clip pools.
+// The pieces occlusion and raster work on, by id: an item (tile, triangle) without candidates
+// has one piece, its triangle clipped to the tile (recomputed here rather than stored), with
+// id = the item's index; a clipped item's pieces are its piece slots in the clip pools, with
+// id = n_items + slot. The two kinds are visited by separate passes: the unclipped items'
+// as soon as culling is done (beside the clipping), the slots after it.
 #pragma once
 
 #include "pipeline.cuh"
 
 namespace tilevis::cuda {
 
+enum class Pass { unclipped, clipped };
+
 template <class P>
 struct PieceSource {
   const TileTri<P>* tris;
   const uint64_t* item_key;
   const uint32_t* item_tri;
-  const uint64_t* piece_offset;
-  const uint32_t* piece_item;
   const uint32_t* cand_count;
-  const uint32_t* item_slot;
+  const uint32_t* piece_count;
   const uint64_t* slot_poly;
+  const uint32_t* slot_item;  // per slot, its item (kNone: reserved, unused)
   const PEdge<P>* pool;
   TileGrid grid;
+  uint64_t n_items;
 };
 
 template <class P>
 struct PieceView {
   const PEdge<P>* e;
-  uint32_t n;
+  uint32_t n;  // 0: no piece under this id
   uint32_t item, tile, tri;
 };
 
 // `local` must hold kTileCap edges.
 template <class P>
-TV_HD inline PieceView<P> piece_at(const PieceSource<P>& s, uint64_t p, PEdge<P>* local) {
-  const uint32_t j = s.piece_item[p];
-  PieceView<P> v;
-  v.item = j;
-  v.tile = uint32_t(s.item_key[j]);
-  v.tri = s.item_tri[j];
-  if (s.cand_count[j] == 0) {
+TV_HD inline PieceView<P> piece_at(const PieceSource<P>& s, uint64_t id, PEdge<P>* local) {
+  PieceView<P> v{local, 0, 0, 0, 0};
+  uint64_t sp = 0;
+  if (id < s.n_items) {
+    v.item = uint32_t(id);
+    if (s.cand_count[id] != 0 || s.piece_count[id] == 0) return v;
+  } else {
+    sp = s.slot_poly[id - s.n_items];
+    v.item = s.slot_item[id - s.n_items];
+    if (v.item == kNone) return v;
+  }
+  v.tile = uint32_t(s.item_key[v.item]);
+  v.tri = s.item_tri[v.item];
+  if (id < s.n_items) {
     bool overflow = false;
     v.n = tile_polygon<P>(s.tris[v.tri], s.grid.rect(v.tile), local, overflow);
-    v.e = local;
   } else {
-    const uint64_t sp = s.slot_poly[s.item_slot[j] + (p - s.piece_offset[j])];
     v.e = s.pool + (sp >> 32);
     v.n = uint32_t(sp);
   }
@@ -55,14 +63,33 @@ PieceSource<P> piece_source(Pipeline<P>& p) {
   s.tris = p.tris.get();
   s.item_key = p.item_key_sorted.get();
   s.item_tri = p.item_tri_sorted.get();
-  s.piece_offset = p.piece_offset.get();
-  s.piece_item = p.piece_item.get();
   s.cand_count = p.cand_count.get();
-  s.item_slot = p.item_slot.get();
+  s.piece_count = p.piece_count.get();
   s.slot_poly = p.slot_poly.get();
+  s.slot_item = p.slot_item.get();
   s.pool = p.clip_edges.get();
   s.grid = p.grid;
+  s.n_items = p.n_items;
   return s;
+}
+
+// A pass's pieces: ids [base, base + *count), at most cap of them; its queue of pieces for
+// warps (heavy) and the queue's counter.
+struct PassRange {
+  uint64_t base;
+  const uint64_t* count;
+  uint64_t cap;
+  uint64_t* heavy;
+  uint64_t* heavy_count;
+};
+
+template <class P>
+PassRange pass_range(Pipeline<P>& p, Pass pass) {
+  if (pass == Pass::unclipped)
+    return {0, p.tri_tiles_off.get() + p.n_tris, p.n_items, p.heavy_unclipped.need(p.n_items + 1),
+            p.counters.get() + kHeavyUnclipped};
+  return {p.n_items, p.counters.get() + kSlotsUsed, p.caps.clip_slots, p.heavy_clipped.need(p.caps.clip_slots + 1),
+          p.counters.get() + kHeavyClipped};
 }
 
 }  // namespace tilevis::cuda

@@ -10,7 +10,7 @@
 #include <cub/device/device_radix_sort.cuh>
 #include <cub/device/device_scan.cuh>
 
-#include "pipeline.cuh"
+#include "pieces.cuh"
 
 namespace tilevis::cuda {
 
@@ -270,8 +270,11 @@ void Exec::sort_pairs(const uint64_t* keys_in, uint64_t* keys_out, const uint32_
 
 namespace {
 
+// The main chain's stages (marks 0..7), then the unclipped pieces' occlusion and raster, which
+// run beside clipping on a side stream (marks 8, 9) and are not part of the total.
 const char* const kStages[] = {"setup", "silhouettes", "binning", "cull", "clip", "occlusion", "raster"};
 constexpr int kStageCount = 7;
+constexpr const char* kBesideClip = "unclipped_pieces";
 
 class Timer {
  public:
@@ -283,12 +286,13 @@ class Timer {
     for (auto& e : m_ev)
       if (e) cudaEventDestroy(e);
   }
+  // Mark k on the stream work is queued on now (the main stream, or a side stream in a branch).
   void mark(int k) {
     // While a graph is captured, an external event record becomes a node of the graph.
     if (m_ex.where == Where::cpu) m_host[k] = std::chrono::steady_clock::now();
     else if (m_ex.reads == Exec::Reads::replay)
-      TV_CUDA(cudaEventRecordWithFlags(m_ev[k], m_ex.main_stream, cudaEventRecordExternal));
-    else TV_CUDA(cudaEventRecord(m_ev[k], m_ex.main_stream));
+      TV_CUDA(cudaEventRecordWithFlags(m_ev[k], m_ex.stream, cudaEventRecordExternal));
+    else TV_CUDA(cudaEventRecord(m_ev[k], m_ex.stream));
   }
   // Stage k's time (between marks k and k + 1), after the stream has finished.
   double ms(int a, int b) {
@@ -302,8 +306,8 @@ class Timer {
 
  private:
   Exec& m_ex;
-  cudaEvent_t m_ev[kStageCount + 1] = {};
-  std::chrono::steady_clock::time_point m_host[kStageCount + 1];
+  cudaEvent_t m_ev[kStageCount + 3] = {};
+  std::chrono::steady_clock::time_point m_host[kStageCount + 3];
 };
 
 double median(std::vector<double> v) {
@@ -329,15 +333,24 @@ bool run_once(Pipeline<P>& p, Timer& t) {
   t.mark(3);
   stage_cull(p);
   t.mark(4);
+  raster_begin(p);
+  p.ex.merge(1);  // the occluder lists (binning)
+  p.ex.branch(0);
+  t.mark(kStageCount + 1);
+  stage_occlusion(p, Pass::unclipped);
+  stage_raster(p, Pass::unclipped);
+  t.mark(kStageCount + 2);
+  p.ex.on_main();
   if (!stage_clip(p)) {  // a pool overflowed: finish the branches before the run is repeated
     p.ex.merge_all();
     p.ex.sync();
     return false;
   }
   t.mark(5);
-  stage_occlusion(p);
+  stage_occlusion(p, Pass::clipped);
   t.mark(6);
-  stage_raster(p);
+  stage_raster(p, Pass::clipped);
+  stage_outputs(p);
   p.ex.merge_all();
   t.mark(7);
   p.ex.sync();
@@ -465,17 +478,19 @@ CudaResult run(const trace::Frame& frame, const CudaConfig& cfg) {
   // Median stage and total times of `runs` runs of `one` (false: not timed, run again).
   auto timed = [&](auto&& one, std::vector<StageTime>& stage_ms, double& total_ms) {
     std::vector<std::vector<double>> stage(kStageCount);
-    std::vector<double> total;
+    std::vector<double> total, beside;
     for (uint32_t k = 0; k < runs;) {
       if (!one()) {  // cannot happen with learned capacities, but never time a partial run
         ++r.retries;
         continue;
       }
       for (int s = 0; s < kStageCount; ++s) stage[s].push_back(timer.ms(s, s + 1));
+      beside.push_back(timer.ms(kStageCount + 1, kStageCount + 2));
       total.push_back(timer.ms(0, kStageCount));
       ++k;
     }
     for (int s = 0; s < kStageCount; ++s) stage_ms.push_back({kStages[s], median(stage[s])});
+    stage_ms.push_back({kBesideClip, median(beside)});
     total_ms = median(total);
   };
   // The stream: each stage's work queued as it comes, the host reading sizes between stages.

@@ -42,8 +42,8 @@ enum Counter : uint32_t {
   kFloatAnomalies,  // float: polygons that outgrew their bound
   kVisibleTriangles,
   kMaxTilePieces,
-  kPieces,          // copy of the piece total, so one copy brings back every count
-  kHeavyPieces,     // occlusion, then raster: pieces queued for a warp each
+  kHeavyUnclipped,  // occlusion, then raster: pieces queued for a warp each (two passes)
+  kHeavyClipped,
   kCounterCount
 };
 
@@ -173,14 +173,10 @@ struct Pipeline {
   Buf<uint64_t> slot_poly;         // piece slot: edge offset << 32 | edge count
   Buf<PEdge<P>> clip_edges;
 
-  // Pieces.
-  Buf<uint64_t> piece_offset;      // scan of piece_count (n_items + 1)
-  Buf<uint32_t> piece_item;        // per piece, its item
-  uint64_t n_pieces = 0;
+  // Pieces (pieces.cuh): per piece id, n_items + clip_slots of them.
+  Buf<uint32_t> slot_item;         // per piece slot, its item (kNone: unused)
   Buf<uint8_t> piece_visible;
-  Buf<uint64_t> heavy;             // occlusion, then raster: pieces queued for a warp each
-  Buf<uint32_t> tile_units;        // raster: work units per tile
-  Buf<uint64_t> unit_off;          // their scan
+  Buf<uint64_t> heavy_unclipped, heavy_clipped;  // occlusion, then raster: pieces for a warp each
   Buf<double> piece_area;
 
   // Outputs.
@@ -194,11 +190,11 @@ struct Pipeline {
                     &tedge_id_sorted, &tile_item_begin, &tile_edge_begin, &tile_occ_count, &area_item,
                     &area_item_sorted, &piece_count, &cand_count, &cand_cursor, &cand_offset,
                     &cand_edges, &cand_scratch, &clip_items, &item_slot, &winner, &indices, &tri_draw, &sample_xy,
-                    &obin_cnt, &obin_val, &obin_val_sorted, &obin_begin, &obin_count, &piece_item, &tile_units})
+                    &obin_cnt, &obin_val, &obin_val_sorted, &obin_begin, &obin_count, &slot_item})
       b->bind(&e);
     for (auto* b : {&fan_offset, &use_key, &sil_offset, &sil_key, &sil_key_sorted,
                     &front_offset, &tri_tiles_off, &edge_tiles_off, &item_key, &item_key_sorted, &occ_key,
-                    &occ_key_sorted, &tedge_key, &tedge_key_sorted, &area_key, &area_key_sorted, &deep, &cands, &slot_poly, &piece_offset, &counters, &heavy, &unit_off,
+                    &occ_key_sorted, &tedge_key, &tedge_key_sorted, &area_key, &area_key_sorted, &deep, &cands, &slot_poly, &counters, &heavy_unclipped, &heavy_clipped,
                     &obin_off, &obin_key, &obin_key_sorted})
       b->bind(&e);
     vertices.bind(&e);
@@ -254,9 +250,16 @@ template <class P>
 void stage_cull(Pipeline<P>& p);
 template <class P>
 bool stage_clip(Pipeline<P>& p);  // false: a buffer overflowed (capacities grown; run again)
+// Occlusion and raster run once per kind of piece (pieces.cuh): the unclipped items' pieces on
+// side stream 0 as soon as culling is done (beside the clipping), the clipped ones' after it.
+enum class Pass;
 template <class P>
-void stage_occlusion(Pipeline<P>& p);
+void stage_occlusion(Pipeline<P>& p, Pass pass);
 template <class P>
-void stage_raster(Pipeline<P>& p);
+void raster_begin(Pipeline<P>& p);  // clears the id buffer, before either raster pass
+template <class P>
+void stage_raster(Pipeline<P>& p, Pass pass);
+template <class P>
+void stage_outputs(Pipeline<P>& p);  // after both passes: the id raster and the visible areas
 
 }  // namespace tilevis::cuda
