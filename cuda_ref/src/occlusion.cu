@@ -32,6 +32,8 @@ struct OccArgs {
   uint64_t* heavy;            // queued pieces
   uint64_t* heavy_count;
   uint64_t heavy_cap;
+  const uint64_t* unit_off;   // unclipped pass by tiles: per tile, its first work unit (scan)
+  uint32_t n_tiles;
 };
 
 // Occluders a piece's own thread judges; a longer search goes on in a warp. Exact: all of
@@ -111,11 +113,10 @@ TV_HD void occ_finish(const OccArgs<P>& a, uint64_t p, const PieceView<P>& v, bo
   if (!hidden) a.area[p] = ddiv(doubled_area<P>(v.e, v.n), a.area_scale);
 }
 
-// First pass, one thread per piece over the first kSoloOccluders entries of its list; a piece
-// still undecided is queued for the second pass.
+// First pass, one thread per piece over the first `solo` entries of its list; a piece still
+// undecided is queued for the second pass.
 template <class P>
-TV_HD void occlude_piece(const OccArgs<P>& a, uint64_t i) {
-  const uint64_t p = a.base + i;
+TV_HD void occlude_first(const OccArgs<P>& a, uint64_t p, uint32_t solo) {
   PEdge<P> local[kTileCap];
   OccQuery<P> o;
   if (!occ_query<P>(a, p, local, o)) {
@@ -124,7 +125,7 @@ TV_HD void occlude_piece(const OccArgs<P>& a, uint64_t i) {
   }
   const TileTri<P>& tt = a.src.tris[o.v.tri];
   uint32_t tests = 0;
-  const uint32_t solo = tmin(o.n_occ, kSoloOccluders<P>);
+  solo = tmin(o.n_occ, solo);
   const int r = scan_occluders<P>(o.q, o.qx, o.qy, tt, a.src.tris, o.occ, 0, solo, tests, HostTeam{});
   if (r < 0 && solo < o.n_occ) {
     count_add(&a.rows[uint64_t(o.v.tile) * kTileColumns + kColOcclusionTests], tests);
@@ -151,6 +152,86 @@ TV_HD void occlude_heavy(const OccArgs<P>& a, uint64_t h, Team team) {
 template <class P>
 TV_HD void occlude_heavy_host(const OccArgs<P>& a, uint64_t h) {
   occlude_heavy<P>(a, h, HostTeam{});
+}
+
+template <class P>
+TV_HD void occlude_piece(const OccArgs<P>& a, uint64_t i) {
+  occlude_first<P>(a, a.base + i, kSoloOccluders<P>);
+}
+
+// The unclipped pass a tile at a time (finer bins off): a block takes up to kOccBlock
+// consecutive items of one tile, a thread each, and streams the tile's occluder list through
+// shared memory kOccStage records at a time, every thread going on with the sequential search
+// of its piece over the staged records until its verdict.
+inline constexpr uint32_t kOccBlock = 128, kOccStage = 256;
+
+struct TileChunk {
+  uint32_t tile, count;
+  uint64_t first;  // item
+};
+
+template <class P>
+TV_HD TileChunk tile_chunk(const OccArgs<P>& a, uint64_t u) {
+  uint32_t lo = 0, hi = a.n_tiles;  // the last tile whose first unit is <= u
+  while (hi - lo > 1) {
+    const uint32_t mid = (lo + hi) / 2;
+    if (a.unit_off[mid] <= u) lo = mid;
+    else hi = mid;
+  }
+  const uint64_t chunk = u - a.unit_off[lo], items = uint64_t(a.rows[uint64_t(lo) * kTileColumns + kColTriangles]);
+  return {lo, uint32_t(tmin<uint64_t>(kOccBlock, items - chunk * kOccBlock)), a.item_begin[lo] + chunk * kOccBlock};
+}
+
+template <class P>
+__global__ void __launch_bounds__(kOccBlock) k_occlude_tiles(OccArgs<P> a, const uint64_t* count, uint64_t) {
+  __shared__ OccRec staged[kOccStage];
+  const uint64_t n = *count;
+  for (uint64_t u = blockIdx.x; u < n; u += gridDim.x) {
+    const TileChunk c = tile_chunk<P>(a, u);
+    const uint64_t j = c.first + threadIdx.x;
+    PEdge<P> local[kTileCap];
+    OccQuery<P> o;
+    bool open = false;
+    if (threadIdx.x < c.count) {
+      open = occ_query<P>(a, j, local, o);
+      if (!open) a.visible[j] = 0;
+    }
+    const bool mine = open;
+    uint32_t tests = 0;
+    int r = -1;
+    const OccRec* list = a.occ + a.item_begin[c.tile];
+    const uint32_t n_occ = a.occ_count[c.tile];
+    for (uint32_t s0 = 0; s0 < n_occ; s0 += kOccStage) {
+      if (!__syncthreads_or(open)) break;
+      const uint32_t m = tmin(kOccStage, n_occ - s0);
+      for (uint32_t k = threadIdx.x; k < m; k += blockDim.x) staged[k] = list[s0 + k];
+      __syncthreads();
+      if (open) {
+        r = scan_occluders<P>(o.q, o.qx, o.qy, a.src.tris[o.v.tri], a.src.tris, staged, 0, m, tests, HostTeam{});
+        open = r < 0;
+      }
+    }
+    __syncthreads();  // the stage is refilled by the next unit
+    if (mine) occ_finish<P>(a, j, o.v, r > 0, tests);
+  }
+}
+
+template <class P>
+void occlude_unit_host(const OccArgs<P>& a, uint64_t u) {
+  const TileChunk c = tile_chunk<P>(a, u);
+  for (uint32_t k = 0; k < c.count; ++k) occlude_first<P>(a, c.first + k, 0xffffffffu);
+}
+
+// Work units per tile: its items in chunks of kOccBlock.
+struct OccUnitArgs {
+  const int64_t* rows;
+  uint32_t* units;
+};
+TV_HD void occ_units(const OccUnitArgs& a, uint64_t t) {
+  a.units[t] = uint32_t((uint64_t(a.rows[t * kTileColumns + kColTriangles]) + kOccBlock - 1) / kOccBlock);
+}
+__global__ void k_occ_units(OccUnitArgs a, uint64_t n) {
+  TV_GRID_LOOP(i, n) occ_units(a, i);
 }
 
 template <class P>
@@ -193,9 +274,19 @@ void stage_occlusion(Pipeline<P>& p, Pass pass) {
   a.heavy = r.heavy;
   a.heavy_count = r.heavy_count;
   a.heavy_cap = r.cap;
-  p.ex.zero(a.heavy_count, 8);
-  p.ex.launch_dyn(k_occlude<P>, occlude_piece<P>, r.count, r.cap, a);
-  p.ex.launch_dyn(k_occlude_heavy<P>, occlude_heavy_host<P>, a.heavy_count, a.heavy_cap, a);
+  Exec& ex = p.ex;
+  if (pass == Pass::unclipped && p.obins_x * p.obins_y == 1) {
+    uint32_t* units = p.occ_units.need(p.n_tiles + 1);
+    ex.launch(k_occ_units, occ_units, p.n_tiles, OccUnitArgs{a.rows, units});
+    ex.exclusive_scan(units, p.occ_unit_off.need(p.n_tiles + 1), p.n_tiles);
+    a.unit_off = p.occ_unit_off.get();
+    a.n_tiles = p.n_tiles;
+    ex.launch_dyn(k_occlude_tiles<P>, occlude_unit_host<P>, a.unit_off + p.n_tiles, ~uint64_t{0}, a, kOccBlock);
+    return;
+  }
+  ex.zero(a.heavy_count, 8);
+  ex.launch_dyn(k_occlude<P>, occlude_piece<P>, r.count, r.cap, a);
+  ex.launch_dyn(k_occlude_heavy<P>, occlude_heavy_host<P>, a.heavy_count, a.heavy_cap, a);
 }
 
 template void stage_occlusion<ExactP>(Pipeline<ExactP>&, Pass);

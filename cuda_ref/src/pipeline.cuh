@@ -177,6 +177,8 @@ struct Pipeline {
   Buf<uint32_t> slot_item;         // per piece slot, its item (kNone: unused)
   Buf<uint8_t> piece_visible;
   Buf<uint64_t> heavy_unclipped, heavy_clipped;  // occlusion, then raster: pieces for a warp each
+  Buf<uint32_t> occ_units;         // occlusion by tiles: work units per tile, and their scan
+  Buf<uint64_t> occ_unit_off;
   Buf<double> piece_area;
 
   // Outputs.
@@ -190,11 +192,11 @@ struct Pipeline {
                     &tedge_id_sorted, &tile_item_begin, &tile_edge_begin, &tile_occ_count, &area_item,
                     &area_item_sorted, &piece_count, &cand_count, &cand_cursor, &cand_offset,
                     &cand_edges, &cand_scratch, &clip_items, &item_slot, &winner, &indices, &tri_draw, &sample_xy,
-                    &obin_cnt, &obin_val, &obin_val_sorted, &obin_begin, &obin_count, &slot_item})
+                    &obin_cnt, &obin_val, &obin_val_sorted, &obin_begin, &obin_count, &slot_item, &occ_units})
       b->bind(&e);
     for (auto* b : {&fan_offset, &use_key, &sil_offset, &sil_key, &sil_key_sorted,
                     &front_offset, &tri_tiles_off, &edge_tiles_off, &item_key, &item_key_sorted, &occ_key,
-                    &occ_key_sorted, &tedge_key, &tedge_key_sorted, &area_key, &area_key_sorted, &deep, &cands, &slot_poly, &counters, &heavy_unclipped, &heavy_clipped,
+                    &occ_key_sorted, &tedge_key, &tedge_key_sorted, &area_key, &area_key_sorted, &deep, &cands, &slot_poly, &counters, &heavy_unclipped, &heavy_clipped, &occ_unit_off,
                     &obin_off, &obin_key, &obin_key_sorted})
       b->bind(&e);
     vertices.bind(&e);

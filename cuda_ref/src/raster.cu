@@ -1,10 +1,10 @@
-// Raster and outputs: the samples of every piece (one thread per piece of at most
-// kSoloSamples samples in its pixel box inside the tile, then one warp per larger piece, its
-// lanes taking the samples in turn; a sample is covered under the tie rule),
-// the id buffer
-// (per sample, the last visible piece in canonical order: within a tile, the highest
-// triangle in setup order, kept by atomicMax), the per-tile sample counters, and the
-// visible area per original triangle folded in canonical order (items sorted by id).
+// Raster and outputs, in the two passes of pieces.cuh: the samples of every piece (a warp
+// takes 32 pieces, each lane finding one and staging its lines in shared memory, then the
+// warp rasters them one at a time, its lanes over each piece's pixel box inside the tile; a
+// sample is covered under the tie rule), the id buffer (per sample, the last visible piece
+// in canonical order: within a tile, the highest triangle in setup order, kept by atomicMax),
+// the per-tile sample counters, and the visible area per original triangle folded in
+// canonical order (items sorted by id).
 #include "pieces.cuh"
 
 namespace tilevis::cuda {
@@ -19,14 +19,7 @@ struct RasterArgs {
   int64_t* rows;
   uint32_t* winner;
   uint64_t base;              // the pass's first piece id (pieces.cuh)
-  uint64_t* heavy;            // queued pieces
-  uint64_t* heavy_count;
-  uint64_t heavy_cap;
 };
-
-// Pieces with more samples than this in their pixel box go to the second pass (one warp each);
-// the rest are rastered by their item's thread.
-inline constexpr uint32_t kSoloSamples = 64;
 
 // The pixels [px0, px0 + w) x [py0, py0 + h) of a piece's bounding box inside the tile and
 // the screen.
@@ -35,61 +28,70 @@ struct PixelBox {
   uint32_t w, h;
 };
 
-// Coverage of a piece over its pixel box; returns this lane's covered samples. The team's
-// lanes take runs of up to kRun pixels of a row at one sample position, in turn. N > 0: N
-// edges, held in registers; N = 0: any edge count, each sample tested as covers() does.
-// Exact: the edge functions evaluated at the run's first pixel and stepped along it,
-// e(x + 2^sb) = e(x) + a 2^sb: exact in int64 (|e| < 2^49, |a 2^sb| <= 2^32), the same
+// Coverage of a piece over its pixel box; returns this lane's covered samples. N > 0: the N
+// lines `lines`, held in registers; N = 0: the polygon `poly` of n edges, each sample tested
+// as covers() does. Exact: the team's lanes take runs of up to kRun pixels of a row at one
+// sample position, the edge functions evaluated at the run's first pixel and stepped along
+// it, e(x + 2^sb) = e(x) + a 2^sb: exact in int64 (|e| < 2^49, |a 2^sb| <= 2^32), the same
 // integer test as covers() under the tie rule (e > 0, or e = 0 on an owned boundary: e > -1).
-// Float: every sample evaluated as covers() does.
-inline constexpr uint32_t kRun = 32;
+// Float: the lanes take samples, each evaluated as covers() does.
+inline constexpr uint32_t kRun = 8;
 
 template <int N, class P, class Team>
-TV_HD uint64_t raster_box(const RasterArgs<P>& a, const PEdge<P>* poly, uint32_t n, const PixelBox& b, uint32_t tri,
-                          bool vis, Team team) {
+TV_HD uint64_t raster_box(const RasterArgs<P>& a, const typename P::Line* lines, const PEdge<P>* poly, uint32_t n,
+                          const PixelBox& b, uint32_t tri, bool vis, Team team) {
   [[maybe_unused]] typename P::Line l[N > 0 ? N : 1];
   [[maybe_unused]] int64_t step[N > 0 ? N : 1], floor[N > 0 ? N : 1];
   const uint32_t S = a.n_samples, sb = a.src.grid.sb;
   if constexpr (N > 0)
     for (int i = 0; i < N; ++i) {
-      l[i] = poly[i].line;
+      l[i] = lines[i];
       if constexpr (P::kExact) {
         step[i] = l[i].a << sb;
         floor[i] = l[i].owns_boundary() ? -1 : 0;
       }
     }
-  const uint32_t runs = (b.w + kRun - 1) / kRun;
-  const uint32_t units = runs * b.h * S;  // <= 4096 * 4096 * 16
   uint64_t covered = 0;
-  for (uint32_t u = team.lane(); u < units; u += Team::kSize) {
-    const uint32_t run = runs == 1 ? 0 : u % runs, rest = runs == 1 ? u : u / runs;
-    const uint32_t k = S == 1 ? 0 : rest % S, row = S == 1 ? rest : rest / S;
-    const int64_t px0 = b.px0 + int64_t(run) * kRun, py = b.py0 + row;
-    const int64_t px_end = tmin<int64_t>(px0 + kRun, b.px0 + b.w);
-    const uint32_t sxy = a.sample_xy[k];
-    const int64_t x0 = (px0 << sb) + (sxy & 0xffffu), y = (py << sb) + (sxy >> 16);
-    [[maybe_unused]] int64_t e[N > 0 ? N : 1];
-    if constexpr (P::kExact && N > 0)
+  auto hit = [&](int64_t px, int64_t py, uint32_t k) {
+    ++covered;
+    if (vis) atomic_max(&a.winner[(uint64_t(py) * a.width + uint64_t(px)) * S + k], tri + 1);
+  };
+  if constexpr (P::kExact && N > 0) {
+    const uint32_t runs = (b.w + kRun - 1) / kRun;
+    const uint32_t units = runs * b.h * S;  // <= 4096 * 4096 * 16
+    for (uint32_t u = team.lane(); u < units; u += Team::kSize) {
+      const uint32_t run = runs == 1 ? 0 : u % runs, rest = runs == 1 ? u : u / runs;
+      const uint32_t k = S == 1 ? 0 : rest % S, row = S == 1 ? rest : rest / S;
+      const int64_t px0 = b.px0 + int64_t(run) * kRun, py = b.py0 + row;
+      const int64_t px_end = tmin<int64_t>(px0 + kRun, b.px0 + b.w);
+      const uint32_t sxy = a.sample_xy[k];
+      const int64_t x0 = (px0 << sb) + (sxy & 0xffffu), y = (py << sb) + (sxy >> 16);
+      int64_t e[N];
       for (int i = 0; i < N; ++i) e[i] = l[i].a * x0 + l[i].b * y + l[i].c;
-    for (int64_t px = px0; px < px_end; ++px) {
-      bool in = true;
-      if constexpr (P::kExact && N > 0) {
+      for (int64_t px = px0; px < px_end; ++px) {
+        bool in = true;
         for (int i = 0; i < N; ++i) {
           in &= e[i] > floor[i];
           e[i] += step[i];
         }
-      } else {
-        const Pt s{int32_t(x0 + ((px - px0) << sb)), int32_t(y)};
-        if constexpr (N > 0) {
-          for (int i = 0; i < N; ++i) in &= P::in_half(l[i], s);
-        } else {
-          in = covers<P>(poly, n, s);
-        }
+        if (in) hit(px, py, k);
       }
-      if (!in) continue;
-      ++covered;
-      if (vis) atomic_max(&a.winner[(uint64_t(py) * a.width + uint64_t(px)) * S + k], tri + 1);
     }
+    return covered;
+  }
+  const uint32_t cells = b.w * b.h * S;  // <= 4096 * 4096 * 16
+  for (uint32_t c = team.lane(); c < cells; c += Team::kSize) {
+    const uint32_t k = S == 1 ? 0 : c % S, pix = S == 1 ? c : c / S;
+    const int64_t px = b.px0 + int64_t(pix % b.w), py = b.py0 + int64_t(pix / b.w);
+    const uint32_t sxy = a.sample_xy[k];
+    const Pt s{int32_t((px << sb) + (sxy & 0xffffu)), int32_t((py << sb) + (sxy >> 16))};
+    bool in = true;
+    if constexpr (N > 0) {
+      for (int i = 0; i < N; ++i) in &= P::in_half(l[i], s);
+    } else {
+      in = covers<P>(poly, n, s);
+    }
+    if (in) hit(px, py, k);
   }
   return covered;
 }
@@ -111,59 +113,93 @@ TV_HD bool pixel_box(const RasterArgs<P>& a, const PieceView<P>& v, PixelBox& b)
   return true;
 }
 
-template <class P, class Team>
-TV_HD uint64_t raster_piece(const RasterArgs<P>& a, const PieceView<P>& v, const PixelBox& b, bool vis, Team team) {
-  switch (v.n) {
-    case 3: return raster_box<3, P>(a, v.e, v.n, b, v.tri, vis, team);
-    case 4: return raster_box<4, P>(a, v.e, v.n, b, v.tri, vis, team);
-    case 5: return raster_box<5, P>(a, v.e, v.n, b, v.tri, vis, team);
-    case 6: return raster_box<6, P>(a, v.e, v.n, b, v.tri, vis, team);
-    case 7: return raster_box<7, P>(a, v.e, v.n, b, v.tri, vis, team);
-    case 8: return raster_box<8, P>(a, v.e, v.n, b, v.tri, vis, team);
-    default: return raster_box<0, P>(a, v.e, v.n, b, v.tri, vis, team);
-  }
-}
-
-// First pass, one thread per piece: rastered here if its pixel box holds at most
-// kSoloSamples samples, else queued for the second pass.
-template <class P>
-TV_HD void raster_solo(const RasterArgs<P>& a, uint64_t i) {
-  const uint64_t p = a.base + i;
-  PEdge<P> local[kTileCap];
-  const PieceView<P> v = piece_at<P>(a.src, p, local);
-  PixelBox b;
-  if (!pixel_box<P>(a, v, b)) return;
-  if (b.w * b.h * a.n_samples > kSoloSamples) {
-    const uint64_t at = bump_one(a.heavy_count, a.heavy_cap);
-    if (at != ~uint64_t{0}) a.heavy[at] = p;
-    return;
-  }
-  const bool vis = a.visible[p] != 0;
-  const uint32_t c = uint32_t(raster_piece<P>(a, v, b, vis, HostTeam{}));
-  int64_t* row = a.rows + uint64_t(v.tile) * kTileColumns;
-  count_add(&row[kColFragments], c);
-  count_add(&row[kColSamplesCovered], vis ? c : 0);
-}
-
-// Second pass, one team per queued piece: the lanes take its samples in turn.
-template <class P, class Team>
-TV_HD void raster_heavy(const RasterArgs<P>& a, uint64_t h, Team team) {
-  const uint64_t p = a.heavy[h];
-  PEdge<P> local[kTileCap];
-  const PieceView<P> v = piece_at<P>(a.src, p, local);
-  PixelBox b;
-  pixel_box<P>(a, v, b);
-  const bool vis = a.visible[p] != 0;
-  const uint64_t c = team.sum(raster_piece<P>(a, v, b, vis, team));
-  if (team.lane() != 0) return;
-  int64_t* row = a.rows + uint64_t(v.tile) * kTileColumns;
-  atomic_add(&row[kColFragments], int64_t(c));
-  if (vis) atomic_add(&row[kColSamplesCovered], int64_t(c));
-}
+// A piece as its group's team sees it: pixel box, and its lines in the team's stage (at most
+// kStageEdges of them) or, for a clipped piece with more, its polygon in the clip pool.
+inline constexpr uint32_t kStageEdges = 8, kRasterBlock = 128;
 
 template <class P>
-TV_HD void raster_heavy_host(const RasterArgs<P>& a, uint64_t h) {
-  raster_heavy<P>(a, h, HostTeam{});
+struct RasterMeta {
+  const PEdge<P>* poly;
+  PixelBox box;
+  uint32_t n, tri, tile;  // n = 0: nothing to raster
+  bool vis;
+};
+
+// A team's group of kSize consecutive pieces of the pass, [first, first + kSize) cut at
+// `count`: each lane finds its piece and stages it; then the team rasters the pieces one at a
+// time, its lanes over each piece's samples, so no piece's size holds up another's lane. The
+// tile counters are added once per run of pieces of one tile.
+template <class P, class Team>
+TV_HD void raster_group(const RasterArgs<P>& a, uint64_t first, uint64_t count,
+                        typename P::Line (*lines)[kStageEdges], RasterMeta<P>* meta, Team team) {
+  const uint32_t lane = team.lane();
+  RasterMeta<P>& mine = meta[lane];
+  mine.n = 0;
+  if (first + lane < count) {
+    const uint64_t p = a.base + first + lane;
+    PEdge<P> local[kTileCap];
+    const PieceView<P> v = piece_at<P>(a.src, p, local);
+    if (pixel_box<P>(a, v, mine.box)) {
+      mine.poly = v.e;
+      mine.n = v.n;
+      mine.tri = v.tri;
+      mine.tile = v.tile;
+      mine.vis = a.visible[p] != 0;
+      if (v.n <= kStageEdges)
+        for (uint32_t i = 0; i < v.n; ++i) lines[lane][i] = v.e[i].line;
+    }
+  }
+  team.sync();
+  uint32_t tile = kNone;
+  uint64_t frags = 0, vis_frags = 0;
+  auto flush = [&] {
+    const uint64_t f = team.sum(frags), vf = team.sum(vis_frags);
+    if (lane == 0 && tile != kNone) {
+      int64_t* row = a.rows + uint64_t(tile) * kTileColumns;
+      atomic_add(&row[kColFragments], int64_t(f));
+      atomic_add(&row[kColSamplesCovered], int64_t(vf));
+    }
+    frags = vis_frags = 0;
+  };
+  for (uint32_t q = 0; q < Team::kSize; ++q) {
+    const RasterMeta<P> m = meta[q];
+    if (m.n == 0) continue;
+    if (m.tile != tile) {
+      flush();
+      tile = m.tile;
+    }
+    uint64_t c = 0;
+    switch (m.n) {
+      case 3: c = raster_box<3, P>(a, lines[q], m.poly, m.n, m.box, m.tri, m.vis, team); break;
+      case 4: c = raster_box<4, P>(a, lines[q], m.poly, m.n, m.box, m.tri, m.vis, team); break;
+      case 5: c = raster_box<5, P>(a, lines[q], m.poly, m.n, m.box, m.tri, m.vis, team); break;
+      case 6: c = raster_box<6, P>(a, lines[q], m.poly, m.n, m.box, m.tri, m.vis, team); break;
+      case 7: c = raster_box<7, P>(a, lines[q], m.poly, m.n, m.box, m.tri, m.vis, team); break;
+      case 8: c = raster_box<8, P>(a, lines[q], m.poly, m.n, m.box, m.tri, m.vis, team); break;
+      default: c = raster_box<0, P>(a, nullptr, m.poly, m.n, m.box, m.tri, m.vis, team); break;
+    }
+    frags += c;
+    if (m.vis) vis_frags += c;
+  }
+  flush();
+  team.sync();  // the stage is refilled by the next group
+}
+
+template <class P>
+__global__ void __launch_bounds__(kRasterBlock) k_raster(RasterArgs<P> a, const uint64_t* count, uint64_t cap) {
+  __shared__ typename P::Line lines[kRasterBlock / 32][32][kStageEdges];
+  __shared__ RasterMeta<P> meta[kRasterBlock / 32][32];
+  const uint64_t n = *count < cap ? *count : cap;
+  const uint32_t w = threadIdx.x / 32;
+  for (uint64_t g = (uint64_t(blockIdx.x) * (kRasterBlock / 32) + w) * 32; g < n; g += uint64_t(gridDim.x) * kRasterBlock)
+    raster_group<P>(a, g, n, lines[w], meta[w], WarpTeam{});
+}
+
+template <class P>
+void raster_piece_host(const RasterArgs<P>& a, uint64_t i) {
+  typename P::Line lines[1][kStageEdges];
+  RasterMeta<P> meta[1];
+  raster_group<P>(a, i, i + 1, lines, meta, HostTeam{});
 }
 
 template <class P>
@@ -212,16 +248,6 @@ TV_HD void fold_area(const OutArgs<P>& a, uint64_t q) {
 }
 
 template <class P>
-__global__ void k_raster(RasterArgs<P> a, const uint64_t* count, uint64_t cap) {
-  const uint64_t n = *count < cap ? *count : cap;
-  TV_GRID_LOOP(i, n) raster_solo<P>(a, i);
-}
-template <class P>
-__global__ void k_raster_heavy(RasterArgs<P> a, const uint64_t* count, uint64_t cap) {
-  const uint64_t n = *count < cap ? *count : cap;
-  TV_WARP_LOOP(w, n) raster_heavy<P>(a, w, WarpTeam{});
-}
-template <class P>
 __global__ void k_write_id(OutArgs<P> a, uint64_t n) {
   TV_GRID_LOOP(i, n) write_id<P>(a, i);
 }
@@ -251,12 +277,7 @@ void stage_raster(Pipeline<P>& p, Pass pass) {
   a.winner = p.winner.get();
   const PassRange r = pass_range(p, pass);
   a.base = r.base;
-  a.heavy = r.heavy;
-  a.heavy_count = r.heavy_count;
-  a.heavy_cap = r.cap;
-  p.ex.zero(a.heavy_count, 8);
-  p.ex.launch_dyn(k_raster<P>, raster_solo<P>, r.count, r.cap, a);
-  p.ex.launch_dyn(k_raster_heavy<P>, raster_heavy_host<P>, a.heavy_count, a.heavy_cap, a);
+  p.ex.launch_dyn(k_raster<P>, raster_piece_host<P>, r.count, r.cap, a, kRasterBlock);
 }
 
 template <class P>
