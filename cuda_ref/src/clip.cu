@@ -179,6 +179,8 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team, uint64_t* stag
   if (lane == 0) {
     if (failed) atomic_add(&a.counters[kClipOverflow], 1);
     a.piece_count[j] = count;
+    atomic_add(&a.rows[uint64_t(tile) * kTileColumns + kColPieces], int64_t(count));
+    atomic_max(&a.counters[kMaxTilePieces], uint64_t(count));
   }
 }
 
@@ -205,23 +207,6 @@ __global__ void k_clip_items(ClipArgs<P> a, const uint64_t* count, uint64_t cap)
   const uint64_t warps = uint64_t(gridDim.x) * blockDim.x / 32;
   __shared__ uint64_t stage[kClipBlock / 32][kStageSlots];
   for (uint64_t w = warp; w < n; w += warps) clip_item<P>(a, w, WarpTeam{}, stage[threadIdx.x / 32]);
-}
-
-// After clipping: per-tile piece counts and the largest piece count of a triangle.
-struct PieceArgs {
-  const uint32_t* piece_count;
-  const uint64_t* item_key;
-  int64_t* rows;
-  uint64_t* counters;
-};
-TV_HD void count_pieces(const PieceArgs& a, uint64_t j) {
-  const uint32_t n = a.piece_count[j];
-  if (n == 0) return;
-  count_add(&a.rows[a.item_key[j] * kTileColumns + kColPieces], n);
-  count_max(&a.counters[kMaxTilePieces], n);
-}
-__global__ void k_count_pieces(PieceArgs a, uint64_t n) {
-  TV_GRID_LOOP(i, n) count_pieces(a, i);
 }
 
 }  // namespace
@@ -268,7 +253,6 @@ bool stage_clip(Pipeline<P>& p) {
     k_clip_items<P><<<ex.grid_blocks * 2, kClipBlock, 0, ex.stream>>>(a, p.counters.get() + kClipItems, ni);
     TV_CUDA(cudaGetLastError());
   }
-  ex.launch(k_count_pieces, count_pieces, ni, PieceArgs{p.piece_count.get(), a.item_key, a.rows, a.counters});
 
   // sync: the overflow counters (those before kFloatAnomalies: only setup, cull and clip, all
   // finished here, write them; the unclipped pieces' occlusion may be running beside).

@@ -113,10 +113,20 @@ TV_HD void occ_finish(const OccArgs<P>& a, uint64_t p, const PieceView<P>& v, bo
   if (!hidden) a.area[p] = ddiv(doubled_area<P>(v.e, v.n), a.area_scale);
 }
 
+// An unclipped item's piece (if its tile polygon is not empty) in the per-tile piece count and
+// the largest piece count (clipping counts the clipped items' pieces).
+template <class P>
+TV_HD void count_unclipped(const OccArgs<P>& a, uint64_t j) {
+  const bool one = a.src.cand_count[j] == 0 && a.src.piece_count[j] != 0;
+  count_add(&a.rows[a.src.item_key[j] * kTileColumns + kColPieces], one ? 1 : 0);
+  count_max(&a.counters[kMaxTilePieces], one ? 1 : 0);
+}
+
 // First pass, one thread per piece over the first `solo` entries of its list; a piece still
 // undecided is queued for the second pass.
 template <class P>
 TV_HD void occlude_first(const OccArgs<P>& a, uint64_t p, uint32_t solo) {
+  if (p < a.src.n_items) count_unclipped<P>(a, p);
   PEdge<P> local[kTileCap];
   OccQuery<P> o;
   if (!occ_query<P>(a, p, local, o)) {
@@ -136,22 +146,31 @@ TV_HD void occlude_first(const OccArgs<P>& a, uint64_t p, uint32_t solo) {
   occ_finish<P>(a, p, o.v, r > 0, tests);
 }
 
-// Second pass, one team per queued piece: the rest of its list, kSize entries at a time.
+// A team's search for piece p from entry `begin` of its list on, kSize entries at a time.
 template <class P, class Team>
-TV_HD void occlude_heavy(const OccArgs<P>& a, uint64_t h, Team team) {
-  const uint64_t p = a.heavy[h];
+TV_HD void occlude_team(const OccArgs<P>& a, uint64_t p, uint32_t begin, Team team) {
   PEdge<P> local[kTileCap];
   OccQuery<P> o;
-  occ_query<P>(a, p, local, o);
+  if (!occ_query<P>(a, p, local, o)) {
+    if (team.lane() == 0) a.visible[p] = 0;
+    return;
+  }
   const TileTri<P>& tt = a.src.tris[o.v.tri];
   uint32_t tests = 0;
-  const int r = scan_occluders<P>(o.q, o.qx, o.qy, tt, a.src.tris, o.occ, kSoloOccluders<P>, o.n_occ, tests, team);
+  const int r = scan_occluders<P>(o.q, o.qx, o.qy, tt, a.src.tris, o.occ, tmin(begin, o.n_occ), o.n_occ, tests, team);
   if (team.lane() == 0) occ_finish<P>(a, p, o.v, r > 0, tests);
 }
 
+// Second pass: the queued pieces, the rest of their lists.
 template <class P>
 TV_HD void occlude_heavy_host(const OccArgs<P>& a, uint64_t h) {
-  occlude_heavy<P>(a, h, HostTeam{});
+  occlude_team<P>(a, a.heavy[h], kSoloOccluders<P>, HostTeam{});
+}
+
+// The clipped pass: float, one warp per piece over its whole list; exact, one thread.
+template <class P>
+TV_HD void occlude_clipped_host(const OccArgs<P>& a, uint64_t i) {
+  occlude_team<P>(a, a.base + i, 0, HostTeam{});
 }
 
 template <class P>
@@ -193,6 +212,7 @@ __global__ void __launch_bounds__(kOccBlock) k_occlude_tiles(OccArgs<P> a, const
     OccQuery<P> o;
     bool open = false;
     if (threadIdx.x < c.count) {
+      count_unclipped<P>(a, j);
       open = occ_query<P>(a, j, local, o);
       if (!open) a.visible[j] = 0;
     }
@@ -242,7 +262,16 @@ __global__ void k_occlude(OccArgs<P> a, const uint64_t* count, uint64_t cap) {
 template <class P>
 __global__ void k_occlude_heavy(OccArgs<P> a, const uint64_t* count, uint64_t cap) {
   const uint64_t n = *count < cap ? *count : cap;
-  TV_WARP_LOOP(w, n) occlude_heavy<P>(a, w, WarpTeam{});
+  TV_WARP_LOOP(w, n) occlude_team<P>(a, a.heavy[w], kSoloOccluders<P>, WarpTeam{});
+}
+template <class P>
+__global__ void k_occlude_clipped(OccArgs<P> a, const uint64_t* count, uint64_t cap) {
+  const uint64_t n = *count < cap ? *count : cap;
+  if constexpr (P::kExact) {
+    TV_GRID_LOOP(i, n) occlude_team<P>(a, a.base + i, 0, HostTeam{});
+  } else {
+    TV_WARP_LOOP(w, n) occlude_team<P>(a, a.base + w, 0, WarpTeam{});
+  }
 }
 
 }  // namespace
@@ -282,6 +311,10 @@ void stage_occlusion(Pipeline<P>& p, Pass pass) {
     a.unit_off = p.occ_unit_off.get();
     a.n_tiles = p.n_tiles;
     ex.launch_dyn(k_occlude_tiles<P>, occlude_unit_host<P>, a.unit_off + p.n_tiles, ~uint64_t{0}, a, kOccBlock);
+    return;
+  }
+  if (pass == Pass::clipped) {
+    ex.launch_dyn(k_occlude_clipped<P>, occlude_clipped_host<P>, r.count, r.cap, a);
     return;
   }
   ex.zero(a.heavy_count, 8);

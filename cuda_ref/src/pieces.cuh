@@ -73,8 +73,8 @@ PieceSource<P> piece_source(Pipeline<P>& p) {
   return s;
 }
 
-// A pass's pieces: ids [base, base + *count), at most cap of them; its queue of pieces for
-// warps (heavy) and the queue's counter.
+// A pass's pieces: ids [base, base + *count), at most cap of them; the unclipped pass's queue
+// of pieces for warps (occlusion with finer bins) and the queue's counter.
 struct PassRange {
   uint64_t base;
   const uint64_t* count;
@@ -86,10 +86,9 @@ struct PassRange {
 template <class P>
 PassRange pass_range(Pipeline<P>& p, Pass pass) {
   if (pass == Pass::unclipped)
-    return {0, p.tri_tiles_off.get() + p.n_tris, p.n_items, p.heavy_unclipped.need(p.n_items + 1),
-            p.counters.get() + kHeavyUnclipped};
-  return {p.n_items, p.counters.get() + kSlotsUsed, p.caps.clip_slots, p.heavy_clipped.need(p.caps.clip_slots + 1),
-          p.counters.get() + kHeavyClipped};
+    return {0, p.tri_tiles_off.get() + p.n_tris, p.n_items, p.heavy.need(p.n_items + 1),
+            p.counters.get() + kHeavyPieces};
+  return {p.n_items, p.counters.get() + kSlotsUsed, p.caps.clip_slots, nullptr, nullptr};
 }
 
 }  // namespace tilevis::cuda

@@ -42,8 +42,7 @@ enum Counter : uint32_t {
   kFloatAnomalies,  // float: polygons that outgrew their bound
   kVisibleTriangles,
   kMaxTilePieces,
-  kHeavyUnclipped,  // occlusion, then raster: pieces queued for a warp each (two passes)
-  kHeavyClipped,
+  kHeavyPieces,     // occlusion of unclipped pieces with finer bins: pieces queued for a warp each
   kCounterCount
 };
 
@@ -176,7 +175,7 @@ struct Pipeline {
   // Pieces (pieces.cuh): per piece id, n_items + clip_slots of them.
   Buf<uint32_t> slot_item;         // per piece slot, its item (kNone: unused)
   Buf<uint8_t> piece_visible;
-  Buf<uint64_t> heavy_unclipped, heavy_clipped;  // occlusion, then raster: pieces for a warp each
+  Buf<uint64_t> heavy;             // occlusion (unclipped, finer bins): pieces queued for a warp each
   Buf<uint32_t> occ_units;         // occlusion by tiles: work units per tile, and their scan
   Buf<uint64_t> occ_unit_off;
   Buf<double> piece_area;
@@ -196,7 +195,7 @@ struct Pipeline {
       b->bind(&e);
     for (auto* b : {&fan_offset, &use_key, &sil_offset, &sil_key, &sil_key_sorted,
                     &front_offset, &tri_tiles_off, &edge_tiles_off, &item_key, &item_key_sorted, &occ_key,
-                    &occ_key_sorted, &tedge_key, &tedge_key_sorted, &area_key, &area_key_sorted, &deep, &cands, &slot_poly, &counters, &heavy_unclipped, &heavy_clipped, &occ_unit_off,
+                    &occ_key_sorted, &tedge_key, &tedge_key_sorted, &area_key, &area_key_sorted, &deep, &cands, &slot_poly, &counters, &heavy, &occ_unit_off,
                     &obin_off, &obin_key, &obin_key_sorted})
       b->bind(&e);
     vertices.bind(&e);

@@ -262,6 +262,7 @@ template <class P>
 void raster_begin(Pipeline<P>& p) {
   const uint64_t n_samples = uint64_t(p.f.width) * p.f.height * p.f.n_samples;
   p.ex.zero(p.winner.need(n_samples + 1), n_samples * 4);
+  p.ex.zero(p.area.need(p.f.n_triangles + 1), p.f.n_triangles * 8);
 }
 
 template <class P>
@@ -296,8 +297,7 @@ void stage_outputs(Pipeline<P>& p) {
   o.n_items = p.n_items;
   o.visible = p.piece_visible.get();
   o.piece_area = p.piece_area.get();
-  o.area = p.area.need(p.f.n_triangles + 1);
-  ex.zero(o.area, p.f.n_triangles * 8);
+  o.area = p.area.get();  // cleared by raster_begin
   ex.merge(0);  // the unclipped pieces' pass
   ex.launch(k_write_id<P>, write_id<P>, n_samples, o);
   ex.merge(2);  // the visible-area order (binning)
