@@ -238,6 +238,7 @@ class Exec {
   void branch(int k);
   void on_main();
   void merge(int k);
+  void wait_for(int k);  // the stream in use waits for side k's work queued so far
   void merge_all();
   void begin_frame() { m_event_next = 0; }
   uint32_t grid_blocks = 0;  // blocks of 256 that fill the GPU (grid-stride kernels)

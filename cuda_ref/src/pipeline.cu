@@ -33,8 +33,11 @@ Exec::Exec(Where w, bool shuf) : where(w), shuffle(shuf) {
   TV_CUDA(cudaGetDeviceProperties(&prop, 0));
   device_name = prop.name;
   grid_blocks = uint32_t(prop.multiProcessorCount) * 2;
-  TV_CUDA(cudaStreamCreateWithFlags(&main_stream, cudaStreamNonBlocking));
-  for (auto& s : m_side) TV_CUDA(cudaStreamCreateWithFlags(&s, cudaStreamNonBlocking));
+  // The main stream carries the longest chain: its blocks are scheduled first.
+  int least = 0, greatest = 0;
+  TV_CUDA(cudaDeviceGetStreamPriorityRange(&least, &greatest));
+  TV_CUDA(cudaStreamCreateWithPriority(&main_stream, cudaStreamNonBlocking, greatest));
+  for (auto& s : m_side) TV_CUDA(cudaStreamCreateWithPriority(&s, cudaStreamNonBlocking, least));
   stream = main_stream;
 }
 
@@ -77,6 +80,13 @@ void Exec::merge(int k) {
   TV_CUDA(cudaEventRecord(e, m_side[k]));
   TV_CUDA(cudaStreamWaitEvent(main_stream, e, 0));
   m_pending[k] = false;
+}
+
+void Exec::wait_for(int k) {
+  if (where == Where::cpu || !m_pending[k]) return;
+  const cudaEvent_t e = next_event();
+  TV_CUDA(cudaEventRecord(e, m_side[k]));
+  TV_CUDA(cudaStreamWaitEvent(stream, e, 0));
 }
 
 void Exec::merge_all() {
@@ -349,8 +359,16 @@ bool run_once(Pipeline<P>& p, Timer& t) {
   t.mark(5);
   stage_occlusion(p, Pass::clipped);
   t.mark(6);
+  // The visible areas beside the clipped pieces' raster, once the unclipped pass and the
+  // area order (binning, side 2) are done.
+  p.ex.branch(1);
+  p.ex.wait_for(0);
+  p.ex.wait_for(2);
+  stage_fold(p);
+  p.ex.on_main();
   stage_raster(p, Pass::clipped);
-  stage_outputs(p);
+  p.ex.merge(0);
+  stage_ids(p);
   p.ex.merge_all();
   t.mark(7);
   p.ex.sync();

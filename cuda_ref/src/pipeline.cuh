@@ -261,6 +261,8 @@ void raster_begin(Pipeline<P>& p);  // clears the id buffer, before either raste
 template <class P>
 void stage_raster(Pipeline<P>& p, Pass pass);
 template <class P>
-void stage_outputs(Pipeline<P>& p);  // after both passes: the id raster and the visible areas
+void stage_fold(Pipeline<P>& p);  // after both occlusion passes: the visible area per triangle
+template <class P>
+void stage_ids(Pipeline<P>& p);   // after both raster passes: the id raster
 
 }  // namespace tilevis::cuda

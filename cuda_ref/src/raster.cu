@@ -2,7 +2,8 @@
 // takes 32 pieces, each lane finding one and staging its lines in shared memory, then the
 // warp rasters them one at a time, its lanes over each piece's pixel box inside the tile; a
 // sample is covered under the tie rule), the id buffer (per sample, the last visible piece
-// in canonical order: within a tile, the highest triangle in setup order, kept by atomicMax),
+// in canonical order: within a tile, the highest triangle in setup order, kept by atomicMax
+// on its original id + 1),
 // the per-tile sample counters, and the visible area per original triangle folded in
 // canonical order (items sorted by id).
 #include "pieces.cuh"
@@ -121,7 +122,7 @@ template <class P>
 struct RasterMeta {
   const PEdge<P>* poly;
   PixelBox box;
-  uint32_t n, tri, tile;  // n = 0: nothing to raster
+  uint32_t n, tri, tile;  // n = 0: nothing to raster; tri: the original triangle
   bool vis;
 };
 
@@ -142,7 +143,7 @@ TV_HD void raster_group(const RasterArgs<P>& a, uint64_t first, uint64_t count,
     if (pixel_box<P>(a, v, mine.box)) {
       mine.poly = v.e;
       mine.n = v.n;
-      mine.tri = v.tri;
+      mine.tri = a.src.tris[v.tri].id;
       mine.tile = v.tile;
       mine.vis = a.visible[p] != 0;
       if (v.n <= kStageEdges)
@@ -205,7 +206,6 @@ void raster_piece_host(const RasterArgs<P>& a, uint64_t i) {
 template <class P>
 struct OutArgs {
   const uint32_t* winner;
-  const TileTri<P>* tris;
   int32_t* ids;
   const uint64_t* area_key;   // original id, items sorted by it (stable: canonical order)
   const uint32_t* area_item;
@@ -218,10 +218,11 @@ struct OutArgs {
   double* area;
 };
 
+// The winner holds the original id + 1 (0: none): front triangles are in setup order, by
+// original id, so the largest id is the last triangle's.
 template <class P>
 TV_HD void write_id(const OutArgs<P>& a, uint64_t s) {
-  const uint32_t w = a.winner[s];
-  a.ids[s] = w ? int32_t(a.tris[w - 1].id) : -1;
+  a.ids[s] = int32_t(a.winner[s]) - 1;
 }
 
 // One thread per original triangle's run of items: area += piece area, piece by piece, in
@@ -282,12 +283,10 @@ void stage_raster(Pipeline<P>& p, Pass pass) {
 }
 
 template <class P>
-void stage_outputs(Pipeline<P>& p) {
-  Exec& ex = p.ex;
+OutArgs<P> out_args(Pipeline<P>& p) {
   const uint64_t n_samples = uint64_t(p.f.width) * p.f.height * p.f.n_samples;
   OutArgs<P> o{};
   o.winner = p.winner.get();
-  o.tris = p.tris.get();
   o.ids = p.ids.need(n_samples + 1);
   o.area_key = p.area_key_sorted.get();  // ends with a sentinel (binning)
   o.area_item = p.area_item_sorted.get();
@@ -298,17 +297,26 @@ void stage_outputs(Pipeline<P>& p) {
   o.visible = p.piece_visible.get();
   o.piece_area = p.piece_area.get();
   o.area = p.area.get();  // cleared by raster_begin
-  ex.merge(0);  // the unclipped pieces' pass
-  ex.launch(k_write_id<P>, write_id<P>, n_samples, o);
-  ex.merge(2);  // the visible-area order (binning)
-  ex.launch(k_fold_area<P>, fold_area<P>, p.n_items, o);
+  return o;
+}
+
+template <class P>
+void stage_ids(Pipeline<P>& p) {
+  p.ex.launch(k_write_id<P>, write_id<P>, uint64_t(p.f.width) * p.f.height * p.f.n_samples, out_args(p));
+}
+
+template <class P>
+void stage_fold(Pipeline<P>& p) {
+  p.ex.launch(k_fold_area<P>, fold_area<P>, p.n_items, out_args(p));
 }
 
 template void raster_begin<ExactP>(Pipeline<ExactP>&);
 template void raster_begin<FloatP>(Pipeline<FloatP>&);
 template void stage_raster<ExactP>(Pipeline<ExactP>&, Pass);
 template void stage_raster<FloatP>(Pipeline<FloatP>&, Pass);
-template void stage_outputs<ExactP>(Pipeline<ExactP>&);
-template void stage_outputs<FloatP>(Pipeline<FloatP>&);
+template void stage_ids<ExactP>(Pipeline<ExactP>&);
+template void stage_ids<FloatP>(Pipeline<FloatP>&);
+template void stage_fold<ExactP>(Pipeline<ExactP>&);
+template void stage_fold<FloatP>(Pipeline<FloatP>&);
 
 }  // namespace tilevis::cuda
