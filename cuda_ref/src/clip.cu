@@ -69,32 +69,8 @@ TV_HD inline uint64_t piece_bound(uint64_t c) { return 1 + c + c * (c - 1) / 2; 
 // and are copied to slot_poly at the end: each step reads and writes them.
 inline constexpr uint32_t kStageSlots = 256;
 
-// Float: beside each staged slot, its piece's vertex box widened by a pixel. A candidate edge
-// whose box misses it is not tested against it: a convex piece and a segment with disjoint
-// boxes are separated along an axis that test 2 (the piece's lines) or test 1 (the edge's
-// line) tries, so survives() would say no (the pixel of margin covers float rounding).
-struct PieceBox {
-  float x0, y0, x1, y1;
-};
-
-template <class P>
-TV_HD PieceBox piece_box(const PEdge<P>* poly, uint32_t n, float margin) {
-  PieceBox b{poly[0].start.x, poly[0].start.y, poly[0].start.x, poly[0].start.y};
-  for (uint32_t i = 1; i < n; ++i) {
-    b.x0 = fminf(b.x0, poly[i].start.x);
-    b.y0 = fminf(b.y0, poly[i].start.y);
-    b.x1 = fmaxf(b.x1, poly[i].start.x);
-    b.y1 = fmaxf(b.y1, poly[i].start.y);
-  }
-  return {b.x0 - margin, b.y0 - margin, b.x1 + margin, b.y1 + margin};
-}
-
-TV_HD inline bool box_meets(const PieceBox& b, const Rect& r) {
-  return !(b.x1 < float(r.x0) || b.x0 > float(r.x1) || b.y1 < float(r.y0) || b.y0 > float(r.y1));
-}
-
 template <class P, class Team>
-TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team, uint64_t* stage, PieceBox* stage_box) {
+TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team, uint64_t* stage) {
   const uint32_t lane = team.lane();
   const uint32_t j = a.clip_items[w];
   const uint32_t c = a.cand_count[j], off = a.cand_offset[j];
@@ -141,15 +117,11 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team, uint64_t* stag
     return;
   }
   uint64_t* const slots = stage && want <= kStageSlots ? stage : a.slot_poly + base;
-  [[maybe_unused]] PieceBox* const boxes = stage && want <= kStageSlots ? stage_box : nullptr;
-  [[maybe_unused]] const float margin = float(1u << a.grid.sb);
   if (lane == 0) {
     bool overflow = false;
     const uint32_t n = tile_polygon<P>(tt, a.grid.rect(tile), a.pool + poly_at, overflow);
     slots[0] = (poly_at << 32) | n;
     a.item_slot[j] = uint32_t(base);
-    if constexpr (!P::kExact)
-      if (boxes && n) boxes[0] = piece_box<P>(a.pool + poly_at, n, margin);
   }
   team.sync();
   uint32_t count = 1, splits = 0, anomalies = 0;
@@ -166,9 +138,7 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team, uint64_t* stag
       uint64_t sp = 0;
       if (k < n) {
         sp = slots[k];
-        bool near = true;
-        if constexpr (!P::kExact) near = !boxes || uint32_t(sp) == 0 || box_meets(boxes[k], e.bbox);
-        flag = near && survives<P>(a.pool + (sp >> 32), uint32_t(sp), tt, e);
+        flag = survives<P>(a.pool + (sp >> 32), uint32_t(sp), tt, e);
       }
       const uint32_t mask = team.ballot(flag);
       const uint32_t rank = popc(mask & ((1u << lane) - 1u));
@@ -191,11 +161,6 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team, uint64_t* stag
         }
         slots[k] = (at << 32) | in.n;
         slots[dst] = ((at + m + 1) << 32) | out.n;
-        if constexpr (!P::kExact)
-          if (boxes) {
-            if (in.n) boxes[k] = piece_box<P>(in.e, in.n, margin);
-            if (out.n) boxes[dst] = piece_box<P>(out.e, out.n, margin);
-          }
         ++splits;
       }
       appended += popc(mask);
@@ -220,10 +185,8 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team, uint64_t* stag
 }
 
 template <class P>
-void clip_item_host(const ClipArgs<P>& a, uint64_t w) {
-  static thread_local uint64_t stage[kStageSlots];
-  static thread_local PieceBox boxes[kStageSlots];
-  clip_item<P>(a, w, HostTeam{}, stage, boxes);
+TV_HD void clip_item_host(const ClipArgs<P>& a, uint64_t w) {
+  clip_item<P>(a, w, HostTeam{}, nullptr);
 }
 
 template <class P>
@@ -243,9 +206,7 @@ __global__ void k_clip_items(ClipArgs<P> a, const uint64_t* count, uint64_t cap)
   const uint64_t warp = (uint64_t(blockIdx.x) * blockDim.x + threadIdx.x) / 32;
   const uint64_t warps = uint64_t(gridDim.x) * blockDim.x / 32;
   __shared__ uint64_t stage[kClipBlock / 32][kStageSlots];
-  __shared__ PieceBox boxes[kClipBlock / 32][P::kExact ? 1 : kStageSlots];
-  for (uint64_t w = warp; w < n; w += warps)
-    clip_item<P>(a, w, WarpTeam{}, stage[threadIdx.x / 32], P::kExact ? nullptr : boxes[threadIdx.x / 32]);
+  for (uint64_t w = warp; w < n; w += warps) clip_item<P>(a, w, WarpTeam{}, stage[threadIdx.x / 32]);
 }
 
 }  // namespace
