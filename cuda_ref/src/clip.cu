@@ -62,70 +62,6 @@ TV_HD void clip_list(const ClipArgs<P>& a, uint64_t j) {
   a.clip_items[bump_one(&a.counters[kClipItems], ~uint64_t{0})] = uint32_t(j);
 }
 
-// Two warps of a block on one item (64 lanes: an item's pieces are judged 64 at a time, so the
-// items with the most pieces, whose candidates are the longest chain of the clip kernel,
-// take half the steps). The warps exchange their ballots, sums and broadcasts through shared
-// memory at a named barrier of the 64 threads (double-buffered: one barrier per exchange).
-struct PairTeam {
-  static constexpr uint32_t kSize = 64;
-  uint64_t (*buf)[2];  // shared: [parity][warp of the team]
-  uint32_t barrier;    // named barrier id (1 + the team's index in its block)
-  uint32_t parity = 0;
-#if defined(__CUDA_ARCH__)
-  __device__ uint32_t lane() const { return threadIdx.x & 63u; }
-  __device__ void sync() const {
-    __threadfence_block();
-    if (barrier == 1) asm volatile("bar.sync 1, 64;" ::: "memory");  // literal ids: ptxas counts
-    else asm volatile("bar.sync 2, 64;" ::: "memory");               // the barriers used
-  }
-  // Each warp's value (the same in all its lanes) to both warps: {warp 0's, warp 1's}.
-  __device__ void exchange(uint64_t v, uint64_t& v0, uint64_t& v1) {
-    if ((threadIdx.x & 31u) == 0) buf[parity][(threadIdx.x >> 5) & 1u] = v;
-    sync();
-    v0 = buf[parity][0];
-    v1 = buf[parity][1];
-    parity ^= 1u;
-  }
-  __device__ uint64_t ballot(bool p) {
-    uint64_t b0, b1;
-    exchange(__ballot_sync(0xffffffffu, p), b0, b1);
-    return b0 | b1 << 32;
-  }
-  __device__ uint64_t bcast(uint64_t v) {
-    uint64_t v0, v1;
-    exchange(__shfl_sync(0xffffffffu, static_cast<unsigned long long>(v), 0), v0, v1);
-    return v0;
-  }
-  __device__ uint64_t sum(uint64_t v) {
-    for (int d = 16; d > 0; d >>= 1) v += __shfl_xor_sync(0xffffffffu, static_cast<unsigned long long>(v), d);
-    uint64_t s0, s1;
-    exchange(v, s0, s1);
-    return s0 + s1;
-  }
-  __device__ uint32_t scan(uint32_t v) {
-    v = WarpTeam{}.scan(v);
-    uint64_t t0, t1;
-    exchange(__shfl_sync(0xffffffffu, v, 31), t0, t1);
-    return lane() >= 32 ? v + uint32_t(t0) : v;
-  }
-#else  // never instantiated on the host; declared for the shared template
-  uint32_t lane() const { return 0; }
-  void sync() const {}
-  uint64_t ballot(bool p) { return p; }
-  uint64_t bcast(uint64_t v) { return v; }
-  uint64_t sum(uint64_t v) { return v; }
-  uint32_t scan(uint32_t v) { return v; }
-#endif
-};
-
-TV_HD inline uint32_t popc(uint64_t v) {
-#if defined(__CUDA_ARCH__)
-  return uint32_t(__popcll(v));
-#else
-  return uint32_t(__builtin_popcountll(v));
-#endif
-}
-
 // The most pieces c lines can cut a convex region into: 1 + c + c (c - 1) / 2.
 TV_HD inline uint64_t piece_bound(uint64_t c) { return 1 + c + c * (c - 1) / 2; }
 
@@ -204,8 +140,8 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team, uint64_t* stag
         sp = slots[k];
         flag = survives<P>(a.pool + (sp >> 32), uint32_t(sp), tt, e);
       }
-      const auto mask = team.ballot(flag);
-      const uint32_t rank = popc(mask & ((decltype(mask){1} << lane) - 1u));
+      const uint32_t mask = team.ballot(flag);
+      const uint32_t rank = popc(mask & ((1u << lane) - 1u));
       const uint64_t dst = uint64_t(n) + appended + rank;
       const uint32_t m = uint32_t(sp);
       const bool room = dst < want;
@@ -265,15 +201,12 @@ __global__ void k_clip_list(ClipArgs<P> a, uint64_t n) {
 inline constexpr uint32_t kClipBlock = 128;
 
 template <class P>
-__global__ void __launch_bounds__(kClipBlock) k_clip_items(ClipArgs<P> a, const uint64_t* count, uint64_t cap) {
-  constexpr uint32_t kTeams = kClipBlock / PairTeam::kSize;
+__global__ void k_clip_items(ClipArgs<P> a, const uint64_t* count, uint64_t cap) {
   const uint64_t n = *count < cap ? *count : cap;
-  const uint32_t t = threadIdx.x / PairTeam::kSize;
-  __shared__ uint64_t stage[kTeams][kStageSlots];
-  __shared__ uint64_t xchg[kTeams][2][2];
-  PairTeam team{xchg[t], 1 + t};
-  for (uint64_t w = uint64_t(blockIdx.x) * kTeams + t; w < n; w += uint64_t(gridDim.x) * kTeams)
-    clip_item<P>(a, w, team, stage[t]);
+  const uint64_t warp = (uint64_t(blockIdx.x) * blockDim.x + threadIdx.x) / 32;
+  const uint64_t warps = uint64_t(gridDim.x) * blockDim.x / 32;
+  __shared__ uint64_t stage[kClipBlock / 32][kStageSlots];
+  for (uint64_t w = warp; w < n; w += warps) clip_item<P>(a, w, WarpTeam{}, stage[threadIdx.x / 32]);
 }
 
 }  // namespace
