@@ -65,6 +65,8 @@ TV_HD void clip_list(const ClipArgs<P>& a, uint64_t j) {
 // The most pieces c lines can cut a convex region into: 1 + c + c (c - 1) / 2.
 TV_HD inline uint64_t piece_bound(uint64_t c) { return 1 + c + c * (c - 1) / 2; }
 
+inline constexpr uint32_t kCopyEdges = 12;
+
 // A team's piece slots live in `stage` (the warp's shared memory) while it clips, if they fit,
 // and are copied to slot_poly at the end: each step reads and writes them.
 inline constexpr uint32_t kStageSlots = 256;
@@ -126,19 +128,30 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team, uint64_t* stag
   team.sync();
   uint32_t count = 1, splits = 0, anomalies = 0;
   bool failed = false;
-  uint32_t next_id = a.cand_sorted[off];
+  // A step waits on nothing it could have loaded earlier: the next step's edge is read during
+  // this one, and a piece's polygon (written by an earlier step, so not in L1) is read whole,
+  // every load issued at once, into a local copy that survives() and split() then walk.
+  SilEdge<P> next_e = a.edges[a.cand_sorted[off]];
   for (uint32_t ci = 0; ci < c && !failed; ++ci) {
-    const SilEdge<P> e = a.edges[next_id];  // this step's edge; the next one's id read ahead
-    if (ci + 1 < c) next_id = a.cand_sorted[off + ci + 1];
+    const SilEdge<P> e = next_e;
+    if (ci + 1 < c) next_e = a.edges[a.cand_sorted[off + ci + 1]];
     const uint32_t n = count;
     uint32_t appended = 0;
     for (uint32_t k0 = 0; k0 < n; k0 += Team::kSize) {
       const uint32_t k = k0 + lane;
       bool flag = false;
       uint64_t sp = 0;
+      PEdge<P> copy[kCopyEdges];
+      const PEdge<P>* poly = nullptr;
       if (k < n) {
         sp = slots[k];
-        flag = survives<P>(a.pool + (sp >> 32), uint32_t(sp), tt, e);
+        poly = a.pool + (sp >> 32);
+        if (uint32_t(sp) <= kCopyEdges) {
+          for (uint32_t i = 0; i < kCopyEdges; ++i)
+            if (i < uint32_t(sp)) copy[i] = poly[i];
+          poly = copy;
+        }
+        flag = survives<P>(poly, uint32_t(sp), tt, e);
       }
       const uint32_t mask = team.ballot(flag);
       const uint32_t rank = popc(mask & ((1u << lane) - 1u));
@@ -153,7 +166,7 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team, uint64_t* stag
       if (flag && !fail) {
         const uint64_t at = step_at + incl - need;
         PolyOut<P> in{a.pool + at, 0, m + 1, false}, out{a.pool + at + m + 1, 0, m + 1, false};
-        split<P>(a.pool + (sp >> 32), m, e.line, in, out);
+        split<P>(poly, m, e.line, in, out);
         if (in.overflow || out.overflow) {
           ++anomalies;  // only float arithmetic can break convexity
           in.n = tmin(in.n, m + 1);
