@@ -54,6 +54,13 @@ TV_HD inline void atomic_max(uint32_t* p, uint32_t v) {
   if (v > *p) *p = v;
 #endif
 }
+TV_HD inline void atomic_max(int32_t* p, int32_t v) {
+#if defined(__CUDA_ARCH__)
+  atomicMax(p, v);
+#else
+  if (v > *p) *p = v;
+#endif
+}
 TV_HD inline void atomic_max(uint64_t* p, uint64_t v) {
 #if defined(__CUDA_ARCH__)
   atomicMax(reinterpret_cast<unsigned long long*>(p), static_cast<unsigned long long>(v));
@@ -240,7 +247,10 @@ class Exec {
   void merge(int k);
   void wait_for(int k);  // the stream in use waits for side k's work queued so far
   void merge_all();
-  void begin_frame() { m_event_next = 0; }
+  void begin_frame() {
+    m_event_next = 0;
+    m_checks.clear();
+  }
   uint32_t grid_blocks = 0;  // blocks of 256 that fill the GPU (grid-stride kernels)
   std::string device_name;
 
@@ -252,14 +262,17 @@ class Exec {
 
   // Host reads of device values inside a run (sizes, overflow counters): `direct` reads each
   // (a round trip); `log` does too and appends the bytes to read_log; `replay`, while a run is
-  // captured into a CUDA graph, returns the bytes the last logged run read and queues a copy
-  // of the device's current value at the same offset of `read_check`, so that every replay
-  // of the graph can be checked against the log (same frame, same sizes).
+  // captured into a CUDA graph, returns the bytes the last logged run read and notes where
+  // they came from; queue_checks(), at the end of the run, copies those device values to the
+  // same offsets of `read_check`, so that every replay of the graph can be checked against
+  // the log (same frame, same sizes). The copies wait for the end of the run, off the stages'
+  // chain: no stage writes a value once the host has read it.
   enum class Reads { direct, log, replay };
   Reads reads = Reads::direct;
   std::vector<uint8_t> read_log;
   size_t read_pos = 0;
   uint8_t* read_check = nullptr;
+  void queue_checks();
   uint64_t peak_bytes() const { return m_peak; }
 
   void upload(void* dst, const void* src, size_t bytes);
@@ -329,6 +342,12 @@ class Exec {
   bool m_pending[kSides] = {};
   std::vector<cudaEvent_t> m_events;
   size_t m_event_next = 0;
+  struct Check {
+    size_t at;
+    const void* src;
+    size_t bytes;
+  };
+  std::vector<Check> m_checks;
   void* m_temp[kSides + 1] = {};
   size_t m_temp_bytes[kSides + 1] = {};
   uint64_t m_seed = 0x9e3779b97f4a7c15ull;

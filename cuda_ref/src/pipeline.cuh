@@ -181,7 +181,6 @@ struct Pipeline {
   Buf<double> piece_area;
 
   // Outputs.
-  Buf<uint32_t> winner;            // per sample: front triangle + 1 of the last visible piece
   Buf<int32_t> ids;
   Buf<double> area;                // per trace triangle
 
@@ -190,7 +189,7 @@ struct Pipeline {
                     &tri_tiles, &edge_tiles, &item_tri, &item_tri_sorted, &occ_tri, &occ_tri_sorted, &tedge_id,
                     &tedge_id_sorted, &tile_item_begin, &tile_edge_begin, &tile_occ_count, &area_item,
                     &area_item_sorted, &piece_count, &cand_count, &cand_cursor, &cand_offset,
-                    &cand_edges, &cand_scratch, &clip_items, &item_slot, &winner, &indices, &tri_draw, &sample_xy,
+                    &cand_edges, &cand_scratch, &clip_items, &item_slot, &indices, &tri_draw, &sample_xy,
                     &obin_cnt, &obin_val, &obin_val_sorted, &obin_begin, &obin_count, &slot_item, &occ_units})
       b->bind(&e);
     for (auto* b : {&fan_offset, &use_key, &sil_offset, &sil_key, &sil_key_sorted,
@@ -262,7 +261,5 @@ template <class P>
 void stage_raster(Pipeline<P>& p, Pass pass);
 template <class P>
 void stage_fold(Pipeline<P>& p);  // after both occlusion passes: the visible area per triangle
-template <class P>
-void stage_ids(Pipeline<P>& p);   // after both raster passes: the id raster
 
 }  // namespace tilevis::cuda

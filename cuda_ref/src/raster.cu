@@ -2,8 +2,9 @@
 // takes 32 pieces, each lane finding one and staging its lines in shared memory, then the
 // warp rasters them one at a time, its lanes over each piece's pixel box inside the tile; a
 // sample is covered under the tie rule), the id buffer (per sample, the last visible piece
-// in canonical order: within a tile, the highest triangle in setup order, kept by atomicMax
-// on its original id + 1),
+// in canonical order: within a tile, the highest triangle in setup order, which has the
+// largest original id since front triangles are in setup order, kept by atomicMax on the id
+// buffer itself, -1 before),
 // the per-tile sample counters, and the visible area per original triangle folded in
 // canonical order (items sorted by id).
 #include "pieces.cuh"
@@ -18,7 +19,7 @@ struct RasterArgs {
   const uint32_t* sample_xy;
   uint32_t n_samples, width, height;
   int64_t* rows;
-  uint32_t* winner;
+  int32_t* ids;  // per sample, -1 before any visible piece covers it
   uint64_t base;              // the pass's first piece id (pieces.cuh)
 };
 
@@ -55,7 +56,7 @@ TV_HD uint64_t raster_box(const RasterArgs<P>& a, const typename P::Line* lines,
   uint64_t covered = 0;
   auto hit = [&](int64_t px, int64_t py, uint32_t k) {
     ++covered;
-    if (vis) atomic_max(&a.winner[(uint64_t(py) * a.width + uint64_t(px)) * S + k], tri + 1);
+    if (vis) atomic_max(&a.ids[(uint64_t(py) * a.width + uint64_t(px)) * S + k], int32_t(tri));
   };
   if constexpr (P::kExact && N > 0) {
     const uint32_t runs = (b.w + kRun - 1) / kRun;
@@ -205,8 +206,6 @@ void raster_piece_host(const RasterArgs<P>& a, uint64_t i) {
 
 template <class P>
 struct OutArgs {
-  const uint32_t* winner;
-  int32_t* ids;
   const uint64_t* area_key;   // original id, items sorted by it (stable: canonical order)
   const uint32_t* area_item;
   const uint32_t* cand_count;
@@ -217,13 +216,6 @@ struct OutArgs {
   const double* piece_area;
   double* area;
 };
-
-// The winner holds the original id + 1 (0: none): front triangles are in setup order, by
-// original id, so the largest id is the last triangle's.
-template <class P>
-TV_HD void write_id(const OutArgs<P>& a, uint64_t s) {
-  a.ids[s] = int32_t(a.winner[s]) - 1;
-}
 
 // One thread per original triangle's run of items: area += piece area, piece by piece, in
 // canonical order (the left fold golden performs).
@@ -249,10 +241,6 @@ TV_HD void fold_area(const OutArgs<P>& a, uint64_t q) {
 }
 
 template <class P>
-__global__ void k_write_id(OutArgs<P> a, uint64_t n) {
-  TV_GRID_LOOP(i, n) write_id<P>(a, i);
-}
-template <class P>
 __global__ void k_fold_area(OutArgs<P> a, uint64_t n) {
   TV_GRID_LOOP(i, n) fold_area<P>(a, i);
 }
@@ -262,7 +250,7 @@ __global__ void k_fold_area(OutArgs<P> a, uint64_t n) {
 template <class P>
 void raster_begin(Pipeline<P>& p) {
   const uint64_t n_samples = uint64_t(p.f.width) * p.f.height * p.f.n_samples;
-  p.ex.zero(p.winner.need(n_samples + 1), n_samples * 4);
+  p.ex.fill_ones(p.ids.need(n_samples + 1), n_samples * 4);  // -1: background
   p.ex.zero(p.area.need(p.f.n_triangles + 1), p.f.n_triangles * 8);
 }
 
@@ -276,7 +264,7 @@ void stage_raster(Pipeline<P>& p, Pass pass) {
   a.width = p.f.width;
   a.height = p.f.height;
   a.rows = p.tile_rows.get();
-  a.winner = p.winner.get();
+  a.ids = p.ids.get();
   const PassRange r = pass_range(p, pass);
   a.base = r.base;
   p.ex.launch_dyn(k_raster<P>, raster_piece_host<P>, r.count, r.cap, a, kRasterBlock);
@@ -284,10 +272,7 @@ void stage_raster(Pipeline<P>& p, Pass pass) {
 
 template <class P>
 OutArgs<P> out_args(Pipeline<P>& p) {
-  const uint64_t n_samples = uint64_t(p.f.width) * p.f.height * p.f.n_samples;
   OutArgs<P> o{};
-  o.winner = p.winner.get();
-  o.ids = p.ids.need(n_samples + 1);
   o.area_key = p.area_key_sorted.get();  // ends with a sentinel (binning)
   o.area_item = p.area_item_sorted.get();
   o.cand_count = p.cand_count.get();
@@ -301,11 +286,6 @@ OutArgs<P> out_args(Pipeline<P>& p) {
 }
 
 template <class P>
-void stage_ids(Pipeline<P>& p) {
-  p.ex.launch(k_write_id<P>, write_id<P>, uint64_t(p.f.width) * p.f.height * p.f.n_samples, out_args(p));
-}
-
-template <class P>
 void stage_fold(Pipeline<P>& p) {
   p.ex.launch(k_fold_area<P>, fold_area<P>, p.n_items, out_args(p));
 }
@@ -314,8 +294,6 @@ template void raster_begin<ExactP>(Pipeline<ExactP>&);
 template void raster_begin<FloatP>(Pipeline<FloatP>&);
 template void stage_raster<ExactP>(Pipeline<ExactP>&, Pass);
 template void stage_raster<FloatP>(Pipeline<FloatP>&, Pass);
-template void stage_ids<ExactP>(Pipeline<ExactP>&);
-template void stage_ids<FloatP>(Pipeline<FloatP>&);
 template void stage_fold<ExactP>(Pipeline<ExactP>&);
 template void stage_fold<FloatP>(Pipeline<FloatP>&);
 
