@@ -56,11 +56,6 @@ TV_HD void cand_scatter(const ClipArgs<P>& a, uint64_t k) {
   if (at < a.cand_cap) a.cand_edges[at] = uint32_t(d);
 }
 
-template <class P>
-TV_HD void clip_list(const ClipArgs<P>& a, uint64_t j) {
-  if (a.cand_count[j] == 0) return;
-  a.clip_items[bump_one(&a.counters[kClipItems], ~uint64_t{0})] = uint32_t(j);
-}
 
 // The most pieces c lines can cut a convex region into: 1 + c + c (c - 1) / 2.
 TV_HD inline uint64_t piece_bound(uint64_t c) { return 1 + c + c * (c - 1) / 2; }
@@ -207,10 +202,6 @@ __global__ void k_cand_scatter(ClipArgs<P> a, const uint64_t* count, uint64_t ca
   const uint64_t n = *count < cap ? *count : cap;
   TV_GRID_LOOP(i, n) cand_scatter<P>(a, i);
 }
-template <class P>
-__global__ void k_clip_list(ClipArgs<P> a, uint64_t n) {
-  TV_GRID_LOOP(i, n) clip_list<P>(a, i);
-}
 inline constexpr uint32_t kClipBlock = 128;
 
 template <class P>
@@ -237,13 +228,13 @@ bool stage_clip(Pipeline<P>& p) {
   a.rows = p.tile_rows.get();
   a.cands = p.cands.get();
   a.cand_count = p.cand_count.get();
-  a.cand_cursor = p.cand_cursor.need(ni + 1);
+  a.cand_cursor = p.cand_cursor.get();  // zeroed by cull
   a.cand_offset = p.cand_offset.need(ni + 1);
   a.cand_edges = p.cand_edges.need(p.caps.candidates);
   a.cand_sorted = p.cand_scratch.need(p.caps.candidates);
   a.cand_cap = p.caps.candidates;
   a.deep_cap = p.caps.deep_pairs;
-  a.clip_items = p.clip_items.need(ni + 1);
+  a.clip_items = p.clip_items.get();  // listed by cull
   a.item_slot = p.item_slot.need(ni + 1);
   a.slot_poly = p.slot_poly.need(p.caps.clip_slots);
   a.slot_item = p.slot_item.need(p.caps.clip_slots);
@@ -255,10 +246,8 @@ bool stage_clip(Pipeline<P>& p) {
   a.slot_factor = p.caps.slot_factor;
   a.n_items = ni;
 
-  ex.zero(a.cand_cursor, ni * 4);
   ex.exclusive_scan(a.cand_count, p.cand_offset.get(), ni);
   ex.launch_dyn(k_cand_scatter<P>, cand_scatter<P>, p.counters.get() + kCandidates, p.caps.candidates, a);
-  ex.launch(k_clip_list<P>, clip_list<P>, ni, a);
   if (ex.where == Where::cpu) {
     ex.launch_dyn(k_clip_items<P>, clip_item_host<P>, p.counters.get() + kClipItems, ni, a);
   } else {

@@ -27,6 +27,8 @@ struct CullArgs {
   uint64_t deep_cap;
   uint64_t* counters;
   uint32_t* cand_count;
+  uint32_t* cand_cursor;  // zeroed here for clipping's scatter
+  uint32_t* clip_items;   // items with candidates (listed at their first)
   uint64_t* cands;
   uint64_t cand_cap;
   uint64_t n_items;
@@ -46,7 +48,7 @@ TV_HD void cull_item(const CullArgs<P>& a, uint64_t i) {
   const uint32_t lane = uint32_t(i % kCullLanes);
   const uint32_t tile = uint32_t(a.item_key[j]);
   const TileTri<P>& tt = a.tris[a.item_tri[j]];
-  if (lane == 0) a.cand_count[j] = 0;
+  if (lane == 0) a.cand_count[j] = a.cand_cursor[j] = 0;
   // Binning put the triangle here because its interior meets the tile's, so the exact tile
   // polygon is never empty (golden's empty check cannot fire). Float arithmetic can make it
   // empty, and then the item does nothing, as golden would with an empty polygon.
@@ -103,7 +105,7 @@ TV_HD void cull_exact(const CullArgs<P>& a, uint64_t k) {
   const uint32_t n = tile_polygon<P>(tt, a.grid.rect(tile), poly, overflow);
   if (!survives<P>(poly, n, tt, a.edges[ei])) return;
   count_add(&a.rows[uint64_t(tile) * kTileColumns + kColCandidates], 1);
-  atomic_add(&a.cand_count[j], 1u);
+  if (atomic_add(&a.cand_count[j], 1u) == 0) a.clip_items[bump_one(&a.counters[kClipItems], ~uint64_t{0})] = j;
   const uint64_t at = bump_one(&a.counters[kCandidates], a.cand_cap);
   if (at != ~uint64_t{0}) a.cands[at] = d;
 }
@@ -141,6 +143,8 @@ void stage_cull(Pipeline<P>& p) {
   a.deep_cap = p.caps.deep_pairs;
   a.counters = p.counters.get();
   a.cand_count = p.cand_count.need(ni + 1);
+  a.cand_cursor = p.cand_cursor.need(ni + 1);
+  a.clip_items = p.clip_items.need(ni + 1);
   a.cands = p.cands.need(p.caps.candidates);
   a.cand_cap = p.caps.candidates;
   a.n_items = ni;
