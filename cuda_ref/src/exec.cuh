@@ -246,6 +246,8 @@ class Exec {
   void on_main();
   void merge(int k);
   void wait_for(int k);  // the stream in use waits for side k's work queued so far
+  cudaEvent_t record();   // a point of the stream in use (null on the host)...
+  void wait(cudaEvent_t point);  // ... that the stream in use waits for
   void merge_all();
   void begin_frame() {
     m_event_next = 0;

@@ -89,6 +89,17 @@ void Exec::wait_for(int k) {
   TV_CUDA(cudaStreamWaitEvent(stream, e, 0));
 }
 
+cudaEvent_t Exec::record() {
+  if (where == Where::cpu) return nullptr;
+  const cudaEvent_t e = next_event();
+  TV_CUDA(cudaEventRecord(e, stream));
+  return e;
+}
+
+void Exec::wait(cudaEvent_t point) {
+  if (point) TV_CUDA(cudaStreamWaitEvent(stream, point, 0));
+}
+
 void Exec::queue_checks() {
   for (const Check& c : m_checks) copy(read_check + c.at, c.src, c.bytes);
   m_checks.clear();
@@ -301,8 +312,11 @@ class Timer {
     for (auto& e : m_ev)
       if (e) cudaEventDestroy(e);
   }
+  // Only the first and last marks (the total) when `all` is off: the frame without probes.
+  bool all = true;
   // Mark k on the stream work is queued on now (the main stream, or a side stream in a branch).
   void mark(int k) {
+    if (!all && k != 0 && k != kStageCount) return;
     // While a graph is captured, an external event record becomes a node of the graph.
     if (m_ex.where == Where::cpu) m_host[k] = std::chrono::steady_clock::now();
     else if (m_ex.reads == Exec::Reads::replay)
@@ -339,6 +353,12 @@ bool run_once(Pipeline<P>& p, Timer& t) {
   else p.ex.read_log.clear();
   p.ex.begin_frame();
   p.ex.zero(p.counters.get(), kCounterCount * 8);
+  // The id and area buffers are cleared beside the stages (side stream 2) long before the
+  // raster passes and the fold, which wait for that point.
+  p.ex.branch(2);
+  raster_begin(p);
+  const cudaEvent_t cleared = p.ex.record();
+  p.ex.on_main();
   t.mark(0);
   stage_setup(p);
   t.mark(1);
@@ -348,11 +368,11 @@ bool run_once(Pipeline<P>& p, Timer& t) {
   t.mark(3);
   stage_cull(p);
   t.mark(4);
-  raster_begin(p);
   p.ex.merge(1);  // the occluder lists (binning)
   p.ex.branch(0);
   t.mark(kStageCount + 1);
   stage_occlusion(p, Pass::unclipped);
+  p.ex.wait(cleared);
   stage_raster(p, Pass::unclipped);
   t.mark(kStageCount + 2);
   p.ex.on_main();
@@ -371,6 +391,7 @@ bool run_once(Pipeline<P>& p, Timer& t) {
   p.ex.wait_for(2);
   stage_fold(p);
   p.ex.on_main();
+  p.ex.wait(cleared);
   stage_raster(p, Pass::clipped);
   p.ex.merge_all();
   t.mark(7);
@@ -388,8 +409,7 @@ class FrameGraph {
   ~FrameGraph() {
     if (m_exec) cudaGraphExecDestroy(m_exec);
     if (m_graph) cudaGraphDestroy(m_graph);
-    if (m_ex.read_check) m_ex.release(m_ex.read_check, m_check_bytes);
-    m_ex.read_check = nullptr;
+    if (m_check) m_ex.release(m_check, m_check_bytes);
   }
   FrameGraph(const FrameGraph&) = delete;
   FrameGraph& operator=(const FrameGraph&) = delete;
@@ -397,7 +417,8 @@ class FrameGraph {
   template <class Run>
   void capture(Run&& run) {
     m_check_bytes = m_ex.read_log.size() + 8;
-    m_ex.read_check = static_cast<uint8_t*>(m_ex.alloc(m_check_bytes));
+    m_check = static_cast<uint8_t*>(m_ex.alloc(m_check_bytes));
+    m_ex.read_check = m_check;
     m_ex.reads = Exec::Reads::replay;
     TV_CUDA(cudaStreamBeginCapture(m_ex.main_stream, cudaStreamCaptureModeRelaxed));
     bool ok = false;
@@ -423,7 +444,7 @@ class FrameGraph {
     TV_CUDA(cudaGraphLaunch(m_exec, m_ex.main_stream));
     TV_CUDA(cudaStreamSynchronize(m_ex.main_stream));
     std::vector<uint8_t> got(m_ex.read_log.size());
-    m_ex.download(got.data(), m_ex.read_check, got.size());
+    m_ex.download(got.data(), m_check, got.size());
     if (got != m_ex.read_log) throw std::runtime_error("cuda: a graph replay read other sizes than its capture");
   }
   uint32_t nodes() const { return m_nodes; }
@@ -432,6 +453,7 @@ class FrameGraph {
   Exec& m_ex;
   cudaGraph_t m_graph = nullptr;
   cudaGraphExec_t m_exec = nullptr;
+  uint8_t* m_check = nullptr;  // where this graph's replays copy the values it read
   size_t m_check_bytes = 0;
   uint32_t m_nodes = 0;
 };
@@ -497,7 +519,8 @@ CudaResult run(const trace::Frame& frame, const CudaConfig& cfg) {
   for (uint32_t w = 1; w < cfg.warmup; ++w)
     if (!run_once(p, timer)) ++r.retries;
   const uint32_t runs = std::max<uint32_t>(cfg.runs, 1);
-  // Median stage and total times of `runs` runs of `one` (false: not timed, run again).
+  // Median stage (if the timer marks them) and total times of `runs` runs of `one` (false: not
+  // timed, run again).
   auto timed = [&](auto&& one, std::vector<StageTime>& stage_ms, double& total_ms) {
     std::vector<std::vector<double>> stage(kStageCount);
     std::vector<double> total, beside;
@@ -506,13 +529,17 @@ CudaResult run(const trace::Frame& frame, const CudaConfig& cfg) {
         ++r.retries;
         continue;
       }
-      for (int s = 0; s < kStageCount; ++s) stage[s].push_back(timer.ms(s, s + 1));
-      beside.push_back(timer.ms(kStageCount + 1, kStageCount + 2));
+      if (timer.all) {
+        for (int s = 0; s < kStageCount; ++s) stage[s].push_back(timer.ms(s, s + 1));
+        beside.push_back(timer.ms(kStageCount + 1, kStageCount + 2));
+      }
       total.push_back(timer.ms(0, kStageCount));
       ++k;
     }
-    for (int s = 0; s < kStageCount; ++s) stage_ms.push_back({kStages[s], median(stage[s])});
-    stage_ms.push_back({kBesideClip, median(beside)});
+    if (timer.all) {
+      for (int s = 0; s < kStageCount; ++s) stage_ms.push_back({kStages[s], median(stage[s])});
+      stage_ms.push_back({kBesideClip, median(beside)});
+    }
     total_ms = median(total);
   };
   // The stream: each stage's work queued as it comes, the host reading sizes between stages.
@@ -521,11 +548,18 @@ CudaResult run(const trace::Frame& frame, const CudaConfig& cfg) {
   r.host_syncs = ex.syncs;
   r.runs = runs;
   if (ex.where == Where::gpu) {
-    FrameGraph graph(ex);
-    graph.capture([&] { return run_once(p, timer); });
-    r.graph_nodes = graph.nodes();
-    graph.replay();  // warm-up
-    timed([&] { graph.replay(); return true; }, r.stage_ms, r.total_ms);
+    // Two graphs of the frame: one with an event at every stage boundary (stage times), one
+    // with only the first and last (the total, without the probes' own cost).
+    FrameGraph probed(ex), lean(ex);
+    probed.capture([&] { return run_once(p, timer); });
+    timer.all = false;
+    lean.capture([&] { return run_once(p, timer); });
+    r.graph_nodes = lean.nodes();
+    probed.replay();  // warm-up
+    lean.replay();
+    timed([&] { lean.replay(); return true; }, r.stage_ms, r.total_ms);  // no stages: all is off
+    timer.all = true;
+    timed([&] { probed.replay(); return true; }, r.stage_ms, r.probed_total_ms);
   } else {
     r.stage_ms = r.stream_stage_ms;
     r.total_ms = r.stream_total_ms;

@@ -116,6 +116,8 @@ struct Pipeline {
   // Silhouettes.
   Buf<HashSlot> hash_slots;
   uint64_t hash_cap = 0;
+  const HashSlot* hash_clean_at = nullptr;  // the table, all zeros over hash_clean slots
+  uint64_t hash_clean = 0;
   Buf<uint32_t> sil_flag;
   Buf<uint64_t> sil_offset;
   Buf<uint64_t> sil_key, sil_key_sorted;

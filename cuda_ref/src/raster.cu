@@ -281,7 +281,7 @@ OutArgs<P> out_args(Pipeline<P>& p) {
   o.n_items = p.n_items;
   o.visible = p.piece_visible.get();
   o.piece_area = p.piece_area.get();
-  o.area = p.area.get();  // cleared by raster_begin
+  o.area = p.area.get();  // cleared by raster_begin (side 2, before the area order)
   return o;
 }
 

@@ -157,7 +157,9 @@ void stage_silhouettes(Pipeline<P>& p) {
   p.hash_cap = cap;
   HashArgs h{p.use_key.get(),          p.setup.get(), p.hash_slots.need(cap), cap - 1, p.sil_flag.need(uses + 1),
              p.sil_offset.need(uses + 1), nullptr,       nullptr};
-  ex.zero(h.slots, cap * sizeof(HashSlot));
+  // The table is all zeros between runs: cleared once when (re)allocated, and after each run's
+  // last use on a side stream, off the stages' chain.
+  if (p.hash_clean_at != h.slots || p.hash_clean < cap) ex.zero(h.slots, cap * sizeof(HashSlot));
   ex.launch(k_hash_insert, hash_insert, uses, h);
   ex.launch(k_hash_judge, hash_judge, uses, h);
   ex.exclusive_scan(h.flag, p.sil_offset.get(), uses);
@@ -182,6 +184,11 @@ void stage_silhouettes(Pipeline<P>& p) {
   h.sil_key = p.sil_key.need(p.n_edges + 1);
   h.sil_use = p.sil_use.need(p.n_edges + 1);
   ex.launch(k_sil_scatter, sil_scatter, uses, h);
+  ex.branch(1);
+  ex.zero(h.slots, cap * sizeof(HashSlot));
+  ex.on_main();
+  p.hash_clean_at = h.slots;
+  p.hash_clean = cap;
   const int end_bit = int(32 + bits_for(p.f.n_vertices));
   ex.sort_pairs(h.sil_key, p.sil_key_sorted.need(p.n_edges + 1), h.sil_use, p.sil_use_sorted.need(p.n_edges + 1),
                 p.n_edges, end_bit > 64 ? 64 : end_bit);

@@ -103,10 +103,13 @@ int run(const CudaArgs& a, const trace::Frame& frame, uint32_t tw, uint32_t th) 
                {"total_ms", r.total_ms},
                {"stream_stage_ms", stage_json(r.stream_stage_ms)},
                {"stream_total_ms", r.stream_total_ms},
+               {"probed_total_ms", r.probed_total_ms},
                {"graph_nodes", r.graph_nodes},
                {"timing", a.device == "gpu" ? "CUDA events, median of runs after warm-up: the frame as one CUDA graph "
-                                              "(sizes as the first runs read them; every replay checked); stream_*: "
-                                              "queued stage by stage, the host reading sizes in between"
+                                              "(sizes as the first runs read them; every replay checked) with events "
+                                              "at its ends only; stage_ms from a second graph with an event at every "
+                                              "stage boundary (its total: probed_total_ms); stream_*: queued stage by "
+                                              "stage, the host reading sizes in between"
                                             : "host clock (emulation)"},
                {"runs", r.runs},
                {"upload_ms", r.upload_ms},

@@ -64,8 +64,10 @@ struct CudaResult {
   // CUDA graph, replayed (its host reads of sizes answered by the first runs; each replay is
   // checked against them); stream_*: the same work queued stage by stage with the host reading
   // sizes in between (host_syncs round trips). cpu: both are the host emulation's times.
+  // stage_ms come from a second graph with an event at every stage boundary (its own total:
+  // probed_total_ms).
   std::vector<StageTime> stage_ms, stream_stage_ms;
-  double total_ms = 0, stream_total_ms = 0;
+  double total_ms = 0, stream_total_ms = 0, probed_total_ms = 0;
   uint32_t graph_nodes = 0;
   double upload_ms = 0, download_ms = 0;
   uint32_t runs = 0;
