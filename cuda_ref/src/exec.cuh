@@ -12,6 +12,7 @@
 #include <utility>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "wide.cuh"
@@ -47,14 +48,8 @@ TV_HD inline uint64_t atomic_add(uint64_t* p, uint64_t v) {
 #endif
 }
 TV_HD inline void atomic_add(int64_t* p, int64_t v) { atomic_add(reinterpret_cast<uint64_t*>(p), uint64_t(v)); }
-TV_HD inline void atomic_max(uint32_t* p, uint32_t v) {
-#if defined(__CUDA_ARCH__)
-  atomicMax(p, v);
-#else
-  if (v > *p) *p = v;
-#endif
-}
-TV_HD inline void atomic_max(int32_t* p, int32_t v) {
+template <class T, std::enable_if_t<sizeof(T) == 4, int> = 0>  // int32_t or uint32_t
+TV_HD inline void atomic_max(T* p, T v) {
 #if defined(__CUDA_ARCH__)
   atomicMax(p, v);
 #else
@@ -98,24 +93,14 @@ TV_HD inline uint64_t atomic_cas(uint64_t* p, uint64_t expect, uint64_t v) {
 // Counter updates from many threads to few addresses (a frame-wide count, a tile's row): the
 // updates of a warp's active lanes to the same address are combined into one atomic, since
 // atomics to one address are served one at a time (70 K of them cost tens of microseconds).
-TV_HD inline void count_add(uint64_t* p, uint32_t v) {
+template <class T>  // uint32_t, uint64_t or int64_t
+TV_HD inline void count_add(T* p, uint32_t v) {
 #if defined(__CUDA_ARCH__)
   const unsigned group = __match_any_sync(__activemask(), reinterpret_cast<unsigned long long>(p));
   const unsigned s = __reduce_add_sync(group, v);
-  if ((threadIdx.x & 31u) == unsigned(__ffs(group) - 1) && s)
-    atomicAdd(reinterpret_cast<unsigned long long*>(p), static_cast<unsigned long long>(s));
+  if ((threadIdx.x & 31u) == unsigned(__ffs(group) - 1) && s) atomic_add(p, T(s));
 #else
-  *p += v;
-#endif
-}
-TV_HD inline void count_add(int64_t* p, uint32_t v) { count_add(reinterpret_cast<uint64_t*>(p), v); }
-TV_HD inline void count_add(uint32_t* p, uint32_t v) {
-#if defined(__CUDA_ARCH__)
-  const unsigned group = __match_any_sync(__activemask(), reinterpret_cast<unsigned long long>(p));
-  const unsigned s = __reduce_add_sync(group, v);
-  if ((threadIdx.x & 31u) == unsigned(__ffs(group) - 1) && s) atomicAdd(p, s);
-#else
-  *p += v;
+  *p += T(v);
 #endif
 }
 TV_HD inline void count_max(uint64_t* p, uint32_t v) {
