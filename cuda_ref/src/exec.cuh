@@ -323,6 +323,7 @@ class Exec {
   void launch_kernel(const void* fn, uint32_t blocks, uint32_t block, const void* args, uint64_t n);
   void* temp(size_t bytes);  // scratch of CUB calls, one per stream (branches run at once)
   cudaEvent_t next_event();
+  void join(int k, cudaStream_t into);  // `into` waits for side k's work queued so far
   uint64_t m_live = 0, m_peak = 0;
   cudaStream_t m_side[kSides] = {};
   int m_cur = 0;             // 0: main stream, k + 1: side k
@@ -337,7 +338,6 @@ class Exec {
   std::vector<Check> m_checks;
   void* m_temp[kSides + 1] = {};
   size_t m_temp_bytes[kSides + 1] = {};
-  uint64_t m_seed = 0x9e3779b97f4a7c15ull;
 };
 
 // A grow-only buffer on the executing side (device memory, or host memory for the cpu path).

@@ -300,9 +300,6 @@ void stage_occlusion(Pipeline<P>& p, Pass pass) {
   }
   const PassRange r = pass_range(p, pass);
   a.base = r.base;
-  a.heavy = r.heavy;
-  a.heavy_count = r.heavy_count;
-  a.heavy_cap = r.cap;
   Exec& ex = p.ex;
   if (pass == Pass::unclipped && p.obins_x * p.obins_y == 1) {
     uint32_t* units = p.occ_units.need(p.n_tiles + 1);
@@ -317,6 +314,10 @@ void stage_occlusion(Pipeline<P>& p, Pass pass) {
     ex.launch_dyn(k_occlude_clipped<P>, occlude_clipped_host<P>, r.count, r.cap, a);
     return;
   }
+  // The unclipped pass with finer bins: a thread per piece, then a warp per piece still open.
+  a.heavy = p.heavy.need(r.cap + 1);
+  a.heavy_count = p.counters.get() + kHeavyPieces;
+  a.heavy_cap = r.cap;
   ex.zero(a.heavy_count, 8);
   ex.launch_dyn(k_occlude<P>, occlude_piece<P>, r.count, r.cap, a);
   ex.launch_dyn(k_occlude_heavy<P>, occlude_heavy_host<P>, a.heavy_count, a.heavy_cap, a);

@@ -73,22 +73,17 @@ PieceSource<P> piece_source(Pipeline<P>& p) {
   return s;
 }
 
-// A pass's pieces: ids [base, base + *count), at most cap of them; the unclipped pass's queue
-// of pieces for warps (occlusion with finer bins) and the queue's counter.
+// A pass's pieces: ids [base, base + *count), at most cap of them.
 struct PassRange {
   uint64_t base;
   const uint64_t* count;
   uint64_t cap;
-  uint64_t* heavy;
-  uint64_t* heavy_count;
 };
 
 template <class P>
 PassRange pass_range(Pipeline<P>& p, Pass pass) {
-  if (pass == Pass::unclipped)
-    return {0, p.tri_tiles_off.get() + p.n_tris, p.n_items, p.heavy.need(p.n_items + 1),
-            p.counters.get() + kHeavyPieces};
-  return {p.n_items, p.counters.get() + kSlotsUsed, p.caps.clip_slots, nullptr, nullptr};
+  if (pass == Pass::unclipped) return {0, p.tri_tiles_off.get() + p.n_tris, p.n_items};
+  return {p.n_items, p.counters.get() + kSlotsUsed, p.caps.clip_slots};
 }
 
 }  // namespace tilevis::cuda

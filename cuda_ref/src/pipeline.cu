@@ -74,20 +74,19 @@ void Exec::on_main() {
   m_cur = 0;
 }
 
-void Exec::merge(int k) {
+void Exec::join(int k, cudaStream_t into) {
   if (where == Where::cpu || !m_pending[k]) return;
   const cudaEvent_t e = next_event();
   TV_CUDA(cudaEventRecord(e, m_side[k]));
-  TV_CUDA(cudaStreamWaitEvent(main_stream, e, 0));
+  TV_CUDA(cudaStreamWaitEvent(into, e, 0));
+}
+
+void Exec::merge(int k) {
+  join(k, main_stream);
   m_pending[k] = false;
 }
 
-void Exec::wait_for(int k) {
-  if (where == Where::cpu || !m_pending[k]) return;
-  const cudaEvent_t e = next_event();
-  TV_CUDA(cudaEventRecord(e, m_side[k]));
-  TV_CUDA(cudaStreamWaitEvent(stream, e, 0));
-}
+void Exec::wait_for(int k) { join(k, stream); }
 
 cudaEvent_t Exec::record() {
   if (where == Where::cpu) return nullptr;
