@@ -288,7 +288,9 @@ TV_HD inline bool survives(const PEdge<P>* poly, uint32_t n, const TileTri<P>& t
   const int s1 = P::along(first, e.a, dx, dy) < 0 ? P::depth(tt.plane, a, e.a.z) : P::depth_edge(tt.plane, e.a, e.b, first);
   if (s1 > 0) return true;
   const int s2 = P::along(second, e.b, dx, dy) > 0 ? P::depth(tt.plane, b, e.b.z) : P::depth_edge(tt.plane, e.a, e.b, second);
-  return s2 > 0;
+  // Level at both ends: the edge lies in the triangle's plane over the overlap and can bound a
+  // coplanar occluder (golden.cpp survives()).
+  return s2 > 0 || (s1 == 0 && s2 == 0);
 }
 
 // Splits a polygon that `l` crosses into inside = poly ∩ {l >= 0} and outside = poly ∩

@@ -75,7 +75,10 @@ bool survives(const ConvexPolygon& poly, const TileTriangle& tt, const Edge& e) 
   if (s1 > 0) return true;
   const int s2 = along(second, e.b, dx, dy) > 0 ? geom::depth_order(tt.plane, e.b.xy(), e.b.z)
                                                 : geom::depth_order_edge(tt.plane, e.a, e.b, second);
-  return s2 > 0;
+  // Level at both ends: the edge lies in the triangle's plane over the overlap, so it can
+  // bound a coplanar occluder whose tie (the earlier triangle stays in front) the piece's
+  // interior point decides: split there too, or a piece straddling it is judged whole.
+  return s2 > 0 || (s1 == 0 && s2 == 0);
 }
 
 }  // namespace
