@@ -608,6 +608,7 @@ CudaResult run(const trace::Frame& frame, const CudaConfig& cfg) {
   r.triangles_degenerate = c[kDegenerate];
   r.triangles_clipped = c[kClippedTris];
   r.triangles_frustum_culled = c[kFrustumCulled];
+  r.triangles_edge_on = c[kEdgeOn];
   r.silhouette_edges = p.n_edges;
   r.visible_triangles = c[kVisibleTriangles];
   r.max_tile_pieces = c[kMaxTilePieces];

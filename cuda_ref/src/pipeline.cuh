@@ -28,6 +28,7 @@ struct TileGrid {
 // Device-side counters, read back once per run (one small copy).
 enum Counter : uint32_t {
   kFrustumCulled,
+  kEdgeOn,          // trace triangles whose plane holds the eye (projected to a line): culled
   kClippedTris,
   kDegenerate,
   kBackFacing,

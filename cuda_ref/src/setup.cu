@@ -87,6 +87,50 @@ TV_HD inline uint32_t clip_triangle(const SetupArgs& a, uint64_t t, ClipV* poly,
   return n < 3 ? 0 : n;
 }
 
+// Sign of det[x y w] of the trace triangle's clip-space vertices, exactly: > 0 front-facing
+// (counter-clockwise in NDC) for every piece clipping leaves, 0 when the eye lies in its plane.
+// Products of two floats are exact in double; each triple product is split into p + e by an
+// FMA; the twelve doubles are summed into a non-overlapping expansion (Shewchuk's
+// Grow-Expansion), whose largest component carries the sign (model/geom/homogeneous.h).
+TV_HD inline int clip_facing(const float4& a, const float4& b, const float4& c) {
+  double h[12];
+  int n = 0;
+  const double xs[3] = {a.x, b.x, c.x}, ys[3] = {a.y, b.y, c.y}, ws[3] = {a.w, b.w, c.w};
+  const int perm[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 2, 0}, {1, 0, 2}, {2, 0, 1}, {2, 1, 0}};
+  for (int k = 0; k < 6; ++k) {
+    const double sign = (k & 1) ? -1.0 : 1.0;
+    const double ab = dmul(dmul(sign, xs[perm[k][0]]), ys[perm[k][1]]);
+    const double p = dmul(ab, ws[perm[k][2]]);
+    const double parts[2] = {p, dfma(ab, ws[perm[k][2]], -p)};
+    for (double q : parts) {
+      int m = 0;
+      for (int i = 0; i < n; ++i) {
+        const double sum = dadd(q, h[i]);
+        const double bv = dsub(sum, q);
+        const double err = dadd(dsub(q, dsub(sum, bv)), dsub(h[i], bv));
+        q = sum;
+        if (err != 0) h[m++] = err;
+      }
+      if (q != 0) h[m++] = q;
+      n = m;
+    }
+  }
+  return n == 0 ? 0 : (h[n - 1] > 0 ? 1 : -1);
+}
+
+TV_HD inline int clip_facing(const SetupArgs& a, uint64_t t) {
+  return clip_facing(a.vertices[a.indices[3 * t]], a.vertices[a.indices[3 * t + 1]], a.vertices[a.indices[3 * t + 2]]);
+}
+
+// A clipped vertex has w > 0 and |x|, |y| <= g w exactly; rounding can leave it a hair
+// outside the band or, next to w = 0, with w <= 0: project it onto the band's edge in the
+// direction of its coordinate (host setup's Snapper::project).
+TV_HD inline double project(double c, double inv_w, double w, double g) {
+  if (!(w > 0)) return c > 0 ? g : c < 0 ? -g : 0.0;
+  const double q = dmul(c, inv_w);
+  return q > g ? g : q < -g ? -g : q;
+}
+
 TV_HD inline double round_even(double v) {
 #if defined(__CUDA_ARCH__)
   return rint(v);
@@ -98,14 +142,15 @@ TV_HD inline double round_even(double v) {
 // Viewport transform (y down) and snap: x, y to 1/2^subpixel_bits pixel, rounded to nearest
 // even (scaling by a power of two is exact, so rounding the product is rounding the
 // coordinate); guard-band clipping has kept every vertex inside |x| < 2^15 pixels.
-TV_HD inline Vtx snap(const FrameDev& f, const ClipV& v) {
+TV_HD inline Vtx snap(const FrameDev& f, double gx, double gy, const ClipV& v) {
   const double half_w = dmul(double(f.width), 0.5), half_h = dmul(double(f.height), 0.5);
   const double near = double(f.depth_near), range = dsub(double(f.depth_far), double(f.depth_near));
   const double sub = double(1u << f.subpixel_bits);
   const double inv_w = ddiv(1.0, v.w);
-  const double xw = dmul(dadd(dmul(v.x, inv_w), 1.0), half_w);
-  const double yw = dmul(dsub(1.0, dmul(v.y, inv_w)), half_h);
-  const double zw = dadd(near, dmul(dmul(range, dadd(dmul(v.z, inv_w), 1.0)), 0.5));
+  const double xw = dmul(dadd(project(v.x, inv_w, v.w, gx), 1.0), half_w);
+  const double yw = dmul(dsub(1.0, project(v.y, inv_w, v.w, gy)), half_h);
+  const double zn = v.w > 0 ? dmul(v.z, inv_w) : 0.0;  // depth is clamped to [0, 1] by snap_depth
+  const double zw = dadd(near, dmul(dmul(range, dadd(zn, 1.0)), 0.5));
   Vtx s;
   s.x = int32_t(round_even(dmul(xw, sub)));
   s.y = int32_t(round_even(dmul(yw, sub)));
@@ -136,13 +181,18 @@ TV_HD __noinline__ uint32_t count_clipped(const SetupArgs& a, uint64_t t) {
 }
 
 TV_HD void setup_count(const SetupArgs& a, uint64_t t) {
+  if (clip_facing(a, t) == 0) {
+    count_add(&a.counters[kEdgeOn], 1);
+    a.fan_count[t] = 0;
+    return;
+  }
   ClipV v[3];
   a.fan_count[t] = load_inside(a, t, v) ? 1 : count_clipped(a, t);
 }
 
 // One setup triangle: facing after the snap, and its three edge keys for silhouettes.
 TV_HD inline void emit_one(const SetupArgs& a, uint64_t t, uint64_t out, const Vtx& v0, const Vtx& v1, const Vtx& v2,
-                           const uint32_t* idx, bool cut) {
+                           const uint32_t* idx, bool cut, int facing) {
   const uint32_t d = a.tri_draw[t];
   const DrawInfo& di = a.draws[d];
   SetupTri st;
@@ -154,9 +204,12 @@ TV_HD inline void emit_one(const SetupArgs& a, uint64_t t, uint64_t out, const V
   st.opaque = di.opaque;
   st.cut = cut;
   const int64_t area = orient2d(v0.xy(), v1.xy(), v2.xy());
-  // Counter-clockwise in NDC is clockwise in y-down window space: negative area.
-  st.front = area < 0;
-  count_add(&a.counters[area == 0 ? kDegenerate : area > 0 ? kBackFacing : kFrontFacing], 1);
+  // Counter-clockwise in NDC is clockwise in y-down window space: negative area. Facing is the
+  // trace triangle's (clip_facing); a piece whose snapped area is zero or turns against it
+  // covers nothing.
+  const bool turns_as_facing = facing > 0 ? area < 0 : area > 0;
+  st.front = facing > 0 && turns_as_facing;
+  count_add(&a.counters[!turns_as_facing ? kDegenerate : facing < 0 ? kBackFacing : kFrontFacing], 1);
   a.setup[out] = st;
   // Edges made by clipping have no neighbour: boundaries, sorted after the draw's keyed edges.
   const uint64_t boundary = (uint64_t(di.vertex_offset + di.vertex_count - 1) << 32) | 0xffffffffu;
@@ -183,23 +236,27 @@ TV_HD __noinline__ void emit_clipped(const SetupArgs& a, uint64_t t) {
   bool cut = false;
   const uint32_t n = clip_triangle(a, t, poly, cut);
   if (n == 0) return;
+  const int facing = clip_facing(a, t);  // non-zero: setup_emit returned for edge-on triangles
   Vtx sv[kMaxClipVerts];
-  for (uint32_t k = 0; k < n; ++k) sv[k] = snap(a.f, poly[k]);
+  for (uint32_t k = 0; k < n; ++k) sv[k] = snap(a.f, a.gx, a.gy, poly[k]);
   uint64_t out = a.fan_offset[t];
   for (uint32_t k = 1; k + 1 < n; ++k, ++out) {
     const uint32_t idx[3] = {poly[0].index, poly[k].index, poly[k + 1].index};
-    emit_one(a, t, out, sv[0], sv[k], sv[k + 1], idx, cut);
+    emit_one(a, t, out, sv[0], sv[k], sv[k + 1], idx, cut, facing);
   }
 }
 
 TV_HD void setup_emit(const SetupArgs& a, uint64_t t) {
+  const int facing = clip_facing(a, t);
+  if (facing == 0) return;  // edge-on: setup_count gave it no fan
   ClipV v[3];
   if (!load_inside(a, t, v)) {
     emit_clipped(a, t);
     return;
   }
   const uint32_t idx[3] = {v[0].index, v[1].index, v[2].index};
-  emit_one(a, t, a.fan_offset[t], snap(a.f, v[0]), snap(a.f, v[1]), snap(a.f, v[2]), idx, false);
+  emit_one(a, t, a.fan_offset[t], snap(a.f, a.gx, a.gy, v[0]), snap(a.f, a.gx, a.gy, v[1]),
+           snap(a.f, a.gx, a.gy, v[2]), idx, false, facing);
 }
 
 __global__ void k_setup_count(SetupArgs a, uint64_t n) {

@@ -11,6 +11,7 @@
 //    (the setup transform must reproduce the host's double arithmetic exactly).
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 
 #if defined(__CUDACC__)
@@ -57,6 +58,13 @@ TV_HD inline double ddiv(double a, double b) {
 #endif
 }
 TV_HD inline double dabs(double a) { return a < 0 ? -a : a; }
+TV_HD inline double dfma(double a, double b, double c) {
+#if defined(__CUDA_ARCH__)
+  return __fma_rn(a, b, c);
+#else
+  return std::fma(a, b, c);
+#endif
+}
 
 // 2^e for |e| < 1023, exactly.
 TV_HD inline double pow2(int e) {

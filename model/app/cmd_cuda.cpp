@@ -69,6 +69,7 @@ int run(const CudaArgs& a, const trace::Frame& frame, uint32_t tw, uint32_t th) 
                            {"triangles_degenerate", r.triangles_degenerate},
                            {"triangles_clipped", r.triangles_clipped},
                            {"triangles_frustum_culled", r.triangles_frustum_culled},
+                           {"triangles_edge_on", r.triangles_edge_on},
                            {"silhouette_edges", r.silhouette_edges},
                            {"pair_tests", r.pair_tests},
                            {"candidate_pairs", r.candidate_pairs},

@@ -28,6 +28,7 @@ nlohmann::json setup_totals(const vis::Setup& s) {
           {"triangles_degenerate", s.stats.degenerate},
           {"triangles_clipped", s.stats.clipped},
           {"triangles_frustum_culled", s.stats.frustum_culled},
+          {"triangles_edge_on", s.stats.edge_on},
           {"silhouette_edges", s.stats.silhouette_edges}};
 }
 

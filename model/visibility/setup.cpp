@@ -5,6 +5,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "geom/homogeneous.h"
 #include "geom/predicates.h"
 
 namespace tilevis::vis {
@@ -47,7 +48,7 @@ void clip_polygon(std::vector<ClipVertex>& poly, std::vector<ClipVertex>& scratc
 // Viewport transform (y down) in double, then the snap of geom/fixed.h: x, y to
 // 1/2^subpixel_bits pixel and depth to 2^depth_bits levels, both rounded to nearest-even.
 struct Snapper {
-  double half_w, half_h, depth_near, depth_range;
+  double half_w, half_h, depth_near, depth_range, gx, gy;
   int subpixel_bits, depth_bits;
 
   Snapper(const trace::Frame& f, uint32_t bits)
@@ -55,17 +56,30 @@ struct Snapper {
         half_h(f.height * 0.5),
         depth_near(f.depth_near),
         depth_range(double(f.depth_far) - double(f.depth_near)),
+        gx(guard_band_ndc(f.width)),
+        gy(guard_band_ndc(f.height)),
         subpixel_bits(int(f.subpixel_bits)),
         depth_bits(int(bits)) {}
 
+  // A clipped vertex of a triangle whose plane misses the eye (setup culls the others) has
+  // w > 0 and |x|, |y| <= g w exactly; rounding in the clipper can leave it a hair outside
+  // the band, or, next to w = 0, give w <= 0 for a point that lies at the band's edge in
+  // the direction of (x, y). Projecting onto the band keeps both on the band's edge.
+  static double project(double c, double w, double g) {
+    if (!(w > 0)) return c > 0 ? g : c < 0 ? -g : 0.0;
+    const double n = c * (1.0 / w);
+    return n > g ? g : n < -g ? -g : n;  // also maps an infinite quotient onto the band
+  }
+
   geom::Vertex operator()(const ClipVertex& v) const {
-    const double inv_w = 1.0 / v.w;
-    const double xw = (v.x * inv_w + 1.0) * half_w;
-    const double yw = (1.0 - v.y * inv_w) * half_h;
-    const double zw = depth_near + depth_range * (v.z * inv_w + 1.0) * 0.5;
+    const double xn = project(v.x, v.w, gx), yn = project(v.y, v.w, gy);
+    const double zn = v.w > 0 ? v.z * (1.0 / v.w) : 0.0;  // depth is clamped to [0, 1] by the snap
+    const double xw = (xn + 1.0) * half_w;
+    const double yw = (1.0 - yn) * half_h;
+    const double zw = depth_near + depth_range * (zn + 1.0) * 0.5;
     const auto x = geom::snap_coord(xw, subpixel_bits), y = geom::snap_coord(yw, subpixel_bits);
-    // Guard-band clipping keeps every vertex inside the band (guard_band_ndc).
-    if (!x || !y) throw std::logic_error("primitive setup: vertex outside the guard band after clipping");
+    // Inside the band by construction: guard_band_ndc keeps |window| < 2^15 pixels.
+    if (!x || !y) throw std::logic_error("primitive setup: a projected vertex left the guard band");
     return {*x, *y, geom::snap_depth(zw, depth_bits)};
   }
 };
@@ -133,6 +147,16 @@ Setup primitive_setup(const trace::Frame& frame, const SetupConfig& config) {
         const trace::Vec4& v = d.vertices[vi];
         poly.push_back({v.x, v.y, v.z, v.w, vi});
       }
+      // Facing is decided once, in clip space, for every piece clipping leaves (the facing of
+      // the clipped polygon: geom/homogeneous.h). Zero: the eye lies in the triangle's plane,
+      // so it projects to a line (or, through the eye itself, nowhere): nothing to draw.
+      const trace::Vec4 &c0 = d.vertices[d.indices[t]], &c1 = d.vertices[d.indices[t + 1]],
+                        &c2 = d.vertices[d.indices[t + 2]];
+      const int facing = geom::homogeneous_orientation(c0.x, c0.y, c0.w, c1.x, c1.y, c1.w, c2.x, c2.y, c2.w);
+      if (facing == 0) {
+        ++s.stats.edge_on;
+        continue;
+      }
       bool culled = false, cut = false;
       for (const Plane& p : planes) {
         int inside = 0;
@@ -175,10 +199,12 @@ Setup primitive_setup(const trace::Frame& frame, const SetupConfig& config) {
         st.opaque = opaque;
         st.clipped = cut;
         int64_t area = geom::orient2d(st.v[0].xy(), st.v[1].xy(), st.v[2].xy());
-        // Counter-clockwise in NDC is clockwise in y-down window space: negative area.
-        st.front = area < 0;
-        if (area == 0) ++s.stats.degenerate;
-        else if (area > 0) ++s.stats.back_facing;
+        // Counter-clockwise in NDC is clockwise in y-down window space: negative area. A piece
+        // whose snapped area is zero or turns against its triangle's facing covers nothing.
+        const bool turns_as_facing = facing > 0 ? area < 0 : area > 0;
+        st.front = facing > 0 && turns_as_facing;
+        if (!turns_as_facing) ++s.stats.degenerate;
+        else if (facing < 0) ++s.stats.back_facing;
         else ++s.stats.front_facing;
         auto tri = static_cast<uint32_t>(s.triangles.size());
         uint32_t idx[3] = {cut ? kNoVertex : poly[0].index, cut ? kNoVertex : poly[k].index,

@@ -24,7 +24,8 @@ struct SetupTriangle {
   geom::Vertex v[3];
   uint32_t id = 0;        // original triangle: index over the frame's draws in order
   uint32_t draw = 0;
-  bool front = false;     // counter-clockwise in NDC (clockwise in y-down window space), non-zero area
+  bool front = false;     // counter-clockwise in NDC (clockwise in y-down window space) in clip space
+                          // (geom/homogeneous.h), and so after the snap, with non-zero area
   bool opaque = true;     // may occlude (opaque draw, no shader depth/discard)
   bool clipped = false;   // produced by clipping (its edges are treated as boundaries)
 };
@@ -42,7 +43,8 @@ struct SetupStats {
   uint64_t frustum_culled = 0;   // wholly outside a clip plane
   uint64_t clipped = 0;          // trace triangles cut by a clip plane
   uint64_t setup_triangles = 0;  // after clipping
-  uint64_t degenerate = 0;       // zero area after the snap
+  uint64_t edge_on = 0;          // trace triangles whose plane holds the eye: projected to a line, culled
+  uint64_t degenerate = 0;       // pieces with zero area after the snap, or turned against their facing
   uint64_t back_facing = 0;
   uint64_t front_facing = 0;
   uint64_t silhouette_edges = 0;

@@ -53,7 +53,7 @@ struct CudaResult {
 
   // Totals (names as in the golden stats.json).
   uint64_t triangles_in = 0, triangles_front = 0, triangles_back = 0, triangles_degenerate = 0,
-           triangles_clipped = 0, triangles_frustum_culled = 0, silhouette_edges = 0;
+           triangles_clipped = 0, triangles_frustum_culled = 0, triangles_edge_on = 0, silhouette_edges = 0;
   uint64_t pair_tests = 0, candidate_pairs = 0, clip_polygons = 0, pieces = 0, visible_pieces = 0,
            visible_triangles = 0, occlusion_tests = 0, samples_covered = 0, fragments_generated = 0;
   uint64_t max_tile_triangles = 0, max_tile_edges = 0, max_tile_pieces = 0;

@@ -569,6 +569,7 @@ nlohmann::json FrameWork::totals() const {
                       {"triangles_degenerate", st.degenerate},
                       {"triangles_clipped", st.clipped},
                       {"triangles_frustum_culled", st.frustum_culled},
+                      {"triangles_edge_on", st.edge_on},
                       {"silhouette_edges", m_cfg.mode == Mode::analytic ? st.silhouette_edges : 0}};
   auto sum = [&](const std::string& name) {
     const auto it = std::find(m_columns.begin(), m_columns.end(), name);
@@ -610,15 +611,16 @@ nlohmann::json FrameWork::triangle_accounts() const {
   }
   uint64_t seg_front = 0;
   for (uint64_t f : m_seg_front) seg_front += f;
-  const bool balanced = st.triangles_in == st.frustum_culled + ids_with_setup &&
+  const bool balanced = st.triangles_in == st.frustum_culled + st.edge_on + ids_with_setup &&
                         st.setup_triangles == st.front_facing + st.back_facing + st.degenerate &&
                         st.front_facing == binned + off_screen && seg_front == st.front_facing;
   if (!balanced) throw std::logic_error("triangle accounting does not balance");
-  return {{"help", "every trace triangle, step by step: in = frustum_culled + reaching setup; setup triangles "
+  return {{"help", "every trace triangle, step by step: in = frustum_culled + edge_on + reaching setup; setup triangles "
                    "(fans of clipped ones) = front + back + degenerate; front = binned + off_screen; front = sum over "
                    "segments"},
           {"triangles_in", st.triangles_in},
           {"frustum_culled", st.frustum_culled},
+          {"edge_on", st.edge_on},
           {"reaching_setup", ids_with_setup},
           {"clipped_into_fans", st.clipped},
           {"setup_triangles", st.setup_triangles},
