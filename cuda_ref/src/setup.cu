@@ -1,7 +1,8 @@
-// Primitive setup on the GPU, one thread per trace triangle: near/far and guard-band
-// clipping in clip space (double precision, Sutherland-Hodgman, intersection computed from
-// the inside vertex), viewport transform and snapping (x, y to 1/2^subpixel_bits pixel,
-// round half to even; depth to 2^D - 1 levels), fan triangulation, facing after the snap, and
+// Primitive setup on the GPU, one thread per trace triangle: facing from the exact sign of
+// det[x y w] (edge-on triangles culled), near/far and guard-band clipping in clip space (double
+// precision, Sutherland-Hodgman, intersection in homogeneous form from the inside vertex),
+// viewport transform and snapping (x, y to 1/2^subpixel_bits pixel,
+// round half to even; depth to 2^D - 1 levels), fan triangulation, pieces turned against their facing dropped, and
 // the edge keys of silhouette extraction (SVGPU §3.1). The double arithmetic uses explicit
 // round-to-nearest operations (never contracted to FMA), so the device reproduces the
 // host's setup bit for bit.
@@ -48,6 +49,26 @@ TV_HD inline double distance(int k, double gx, double gy, const ClipV& v) {
   return dadd(dadd(dadd(dmul(cx, v.x), dmul(cy, v.y)), dmul(cz, v.z)), dmul(cw, v.w));
 }
 
+// The intersection of edge (in, out) with a plane in homogeneous form, din·out − dout·in
+// (din >= 0 > dout), scaled exactly by a power of two: it keeps its relative precision next to
+// the eye, where the interpolated form cancels (host setup.cpp intersect()).
+TV_HD inline ClipV intersect(const ClipV& in, const ClipV& out, double din, double dout) {
+  ClipV v{dsub(dmul(din, out.x), dmul(dout, in.x)), dsub(dmul(din, out.y), dmul(dout, in.y)),
+          dsub(dmul(din, out.z), dmul(dout, in.z)), dsub(dmul(din, out.w), dmul(dout, in.w)), kNone};
+  double m = dabs(v.x);
+  if (dabs(v.y) > m) m = dabs(v.y);
+  if (dabs(v.z) > m) m = dabs(v.z);
+  if (dabs(v.w) > m) m = dabs(v.w);
+  if (m > 0 && m <= 1.7976931348623157e308) {
+    const int e = ilogb(m);
+    v.x = scalbn(v.x, -e);
+    v.y = scalbn(v.y, -e);
+    v.z = scalbn(v.z, -e);
+    v.w = scalbn(v.w, -e);
+  }
+  return v;
+}
+
 // Clips the triangle against the six planes. Returns the vertex count (0: culled) and
 // whether a plane cut it.
 TV_HD inline uint32_t clip_triangle(const SetupArgs& a, uint64_t t, ClipV* poly, bool& cut) {
@@ -75,10 +96,7 @@ TV_HD inline uint32_t clip_triangle(const SetupArgs& a, uint64_t t, ClipV* poly,
         const ClipV& in = da >= 0 ? va : vb;
         const ClipV& out = da >= 0 ? vb : va;
         const double din = da >= 0 ? da : db, dout = da >= 0 ? db : da;
-        const double s = ddiv(din, dsub(din, dout));
-        if (m < kMaxClipVerts)
-          scratch[m++] = {dadd(in.x, dmul(s, dsub(out.x, in.x))), dadd(in.y, dmul(s, dsub(out.y, in.y))),
-                          dadd(in.z, dmul(s, dsub(out.z, in.z))), dadd(in.w, dmul(s, dsub(out.w, in.w))), kNone};
+        if (m < kMaxClipVerts) scratch[m++] = intersect(in, out, din, dout);
       }
     }
     for (uint32_t i = 0; i < m; ++i) poly[i] = scratch[i];

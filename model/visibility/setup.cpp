@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "geom/homogeneous.h"
@@ -22,9 +23,28 @@ struct Plane {
   double distance(const ClipVertex& v) const { return cx * v.x + cy * v.y + cz * v.z + cw * v.w; }
 };
 
-// Sutherland–Hodgman against one plane, in double precision. The intersection is
-// v0 + t (v1 - v0) with t = d0 / (d0 - d1), always computed from the inside vertex,
-// so a shared edge of two triangles is cut at the same point from both sides.
+// Sutherland–Hodgman against one plane, in double precision, in homogeneous coordinates:
+// the intersection of edge (in, out) is din·out − dout·in (din >= 0 > dout), the point
+// in + t (out − in) with t = din / (din − dout) scaled by din − dout > 0, which projects to
+// the same place. Unlike the interpolated form it keeps its relative precision when the
+// point lies next to the eye (a vertex at w ~ 1e-29 keeps its direction, where t rounds to
+// 1 and the interpolation cancels to 0). It is computed from the inside vertex, so a shared
+// edge of two triangles is cut at the same point from both sides, and scaled by a power of
+// two (exact) so that repeated cuts neither underflow nor overflow.
+ClipVertex intersect(const ClipVertex& in, const ClipVertex& out, double din, double dout) {
+  ClipVertex v{din * out.x - dout * in.x, din * out.y - dout * in.y, din * out.z - dout * in.z,
+               din * out.w - dout * in.w, kNoVertex};
+  const double m = std::max({std::fabs(v.x), std::fabs(v.y), std::fabs(v.z), std::fabs(v.w)});
+  if (m > 0 && m <= std::numeric_limits<double>::max()) {
+    const int e = std::ilogb(m);
+    v.x = std::scalbn(v.x, -e);
+    v.y = std::scalbn(v.y, -e);
+    v.z = std::scalbn(v.z, -e);
+    v.w = std::scalbn(v.w, -e);
+  }
+  return v;
+}
+
 void clip_polygon(std::vector<ClipVertex>& poly, std::vector<ClipVertex>& scratch, const Plane& p) {
   scratch.clear();
   const size_t n = poly.size();
@@ -33,14 +53,8 @@ void clip_polygon(std::vector<ClipVertex>& poly, std::vector<ClipVertex>& scratc
     const ClipVertex& b = poly[(i + 1) % n];
     double da = p.distance(a), db = p.distance(b);
     if (da >= 0) scratch.push_back(a);
-    if ((da >= 0) != (db >= 0)) {
-      const ClipVertex& in = da >= 0 ? a : b;
-      const ClipVertex& out = da >= 0 ? b : a;
-      double din = da >= 0 ? da : db, dout = da >= 0 ? db : da;
-      double t = din / (din - dout);
-      scratch.push_back({in.x + t * (out.x - in.x), in.y + t * (out.y - in.y), in.z + t * (out.z - in.z),
-                         in.w + t * (out.w - in.w), kNoVertex});
-    }
+    if ((da >= 0) != (db >= 0))
+      scratch.push_back(da >= 0 ? intersect(a, b, da, db) : intersect(b, a, db, da));
   }
   poly.swap(scratch);
 }

@@ -1,5 +1,7 @@
 #include "scenes.h"
 
+#include "near_eye_scenes.h"
+
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -191,6 +193,10 @@ trace::Frame scene(const std::string& name, uint32_t samples) {
     a.quad(c0, 1.2f, 1.0f);
     b.quad(c1, 1.0f, 0.8f);
     f.draws = {make_draw("first", a, mvp), make_draw("second", b, mvp)};
+  } else if (name == "near_eye" || name == "near_eye_pair") {
+    f = name == "near_eye" ? near_eye::random_near_eye(1, 60, f.width, f.height)
+                           : near_eye::two_triangles(f.width, f.height, 0.0f, 0.0f);
+    f.samples = trace::standard_samples(samples);
   } else {
     throw std::invalid_argument("unknown test scene " + name);
   }
@@ -200,6 +206,8 @@ trace::Frame scene(const std::string& name, uint32_t samples) {
   return f;
 }
 
-std::vector<std::string> scene_names() { return {"cubes", "ground", "stack", "mixed", "coplanar"}; }
+std::vector<std::string> scene_names() {
+  return {"cubes", "ground", "stack", "mixed", "coplanar", "near_eye", "near_eye_pair"};
+}
 
 }  // namespace tilevis::cudatest
