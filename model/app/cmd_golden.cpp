@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include "commands.h"
+#include "progress.h"
 #include "tilevis/outputs.h"
 #include "tilevis/trace.h"
 #include "visibility/golden.h"
@@ -85,6 +86,8 @@ int run_golden(const GoldenArgs& a, const trace::Frame& frame, uint32_t tw, uint
   cfg.tile_h = th;
   cfg.keep_pieces = !a.svg.empty();
   parse_occlusion_bin(a.occlusion_bin, tw, th, cfg.occlusion_bin_w, cfg.occlusion_bin_h);
+  Progress progress("golden: tiles");
+  if (progress.enabled()) cfg.progress = [&](uint64_t done, uint64_t total) { progress.update(done, total); };
   vis::GoldenResult r = vis::golden_visibility(s, cfg);
   auto t2 = std::chrono::steady_clock::now();
   double setup_s = std::chrono::duration<double>(t1 - t0).count(), tiles_s = std::chrono::duration<double>(t2 - t1).count();

@@ -388,7 +388,21 @@ GoldenResult golden_visibility(const Setup& s, const GoldenConfig& cfg) {
   r.samples = uint32_t(s.samples.size());
   GoldenTiler tiler(s, cfg, r);
   tiler.bin();
-  for (uint32_t tile = 0; tile < tiler.tile_count(); ++tile) tiler.process_tile(tile);
+  std::vector<uint64_t> weight;
+  uint64_t total = 0, done = 0;
+  if (cfg.progress) {
+    weight.resize(tiler.tile_count());
+    for (uint32_t tile = 0; tile < tiler.tile_count(); ++tile) {
+      const uint64_t t = tiler.tile_triangle_count(tile);
+      weight[tile] = 1 + t * (tiler.tile_edges(tile).size() + t);
+      total += weight[tile];
+    }
+    cfg.progress(0, total);
+  }
+  for (uint32_t tile = 0; tile < tiler.tile_count(); ++tile) {
+    tiler.process_tile(tile);
+    if (cfg.progress) cfg.progress(done += weight[tile], total);
+  }
   sum_golden_totals(r);
   return r;
 }

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -27,6 +28,10 @@ struct GoldenConfig {
   // results and counters are those of one bin per tile; only the scanning shrinks.
   uint32_t occlusion_bin_w = 0, occlusion_bin_h = 0;
   bool keep_pieces = false;  // collect visible pieces as polygons (for SVG)
+  // Called after binning with (0, total) and after every tile with (done, total), in units
+  // of estimated work: a tile weighs 1 + triangles x (edges + triangles), its pair tests and
+  // occlusion tests, so a frame whose work sits in a few tiles still reports steady progress.
+  std::function<void(uint64_t done, uint64_t total)> progress;
 };
 
 // Per-tile counters (SVGPU Table 2 and more), in tiles.csv column order.
