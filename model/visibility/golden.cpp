@@ -137,6 +137,17 @@ class GoldenTiler::Impl {
             int32_t(std::min((ty + 1) * m_cfg.tile_h, m_s.height)) << sb};
   }
 
+  // GoldenConfig::progress: the frame's estimated work, set after binning.
+  void start_progress() {
+    if (!m_cfg.progress) return;
+    m_work_total = m_work_done = 0;
+    for (size_t tile = 0; tile < m_tile_tris.size(); ++tile) {
+      const uint64_t t = m_tile_tris[tile].size();
+      m_work_total += 1 + t * (m_tile_edges[tile].size() + t);
+    }
+    m_cfg.progress(0, m_work_total);
+  }
+
   void bin() {
     m_tile_tris.assign(size_t(m_tiles_x) * m_tiles_y, {});
     m_tile_edges.assign(m_tile_tris.size(), {});
@@ -152,6 +163,7 @@ class GoldenTiler::Impl {
         if (geom::segment_overlaps_rect(e.a.xy(), e.b.xy(), r)) m_tile_edges[tile].push_back(i);
       });
     }
+    start_progress();
   }
 
   void process_tile(uint32_t tile, std::vector<TileTriangleWork>* per_triangle) {
@@ -180,7 +192,12 @@ class GoldenTiler::Impl {
     bin_occluders(rect);
 
     if (!per_triangle) {
-      for (uint32_t i : tris) process_triangle(m_tris[i], rect, tx, ty, row);
+      const uint64_t step = edge_ids.size() + tris.size();
+      for (uint32_t i : tris) {
+        process_triangle(m_tris[i], rect, tx, ty, row);
+        if (m_cfg.progress) m_cfg.progress(m_work_done += step, m_work_total);
+      }
+      if (m_cfg.progress) m_cfg.progress(m_work_done += 1, m_work_total);
       return;
     }
     for (uint32_t i : tris) {
@@ -361,6 +378,7 @@ class GoldenTiler::Impl {
   uint32_t m_bins_x = 1, m_bins_y = 1;
   int64_t m_bin_x0 = 0, m_bin_y0 = 0, m_bin_step_x = 1, m_bin_step_y = 1;
   std::vector<ConvexPolygon> m_pieces;
+  uint64_t m_work_done = 0, m_work_total = 0;  // GoldenConfig::progress
 };
 
 GoldenTiler::GoldenTiler(const Setup& setup, const GoldenConfig& config, GoldenResult& result)
@@ -388,21 +406,7 @@ GoldenResult golden_visibility(const Setup& s, const GoldenConfig& cfg) {
   r.samples = uint32_t(s.samples.size());
   GoldenTiler tiler(s, cfg, r);
   tiler.bin();
-  std::vector<uint64_t> weight;
-  uint64_t total = 0, done = 0;
-  if (cfg.progress) {
-    weight.resize(tiler.tile_count());
-    for (uint32_t tile = 0; tile < tiler.tile_count(); ++tile) {
-      const uint64_t t = tiler.tile_triangle_count(tile);
-      weight[tile] = 1 + t * (tiler.tile_edges(tile).size() + t);
-      total += weight[tile];
-    }
-    cfg.progress(0, total);
-  }
-  for (uint32_t tile = 0; tile < tiler.tile_count(); ++tile) {
-    tiler.process_tile(tile);
-    if (cfg.progress) cfg.progress(done += weight[tile], total);
-  }
+  for (uint32_t tile = 0; tile < tiler.tile_count(); ++tile) tiler.process_tile(tile);
   sum_golden_totals(r);
   return r;
 }

@@ -28,9 +28,10 @@ struct GoldenConfig {
   // results and counters are those of one bin per tile; only the scanning shrinks.
   uint32_t occlusion_bin_w = 0, occlusion_bin_h = 0;
   bool keep_pieces = false;  // collect visible pieces as polygons (for SVG)
-  // Called after binning with (0, total) and after every tile with (done, total), in units
-  // of estimated work: a tile weighs 1 + triangles x (edges + triangles), its pair tests and
-  // occlusion tests, so a frame whose work sits in a few tiles still reports steady progress.
+  // Called after binning with (0, total), then after every triangle of every tile with
+  // (done, total), in units of estimated work: a tile weighs 1 + triangles x (edges +
+  // triangles), its pair tests and occlusion tests, so a frame whose work sits in one
+  // overloaded tile still reports steady progress. (Not called with per-triangle records.)
   std::function<void(uint64_t done, uint64_t total)> progress;
 };
 
