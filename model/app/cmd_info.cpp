@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "commands.h"
+#include "geom/homogeneous.h"
 #include "tilevis/trace.h"
 
 namespace tilevis::app {
@@ -30,6 +31,8 @@ struct FrameStats {
   size_t behind_eye = 0;        // vertices with w <= 0
   size_t outside_depth = 0;     // vertices in front of the eye but beyond near/far (|z| > w)
   size_t crossing_near = 0;     // triangles with vertices on both sides of the near plane
+  size_t next_to_eye = 0;       // vertices with |w| under 2^-20 of their largest coordinate
+  size_t edge_on = 0;           // triangles whose plane holds the eye (det[x y w] = 0): setup culls them
   size_t degenerate = 0;        // triangles in front of the eye with zero area after snapping
   size_t back_facing = 0;       // clockwise in NDC
   size_t off_screen = 0;        // triangles wholly outside the viewport
@@ -45,9 +48,14 @@ FrameStats analyse(const trace::Frame& f) {
     for (const auto& v : d.vertices) {
       if (v.w <= 0) ++s.behind_eye;
       else if (std::fabs(v.z) > v.w) ++s.outside_depth;
+      const double m = std::max({std::fabs(double(v.x)), std::fabs(double(v.y)), std::fabs(double(v.z))});
+      if (std::fabs(double(v.w)) < std::ldexp(m, -20) || (v.w == 0 && m == 0)) ++s.next_to_eye;
     }
     for (size_t t = 0; t < d.indices.size(); t += 3) {
       const trace::Vec4* v[3] = {&d.vertices[d.indices[t]], &d.vertices[d.indices[t + 1]], &d.vertices[d.indices[t + 2]]};
+      if (geom::homogeneous_orientation(v[0]->x, v[0]->y, v[0]->w, v[1]->x, v[1]->y, v[1]->w, v[2]->x, v[2]->y,
+                                        v[2]->w) == 0)
+        ++s.edge_on;
       int front = 0;
       for (auto* p : v) front += p->w > 0 && p->z >= -p->w;
       if (front != 3) {
@@ -99,6 +107,13 @@ void print_frame(size_t index, const trace::Frame& f, const FrameStats& s, size_
   if (s.behind_eye) notes.push_back(fmt::format("{} vertices behind the eye (w <= 0)", s.behind_eye));
   if (s.outside_depth) notes.push_back(fmt::format("{} vertices beyond the near/far planes", s.outside_depth));
   if (s.crossing_near) notes.push_back(fmt::format("{} triangles cross the near plane (will be clipped)", s.crossing_near));
+  if (s.next_to_eye)
+    notes.push_back(fmt::format("{} vertices next to w = 0 (|w| < 2^-20 of their x, y, z: they project next to "
+                                "infinity; setup clips them in homogeneous form)",
+                                s.next_to_eye));
+  if (s.edge_on)
+    notes.push_back(fmt::format("{} triangles edge-on to the eye (their plane holds it, det[x y w] = 0): culled",
+                                s.edge_on));
   if (s.degenerate) notes.push_back(fmt::format("{} degenerate triangles (zero area after snapping)", s.degenerate));
   if (s.off_screen) notes.push_back(fmt::format("{} triangles wholly off screen", s.off_screen));
   fmt::print("  back-facing: {} of {} triangles in front of the eye\n", s.back_facing, s.triangles - s.crossing_near);
