@@ -9,6 +9,7 @@
 #include "geom/overlap.h"
 #include "geom/polygon.h"
 #include "geom/predicates.h"
+#include "geom/tile_grid.h"
 
 namespace tilevis::vis {
 namespace {
@@ -113,28 +114,7 @@ class GoldenTiler::Impl {
              {std::min(se.a.x, se.b.x), std::min(se.a.y, se.b.y), std::max(se.a.x, se.b.x), std::max(se.a.y, se.b.y)}};
       m_edges.push_back(e);
     }
-    m_tiles_x = (m_s.width + m_cfg.tile_w - 1) / m_cfg.tile_w;
-    m_tiles_y = (m_s.height + m_cfg.tile_h - 1) / m_cfg.tile_h;
-  }
-
-  // Tiles whose closed sub-pixel rectangle the bounding box touches, clamped to the screen.
-  template <typename Fn>
-  void for_tiles(const Rect& b, Fn&& fn) const {
-    const int64_t tw = int64_t(m_cfg.tile_w) << m_s.subpixel_bits, th = int64_t(m_cfg.tile_h) << m_s.subpixel_bits;
-    auto floor_div = [](int64_t a, int64_t d) { return a >= 0 ? a / d : -((-a + d - 1) / d); };
-    const int64_t tx0 = std::max<int64_t>(0, floor_div(b.x0, tw)), tx1 = std::min<int64_t>(m_tiles_x - 1, floor_div(b.x1, tw));
-    const int64_t ty0 = std::max<int64_t>(0, floor_div(b.y0, th)), ty1 = std::min<int64_t>(m_tiles_y - 1, floor_div(b.y1, th));
-    for (int64_t ty = ty0; ty <= ty1; ++ty)
-      for (int64_t tx = tx0; tx <= tx1; ++tx) fn(uint32_t(ty * m_tiles_x + tx), tile_rect(uint32_t(tx), uint32_t(ty)));
-  }
-
-  // The tile's rectangle, cut at the viewport's right and bottom edges: the last column and
-  // row of tiles may reach past the screen, and nothing there is visible.
-  Rect tile_rect(uint32_t tx, uint32_t ty) const {
-    const int32_t sb = int32_t(m_s.subpixel_bits);
-    return {int32_t(tx * m_cfg.tile_w) << sb, int32_t(ty * m_cfg.tile_h) << sb,
-            int32_t(std::min((tx + 1) * m_cfg.tile_w, m_s.width)) << sb,
-            int32_t(std::min((ty + 1) * m_cfg.tile_h, m_s.height)) << sb};
+    m_grid = geom::TileGrid::make(m_s.width, m_s.height, m_cfg.tile_w, m_cfg.tile_h, m_s.subpixel_bits);
   }
 
   // GoldenConfig::progress: the frame's estimated work, set after binning.
@@ -149,17 +129,17 @@ class GoldenTiler::Impl {
   }
 
   void bin() {
-    m_tile_tris.assign(size_t(m_tiles_x) * m_tiles_y, {});
+    m_tile_tris.assign(m_grid.tile_count(), {});
     m_tile_edges.assign(m_tile_tris.size(), {});
     for (uint32_t i = 0; i < m_tris.size(); ++i) {
       const TileTriangle& tt = m_tris[i];
-      for_tiles(tt.bbox, [&](uint32_t tile, const Rect& r) {
+      m_grid.for_tiles(tt.bbox, [&](uint32_t tile, const Rect& r) {
         if (geom::triangle_overlaps_rect(tt.tri, r)) m_tile_tris[tile].push_back(i);
       });
     }
     for (uint32_t i = 0; i < m_edges.size(); ++i) {
       const Edge& e = m_edges[i];
-      for_tiles(e.bbox, [&](uint32_t tile, const Rect& r) {
+      m_grid.for_tiles(e.bbox, [&](uint32_t tile, const Rect& r) {
         if (geom::segment_overlaps_rect(e.a.xy(), e.b.xy(), r)) m_tile_edges[tile].push_back(i);
       });
     }
@@ -175,8 +155,8 @@ class GoldenTiler::Impl {
     m_r.max_tile_triangles = std::max<uint64_t>(m_r.max_tile_triangles, tris.size());
     m_r.max_tile_edges = std::max<uint64_t>(m_r.max_tile_edges, edge_ids.size());
     if (tris.empty()) return;
-    const uint32_t tx = tile % m_tiles_x, ty = tile / m_tiles_x;
-    const Rect rect = tile_rect(tx, ty);
+    const uint32_t tx = m_grid.tile_x(tile), ty = m_grid.tile_y(tile);
+    const Rect rect = m_grid.rect(tx, ty);
 
     // Edges by nearest depth: a triangle whose farthest point is nearer than an edge's
     // nearest (test 6) can skip that edge and every later one.
@@ -371,7 +351,7 @@ class GoldenTiler::Impl {
   GoldenResult& m_r;
   std::vector<TileTriangle> m_tris;
   std::vector<Edge> m_edges;
-  uint32_t m_tiles_x = 0, m_tiles_y = 0;
+  geom::TileGrid m_grid;
   std::vector<std::vector<uint32_t>> m_tile_tris, m_tile_edges;
   std::vector<uint32_t> m_sorted_edges, m_occluders, m_candidates;
   std::vector<std::vector<uint32_t>> m_bin_occ;  // finer occlusion bins of the current tile (one: off)
@@ -385,8 +365,8 @@ GoldenTiler::GoldenTiler(const Setup& setup, const GoldenConfig& config, GoldenR
     : m_impl(std::make_unique<Impl>(setup, config, result)) {}
 GoldenTiler::~GoldenTiler() = default;
 void GoldenTiler::bin() { m_impl->bin(); }
-uint32_t GoldenTiler::tiles_x() const { return m_impl->m_tiles_x; }
-uint32_t GoldenTiler::tiles_y() const { return m_impl->m_tiles_y; }
+uint32_t GoldenTiler::tiles_x() const { return m_impl->m_grid.tiles_x(); }
+uint32_t GoldenTiler::tiles_y() const { return m_impl->m_grid.tiles_y(); }
 std::vector<uint32_t> GoldenTiler::tile_triangles(uint32_t tile) const {
   std::vector<uint32_t> out;
   out.reserve(m_impl->m_tile_tris[tile].size());

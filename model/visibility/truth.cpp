@@ -5,6 +5,7 @@
 
 #include "geom/depth.h"
 #include "geom/predicates.h"
+#include "geom/tile_grid.h"
 
 namespace tilevis::vis {
 namespace {
@@ -83,11 +84,11 @@ TruthResult zbuffer_truth(const Setup& s, const TruthConfig& cfg) {
     }
   ZBuffer zb(s, cfg, tris);
   r.overdraw.assign(size_t(s.width) * s.height, 0.0f);
+  const geom::TileGrid grid = geom::TileGrid::make(s.width, s.height, cfg.tile_w, cfg.tile_h, s.subpixel_bits);
   r.tiles.resize(cfg.tile_w, cfg.tile_h, s.width, s.height, {"fragments_generated", "samples_covered"});
   auto tile_of = [&](size_t sample) {
-    size_t pixel = sample / r.samples;
-    size_t px = pixel % s.width, py = pixel / s.width;
-    return uint32_t((py / cfg.tile_h) * r.tiles.tiles_x + px / cfg.tile_w);
+    const size_t pixel = sample / r.samples;
+    return grid.tile_at_pixel(uint32_t(pixel % s.width), uint32_t(pixel / s.width));
   };
 
   // Pass 1, submission order: ids, generated fragments, early-Z.

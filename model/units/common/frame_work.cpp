@@ -51,21 +51,6 @@ bool unit_present(TileUnit u, Mode m) {
   }
 }
 
-// Closed sub-pixel bounding box to the tiles it touches, clamped to the screen (the same
-// rule as the golden binner's).
-void bbox_tiles(int64_t x0, int64_t y0, int64_t x1, int64_t y1, int64_t tw, int64_t th, uint32_t tiles_x,
-                uint32_t tiles_y, int64_t& tx0, int64_t& ty0, int64_t& tx1, int64_t& ty1) {
-  auto floor_div = [](int64_t a, int64_t d) { return a >= 0 ? a / d : -((-a + d - 1) / d); };
-  tx0 = std::max<int64_t>(0, floor_div(x0, tw));
-  tx1 = std::min<int64_t>(int64_t(tiles_x) - 1, floor_div(x1, tw));
-  ty0 = std::max<int64_t>(0, floor_div(y0, th));
-  ty1 = std::min<int64_t>(int64_t(tiles_y) - 1, floor_div(y1, th));
-}
-
-uint32_t tiles_in(int64_t tx0, int64_t ty0, int64_t tx1, int64_t ty1) {
-  return tx1 < tx0 || ty1 < ty0 ? 0u : uint32_t((tx1 - tx0 + 1) * (ty1 - ty0 + 1));
-}
-
 struct EdgeKey {
   uint32_t draw;
   geom::Vertex a, b;  // a < b lexicographically
@@ -106,8 +91,7 @@ FrameWork::FrameWork(const trace::Frame& frame, const FrameWorkConfig& config) :
   m_trace_triangles = uint32_t(frame.triangle_count());
   m_gcfg.tile_w = config.tile_w;
   m_gcfg.tile_h = config.tile_h;
-  m_tiles_x = (frame.width + config.tile_w - 1) / config.tile_w;
-  m_tiles_y = (frame.height + config.tile_h - 1) / config.tile_h;
+  m_grid = geom::TileGrid::make(frame.width, frame.height, config.tile_w, config.tile_h, frame.subpixel_bits);
   if (m_cfg.mode == Mode::analytic) {
     m_columns = vis::golden_tile_columns();
     for (const char* c : {"fragments_shaded", "depth_tests", "passes", "segments"}) m_columns.push_back(c);
@@ -118,7 +102,7 @@ FrameWork::FrameWork(const trace::Frame& frame, const FrameWorkConfig& config) :
   for (size_t u = 0; u < size_t(TileUnit::count); ++u)
     if (unit_present(TileUnit(u), m_cfg.mode)) m_columns.push_back(column_name(TileUnit(u)));
   m_columns.push_back("tile_cycles");
-  m_rows.assign(size_t(m_tiles_x) * m_tiles_y, std::vector<int64_t>(m_columns.size(), 0));
+  m_rows.assign(m_grid.tile_count(), std::vector<int64_t>(m_columns.size(), 0));
   m_stored.assign(m_rows.size(), false);
 }
 
@@ -146,20 +130,19 @@ void FrameWork::run_binning() {
     for (uint32_t s : m_full_tiler->tile_triangles(tile)) ++m_tri_refs[s];
     for (uint32_t e : m_full_tiler->tile_edges(tile)) ++m_edge_refs[e];
   }
-  const int64_t tw = int64_t(m_cfg.tile_w) << m_setup.subpixel_bits, th = int64_t(m_cfg.tile_h) << m_setup.subpixel_bits;
-  int64_t tx0, ty0, tx1, ty1;
   for (size_t i = 0; i < n_tris; ++i) {
     const auto& v = m_setup.triangles[i].v;
     if (!m_setup.triangles[i].front) continue;  // culled before the tiling engine
-    bbox_tiles(std::min({v[0].x, v[1].x, v[2].x}), std::min({v[0].y, v[1].y, v[2].y}), std::max({v[0].x, v[1].x, v[2].x}),
-               std::max({v[0].y, v[1].y, v[2].y}), tw, th, m_tiles_x, m_tiles_y, tx0, ty0, tx1, ty1);
-    m_tri_tests[i] = tiles_in(tx0, ty0, tx1, ty1);
+    m_tri_tests[i] = m_grid
+                         .range({std::min({v[0].x, v[1].x, v[2].x}), std::min({v[0].y, v[1].y, v[2].y}),
+                                 std::max({v[0].x, v[1].x, v[2].x}), std::max({v[0].y, v[1].y, v[2].y})})
+                         .count();
   }
   for (size_t i = 0; i < n_edges; ++i) {
     const auto& e = m_setup.silhouettes[i];
-    bbox_tiles(std::min(e.a.x, e.b.x), std::min(e.a.y, e.b.y), std::max(e.a.x, e.b.x), std::max(e.a.y, e.b.y), tw, th,
-               m_tiles_x, m_tiles_y, tx0, ty0, tx1, ty1);
-    m_edge_tests[i] = tiles_in(tx0, ty0, tx1, ty1);
+    m_edge_tests[i] =
+        m_grid.range({std::min(e.a.x, e.b.x), std::min(e.a.y, e.b.y), std::max(e.a.x, e.b.x), std::max(e.a.y, e.b.y)})
+            .count();
   }
 
   // Edge owners: the first front-facing triangle of the draw with the edge as one of its own.
@@ -312,8 +295,8 @@ TileWork* FrameWork::open_tile(uint32_t tile) {
   auto w = std::make_unique<TileWork>();
   w->segment = sg.index;
   w->tile = tile;
-  w->tx = tile % m_tiles_x;
-  w->ty = tile / m_tiles_x;
+  w->tx = m_grid.tile_x(tile);
+  w->ty = m_grid.tile_y(tile);
   const uint32_t x0 = w->tx * m_cfg.tile_w, y0 = w->ty * m_cfg.tile_h;
   w->pixels = (std::min(m_frame.width, x0 + m_cfg.tile_w) - x0) * (std::min(m_frame.height, y0 + m_cfg.tile_h) - y0);
   std::vector<uint32_t> list = m_cfg.mode == Mode::analytic ? sg.golden->tile_triangles(tile) : sg.lists[tile];
@@ -549,7 +532,7 @@ void FrameWork::finish() {
       for (uint32_t px = 0; px < m_frame.width; ++px)
         for (uint32_t k = 0; k < ns; ++k)
           if (m_owner[(size_t(py) * m_frame.width + px) * ns + k] != kNone)
-            ++m_rows[(py / m_cfg.tile_h) * m_tiles_x + px / m_cfg.tile_w][c_cov];
+            ++m_rows[m_grid.tile_at_pixel(px, py)][c_cov];
   }
   m_finished = true;
 }

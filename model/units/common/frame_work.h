@@ -21,6 +21,7 @@
 
 #include "geom/depth.h"
 #include "geom/predicates.h"
+#include "geom/tile_grid.h"
 #include "tilevis/outputs.h"
 #include "tilevis/trace.h"
 #include "units/common/work.h"
@@ -61,9 +62,10 @@ class FrameWork {
 
   // --- TilingEngine: exact binning of the whole frame.
   void run_binning();
-  uint32_t tiles_x() const { return m_tiles_x; }
-  uint32_t tiles_y() const { return m_tiles_y; }
-  uint32_t tile_count() const { return m_tiles_x * m_tiles_y; }
+  uint32_t tiles_x() const { return m_grid.tiles_x(); }
+  uint32_t tiles_y() const { return m_grid.tiles_y(); }
+  uint32_t tile_count() const { return m_grid.tile_count(); }
+  const geom::TileGrid& grid() const { return m_grid; }
   uint32_t tile_refs(uint32_t setup_triangle) const { return m_tri_refs[setup_triangle]; }
   uint32_t tile_tests(uint32_t setup_triangle) const { return m_tri_tests[setup_triangle]; }
   uint32_t edge_refs(uint32_t edge) const { return m_edge_refs[edge]; }
@@ -120,7 +122,7 @@ class FrameWork {
   vis::GoldenConfig m_gcfg;
   vis::GoldenResult m_full;  // the whole frame's golden result (one segment: the output)
   std::unique_ptr<vis::GoldenTiler> m_full_tiler;
-  uint32_t m_tiles_x = 0, m_tiles_y = 0;
+  geom::TileGrid m_grid;
   std::vector<uint32_t> m_tri_refs, m_tri_tests, m_edge_refs, m_edge_tests;
   std::vector<uint32_t> m_owned_begin, m_owned;
 
