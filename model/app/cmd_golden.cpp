@@ -20,6 +20,8 @@ struct GoldenArgs {
   std::string trace, out, tile = "32", svg, occlusion_bin;
   uint32_t samples = 0, frame = 0, depth_bits = 24, quantized_depth_bits = 0;
   bool truth = false;
+  std::string mode = "analytic";
+  uint64_t pair_budget = 0;
 };
 
 nlohmann::json setup_totals(const vis::Setup& s) {
@@ -85,6 +87,8 @@ int run_golden(const GoldenArgs& a, const trace::Frame& frame, uint32_t tw, uint
   cfg.tile_w = tw;
   cfg.tile_h = th;
   cfg.keep_pieces = !a.svg.empty();
+  cfg.hybrid = a.mode == "hybrid";
+  cfg.hybrid_pair_budget = a.pair_budget;
   parse_occlusion_bin(a.occlusion_bin, tw, th, cfg.occlusion_bin_w, cfg.occlusion_bin_h);
   Progress progress("golden: tiles");
   if (progress.enabled()) cfg.progress = [&](uint64_t done, uint64_t total) { progress.update(done, total); };
@@ -113,10 +117,19 @@ int run_golden(const GoldenArgs& a, const trace::Frame& frame, uint32_t tw, uint
   totals["max_tile_triangles"] = r.max_tile_triangles;
   totals["max_tile_edges"] = r.max_tile_edges;
   totals["max_tile_pieces"] = r.max_tile_pieces;
+  if (cfg.hybrid)
+    totals["per_pixel_fallback"] = {{"tiles", r.fallback_tiles},
+                                    {"tiles_interpenetration", r.fallback_interpenetration},
+                                    {"tiles_non_opaque", r.fallback_non_opaque},
+                                    {"tiles_budget", r.fallback_budget},
+                                    {"samples", r.fallback_samples}};
+  nlohmann::json config = visibility_config(tw, th, cfg.occlusion_bin_w, cfg.occlusion_bin_h, r.samples, a.depth_bits);
+  config["mode"] = a.mode;
+  if (cfg.hybrid) config["pair_budget"] = a.pair_budget;
   out.stats = {{"tool", "golden"},
                {"trace", a.trace},
                {"frame", a.frame},
-               {"config", visibility_config(tw, th, cfg.occlusion_bin_w, cfg.occlusion_bin_h, r.samples, a.depth_bits)},
+               {"config", config},
                {"totals", totals},
                {"stage_seconds", {{"setup", setup_s}, {"tiles", tiles_s}}},
                {"host_seconds", setup_s + tiles_s}};
@@ -126,6 +139,10 @@ int run_golden(const GoldenArgs& a, const trace::Frame& frame, uint32_t tw, uint
              "{} pieces ({} visible), {:.3f} s -> {}\n",
              a.trace, a.frame, tw, th, s.stats.triangles_in, s.stats.silhouette_edges, r.candidate_pairs,
              r.clip_polygons, r.pieces_total, r.visible_pieces, setup_s + tiles_s, a.out);
+  if (cfg.hybrid)
+    fmt::print("  hybrid: {} of {} tiles per pixel ({} interpenetration, {} non-opaque, {} over budget), {} samples\n",
+               r.fallback_tiles, out.tiles.rows.size(), r.fallback_interpenetration, r.fallback_non_opaque,
+               r.fallback_budget, r.fallback_samples);
   return 0;
 }
 
@@ -144,6 +161,14 @@ Command add_golden_command(CLI::App& app) {
   cmd->add_option("--quantized-depth", a->quantized_depth_bits,
                   "With --truth: compare depth rounded to N bits, as hardware does (shows z-fighting)")
       ->check(CLI::Range(1, 24));
+  cmd->add_option("--mode", a->mode,
+                  "analytic: SVGPU in every tile; hybrid: tiles where the analytic answer can be wrong "
+                  "(interpenetration, non-opaque content, work over --pair-budget) go per pixel")
+      ->check(CLI::IsMember({"analytic", "hybrid"}))
+      ->capture_default_str();
+  cmd->add_option("--pair-budget", a->pair_budget,
+                  "With --mode hybrid: a tile whose triangles x edges exceed this goes per pixel (0: no budget)")
+      ->capture_default_str();
   cmd->add_option("--svg", a->svg, "Also write the visible planar map as SVG");
   cmd->add_option("--occlusion-bin", a->occlusion_bin,
                   "Finer occlusion bins (SVGPU 4.1), N or WxH pixels within each tile: only the scanning of "

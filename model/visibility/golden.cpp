@@ -92,7 +92,9 @@ class GoldenTiler::Impl {
     const size_t n_samples = size_t(m_s.width) * m_s.height * m_s.samples.size();
     m_r.ids.assign(n_samples, -1);
     m_r.visible_area.assign(m_s.triangle_draw.size(), 0.0);
-    m_r.tiles.resize(m_cfg.tile_w, m_cfg.tile_h, m_s.width, m_s.height, golden_tile_columns());
+    std::vector<std::string> columns = golden_tile_columns();
+    if (m_cfg.hybrid) columns.insert(columns.end(), hybrid_tile_columns().begin(), hybrid_tile_columns().end());
+    m_r.tiles.resize(m_cfg.tile_w, m_cfg.tile_h, m_s.width, m_s.height, columns);
     setup_occlusion_bins();
   }
 
@@ -170,6 +172,14 @@ class GoldenTiler::Impl {
     std::stable_sort(m_occluders.begin(), m_occluders.end(),
                      [&](uint32_t a, uint32_t b) { return m_tris[a].z_min < m_tris[b].z_min; });
     bin_occluders(rect);
+
+    if (m_cfg.hybrid) {
+      if (per_triangle) throw std::logic_error("golden: hybrid tiles have no per-triangle records");
+      if (const int cause = fallback_cause(tris, edge_ids.size(), rect)) {
+        resolve_per_pixel(tris, tx, ty, row, cause);
+        return;
+      }
+    }
 
     if (!per_triangle) {
       const uint64_t step = edge_ids.size() + tris.size();
@@ -257,6 +267,96 @@ class GoldenTiler::Impl {
       m_r.visible_area[tt.t->id] += geom::doubled_area(piece) / (2.0 * double(1 << sb) * double(1 << sb));
       if (m_cfg.keep_pieces) keep(piece, tt);
     }
+  }
+
+  // Hybrid: why the tile must go per pixel (0: it need not). 1: two opaque triangles whose
+  // planes cross inside their overlap in the tile; 2: a non-opaque or per-pixel-only triangle;
+  // 3: estimated pair tests over the budget.
+  int fallback_cause(const std::vector<uint32_t>& tris, size_t n_edges, const Rect& rect) const {
+    for (uint32_t i : tris)
+      if (!m_tris[i].t->opaque) return 2;
+    if (m_cfg.hybrid_pair_budget && uint64_t(tris.size()) * n_edges > m_cfg.hybrid_pair_budget) return 3;
+    for (uint32_t i : tris)
+      if (crosses_an_occluder(m_tris[i], rect)) return 1;
+    return 0;
+  }
+
+  // Is there an opaque triangle u of the tile (another trace triangle) whose plane crosses
+  // tt's strictly inside their overlap within the tile? Depth is affine over the overlap, a
+  // convex polygon, so it crosses exactly when the sign of z_u - z_tt at its vertices is
+  // positive at one and negative at another (exact: depth_order at implicit points). There
+  // the analytic method, which judges a piece by one interior point, can be wrong; where every
+  // overlap keeps one order, silhouette splitting makes it exact (SVGPU §4.3's assumption).
+  bool crosses_an_occluder(const TileTriangle& tt, const Rect& rect) const {
+    const ConvexPolygon poly = geom::clip_to_rect(ConvexPolygon::from_triangle(tt.tri), rect);
+    if (poly.empty()) return false;
+    for (uint32_t oi : m_occluders) {
+      const TileTriangle& u = m_tris[oi];
+      if (u.z_min >= tt.z_max) break;  // u at or behind tt everywhere: so are all later occluders
+      if (u.t->id == tt.t->id || u.z_max <= tt.z_min) continue;  // same triangle; u nearer everywhere
+      if (u.bbox.x1 <= tt.bbox.x0 || u.bbox.x0 >= tt.bbox.x1 || u.bbox.y1 <= tt.bbox.y0 || u.bbox.y0 >= tt.bbox.y1)
+        continue;
+      ConvexPolygon overlap = poly;
+      for (const Line& l : u.edges.edge) {
+        overlap = geom::clip(overlap, l);
+        if (overlap.empty()) break;
+      }
+      bool nearer = false, farther = false;
+      for (const auto& e : overlap.edges()) {
+        const int order = geom::depth_order(u.plane, tt.plane, e.start);
+        nearer = nearer || order < 0;
+        farther = farther || order > 0;
+      }
+      if (nearer && farther) return true;
+    }
+    return false;
+  }
+
+  // The tile per pixel: every binned triangle in submission order, an exact less-than depth
+  // test, opaque triangles taking the samples they win (the z-buffer truth's rule). Visible
+  // areas of these tiles are sample counts times the sample's share of a pixel.
+  void resolve_per_pixel(const std::vector<uint32_t>& tris, uint32_t tx, uint32_t ty, std::vector<int64_t>& row,
+                         int cause) {
+    const int32_t sb = int32_t(m_s.subpixel_bits);
+    const uint32_t ns = uint32_t(m_s.samples.size());
+    const uint32_t x0 = tx * m_cfg.tile_w, y0 = ty * m_cfg.tile_h;
+    const uint32_t x1 = std::min(x0 + m_cfg.tile_w, m_s.width), y1 = std::min(y0 + m_cfg.tile_h, m_s.height);
+    const uint32_t w = x1 - x0;
+    m_owner.assign(size_t(w) * (y1 - y0) * ns, -1);
+    int64_t generated = 0;
+    for (uint32_t i : tris) {
+      const TileTriangle& t = m_tris[i];
+      const int64_t px0 = std::max<int64_t>(x0, t.bbox.x0 >> sb), px1 = std::min<int64_t>(x1 - 1, t.bbox.x1 >> sb);
+      const int64_t py0 = std::max<int64_t>(y0, t.bbox.y0 >> sb), py1 = std::min<int64_t>(y1 - 1, t.bbox.y1 >> sb);
+      for (int64_t py = py0; py <= py1; ++py)
+        for (int64_t px = px0; px <= px1; ++px)
+          for (uint32_t k = 0; k < ns; ++k) {
+            const Point p{int32_t((px << sb) + m_s.samples[k].x), int32_t((py << sb) + m_s.samples[k].y)};
+            if (!t.edges.covers(p)) continue;
+            ++generated;
+            int32_t& o = m_owner[(size_t(py - y0) * w + size_t(px - x0)) * ns + k];
+            if (t.t->opaque && (o < 0 || geom::depth_order(t.plane, m_tris[size_t(o)].plane, p) < 0)) o = int32_t(i);
+          }
+    }
+    int64_t covered = 0;
+    const double sample_area = 1.0 / double(ns);
+    for (uint32_t py = y0; py < y1; ++py)
+      for (uint32_t px = x0; px < x1; ++px)
+        for (uint32_t k = 0; k < ns; ++k) {
+          const int32_t o = m_owner[(size_t(py - y0) * w + (px - x0)) * ns + k];
+          if (o < 0) continue;
+          const uint32_t id = m_tris[size_t(o)].t->id;
+          m_r.ids[(size_t(py) * m_s.width + px) * ns + k] = int32_t(id);
+          m_r.visible_area[id] += sample_area;
+          ++covered;
+        }
+    row[8] += covered;
+    row[9] += generated;
+    row[10] = 1;
+    row[11] = cause;
+    ++m_r.fallback_tiles;
+    m_r.fallback_samples += uint64_t(covered);
+    (cause == 1 ? m_r.fallback_interpenetration : cause == 2 ? m_r.fallback_non_opaque : m_r.fallback_budget) += 1;
   }
 
   // SVGPU §3.3: the piece is hidden if an original opaque triangle nearer at its interior
@@ -358,6 +458,7 @@ class GoldenTiler::Impl {
   uint32_t m_bins_x = 1, m_bins_y = 1;
   int64_t m_bin_x0 = 0, m_bin_y0 = 0, m_bin_step_x = 1, m_bin_step_y = 1;
   std::vector<ConvexPolygon> m_pieces;
+  std::vector<int32_t> m_owner;  // hybrid: the per-pixel tile's sample owners (index into m_tris)
   uint64_t m_work_done = 0, m_work_total = 0;  // GoldenConfig::progress
 };
 

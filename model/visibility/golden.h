@@ -28,6 +28,14 @@ struct GoldenConfig {
   // results and counters are those of one bin per tile; only the scanning shrinks.
   uint32_t occlusion_bin_w = 0, occlusion_bin_h = 0;
   bool keep_pieces = false;  // collect visible pieces as polygons (for SVG)
+  // Hybrid visibility (DESIGN.md "Visibility modes"): a tile goes per pixel (an exact
+  // z-buffer over its triangles, the truth's rule) where the analytic answer can be wrong:
+  // two opaque triangles whose planes cross inside their overlap (interpenetration, found
+  // with exact predicates), a non-opaque or per-pixel-only triangle (they never occlude, so
+  // their samples are the z-buffer's), or estimated work over `hybrid_pair_budget` pair
+  // tests (triangles x edges; 0: no budget). The other tiles are resolved analytically.
+  bool hybrid = false;
+  uint64_t hybrid_pair_budget = 0;
   // Called after binning with (0, total), then after every triangle of every tile with
   // (done, total), in units of estimated work: a tile weighs 1 + triangles x (edges +
   // triangles), its pair tests and occlusion tests, so a frame whose work sits in one
@@ -61,7 +69,17 @@ struct GoldenResult {
            occlusion_tests = 0, samples_covered = 0, fragments_generated = 0;
   uint64_t visible_triangles = 0;  // visible pieces fan-triangulated (SVGPU Fig. 6 counts output triangles)
   uint64_t max_tile_triangles = 0, max_tile_edges = 0, max_tile_pieces = 0;
+  // Hybrid: tiles resolved per pixel, by cause, and the samples they cover.
+  uint64_t fallback_tiles = 0, fallback_interpenetration = 0, fallback_non_opaque = 0, fallback_budget = 0,
+           fallback_samples = 0;
 };
+
+// Extra tiles.csv columns of hybrid runs, after golden_tile_columns(): 1 where the tile
+// went per pixel, and why (1 interpenetration, 2 non-opaque content, 3 work budget).
+inline const std::vector<std::string>& hybrid_tile_columns() {
+  static const std::vector<std::string> cols = {"per_pixel", "per_pixel_cause"};
+  return cols;
+}
 
 GoldenResult golden_visibility(const Setup& setup, const GoldenConfig& config);
 
