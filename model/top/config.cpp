@@ -99,7 +99,7 @@ Registry::Registry() {
                      {Fidelity::analytic, Fidelity::tile, Fidelity::primitive},
                      +[](TilerConfig& c) -> Fidelity& { return c.sim.fidelity; });
   add_enum<Mode>("sim.mode", "visibility: analytic (EVU), hsr (per-pixel HSR unit), early_z, none",
-                 {Mode::analytic, Mode::hsr, Mode::early_z, Mode::none}, +[](TilerConfig& c) -> Mode& { return c.sim.mode; });
+                 {Mode::analytic, Mode::hybrid, Mode::hsr, Mode::early_z, Mode::none}, +[](TilerConfig& c) -> Mode& { return c.sim.mode; });
   TV_UINT("sim.tile_width", sim.tile_width, "pixels", 4, 256, "tile width");
   TV_UINT("sim.tile_height", sim.tile_height, "pixels", 4, 256, "tile height");
   TV_UINT("sim.depth_bits", sim.depth_bits, "bits", 1, 24, "bits of snapped depth");

@@ -23,9 +23,9 @@ Tiler::Tiler(const sc_core::sc_module_name& name, const TilerConfig& config, Fra
   m_pb = std::make_unique<ParameterBuffer>("pb", m_env, config.pb);
   m_tiling = std::make_unique<TilingEngine>("tiling", m_env, config.tiling, *m_pb);
   m_fetch = std::make_unique<TileFetch>("fetch", m_env, config.fetch, *m_pb, config.framebuffer, per_primitive);
-  if (config.sim.mode == Mode::analytic)
+  if (uses_evu(config.sim.mode))
     m_evu = std::make_unique<EarlyVisibilityUnit>("evu", m_env, config.evu, render_depth);
-  if (config.sim.mode == Mode::hsr) m_hsr = std::make_unique<HsrUnit>("hsr", m_env, config.hsr);
+  if (uses_hsr(config.sim.mode)) m_hsr = std::make_unique<HsrUnit>("hsr", m_env, config.hsr);
   m_fragment = std::make_unique<FragmentUnit>("fragment", m_env, config.fragment, *m_pb);
   m_writer = std::make_unique<TileWriter>("writer", m_env, config.writer, config.framebuffer);
 
@@ -50,10 +50,12 @@ Tiler::Tiler(const sc_core::sc_module_name& name, const TilerConfig& config, Fra
   m_pb->released(*m_released);
 
   m_fetch->out(*fifo("fetch_to_visibility", render_depth));
+  // Hybrid: the EVU, then the HSR unit; each resolves its own tiles and passes the others on.
   if (m_evu) {
     m_evu->in(*m_fifos.back());
-    m_evu->out(*fifo("visibility_to_fragment", render_depth));
-  } else if (m_hsr) {
+    m_evu->out(*fifo(m_hsr ? "evu_to_hsr" : "visibility_to_fragment", render_depth));
+  }
+  if (m_hsr) {
     m_hsr->in(*m_fifos.back());
     m_hsr->out(*fifo("visibility_to_fragment", render_depth));
   }

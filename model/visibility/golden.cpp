@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <unordered_map>
 
 #include "geom/clip.h"
 #include "geom/depth.h"
@@ -148,7 +149,7 @@ class GoldenTiler::Impl {
     start_progress();
   }
 
-  void process_tile(uint32_t tile, std::vector<TileTriangleWork>* per_triangle) {
+  int process_tile(uint32_t tile, std::vector<TileTriangleWork>* per_triangle) {
     const auto& tris = m_tile_tris[tile];
     const auto& edge_ids = m_tile_edges[tile];
     auto& row = m_r.tiles.rows[tile];
@@ -156,7 +157,7 @@ class GoldenTiler::Impl {
     row[1] = int64_t(edge_ids.size());
     m_r.max_tile_triangles = std::max<uint64_t>(m_r.max_tile_triangles, tris.size());
     m_r.max_tile_edges = std::max<uint64_t>(m_r.max_tile_edges, edge_ids.size());
-    if (tris.empty()) return;
+    if (tris.empty()) return 0;
     const uint32_t tx = m_grid.tile_x(tile), ty = m_grid.tile_y(tile);
     const Rect rect = m_grid.rect(tx, ty);
 
@@ -173,13 +174,11 @@ class GoldenTiler::Impl {
                      [&](uint32_t a, uint32_t b) { return m_tris[a].z_min < m_tris[b].z_min; });
     bin_occluders(rect);
 
-    if (m_cfg.hybrid) {
-      if (per_triangle) throw std::logic_error("golden: hybrid tiles have no per-triangle records");
+    if (m_cfg.hybrid)
       if (const int cause = fallback_cause(tris, edge_ids.size(), rect)) {
-        resolve_per_pixel(tris, tx, ty, row, cause);
-        return;
+        resolve_per_pixel(tris, tx, ty, row, cause, per_triangle);
+        return cause;
       }
-    }
 
     if (!per_triangle) {
       const uint64_t step = edge_ids.size() + tris.size();
@@ -188,7 +187,7 @@ class GoldenTiler::Impl {
         if (m_cfg.progress) m_cfg.progress(m_work_done += step, m_work_total);
       }
       if (m_cfg.progress) m_cfg.progress(m_work_done += 1, m_work_total);
-      return;
+      return 0;
     }
     for (uint32_t i : tris) {
       TileTriangleWork w;
@@ -198,6 +197,7 @@ class GoldenTiler::Impl {
       for (size_t c = 0; c < 8; ++c) w.counters[c] += row[c + 2];
       per_triangle->push_back(w);
     }
+    return 0;
   }
 
   uint32_t setup_index(uint32_t front) const { return uint32_t(m_tris[front].t - m_s.triangles.data()); }
@@ -316,7 +316,8 @@ class GoldenTiler::Impl {
   // test, opaque triangles taking the samples they win (the z-buffer truth's rule). Visible
   // areas of these tiles are sample counts times the sample's share of a pixel.
   void resolve_per_pixel(const std::vector<uint32_t>& tris, uint32_t tx, uint32_t ty, std::vector<int64_t>& row,
-                         int cause) {
+                         int cause, std::vector<TileTriangleWork>* per_triangle) {
+    const size_t first_record = per_triangle ? per_triangle->size() : 0;
     const int32_t sb = int32_t(m_s.subpixel_bits);
     const uint32_t ns = uint32_t(m_s.samples.size());
     const uint32_t x0 = tx * m_cfg.tile_w, y0 = ty * m_cfg.tile_h;
@@ -324,8 +325,10 @@ class GoldenTiler::Impl {
     const uint32_t w = x1 - x0;
     m_owner.assign(size_t(w) * (y1 - y0) * ns, -1);
     int64_t generated = 0;
-    for (uint32_t i : tris) {
+    for (size_t n = 0; n < tris.size(); ++n) {
+      const uint32_t i = tris[n];
       const TileTriangle& t = m_tris[i];
+      const int64_t generated_before = generated;
       const int64_t px0 = std::max<int64_t>(x0, t.bbox.x0 >> sb), px1 = std::min<int64_t>(x1 - 1, t.bbox.x1 >> sb);
       const int64_t py0 = std::max<int64_t>(y0, t.bbox.y0 >> sb), py1 = std::min<int64_t>(y1 - 1, t.bbox.y1 >> sb);
       for (int64_t py = py0; py <= py1; ++py)
@@ -337,6 +340,13 @@ class GoldenTiler::Impl {
             int32_t& o = m_owner[(size_t(py - y0) * w + size_t(px - x0)) * ns + k];
             if (t.t->opaque && (o < 0 || geom::depth_order(t.plane, m_tris[size_t(o)].plane, p) < 0)) o = int32_t(i);
           }
+      if (per_triangle) {
+        TileTriangleWork record;
+        record.triangle = setup_index(i);
+        record.counters[7] = generated - generated_before;
+        per_triangle->push_back(record);
+        m_record_of[i] = uint32_t(n);
+      }
     }
     int64_t covered = 0;
     const double sample_area = 1.0 / double(ns);
@@ -349,6 +359,7 @@ class GoldenTiler::Impl {
           m_r.ids[(size_t(py) * m_s.width + px) * ns + k] = int32_t(id);
           m_r.visible_area[id] += sample_area;
           ++covered;
+          if (per_triangle) ++(*per_triangle)[first_record + m_record_of[uint32_t(o)]].counters[6];
         }
     row[8] += covered;
     row[9] += generated;
@@ -459,6 +470,7 @@ class GoldenTiler::Impl {
   int64_t m_bin_x0 = 0, m_bin_y0 = 0, m_bin_step_x = 1, m_bin_step_y = 1;
   std::vector<ConvexPolygon> m_pieces;
   std::vector<int32_t> m_owner;  // hybrid: the per-pixel tile's sample owners (index into m_tris)
+  std::unordered_map<uint32_t, uint32_t> m_record_of;  // hybrid: per-triangle record of a tile triangle
   uint64_t m_work_done = 0, m_work_total = 0;  // GoldenConfig::progress
 };
 
@@ -476,8 +488,8 @@ std::vector<uint32_t> GoldenTiler::tile_triangles(uint32_t tile) const {
 }
 size_t GoldenTiler::tile_triangle_count(uint32_t tile) const { return m_impl->m_tile_tris[tile].size(); }
 const std::vector<uint32_t>& GoldenTiler::tile_edges(uint32_t tile) const { return m_impl->m_tile_edges[tile]; }
-void GoldenTiler::process_tile(uint32_t tile, std::vector<TileTriangleWork>* per_triangle) {
-  m_impl->process_tile(tile, per_triangle);
+int GoldenTiler::process_tile(uint32_t tile, std::vector<TileTriangleWork>* per_triangle) {
+  return m_impl->process_tile(tile, per_triangle);
 }
 
 GoldenResult golden_visibility(const Setup& s, const GoldenConfig& cfg) {

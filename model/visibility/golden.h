@@ -118,8 +118,10 @@ class GoldenTiler {
   size_t tile_triangle_count(uint32_t tile) const;
 
   // Runs SVGPU §3.2–3.3 on one tile. With `per_triangle`, appends one record per binned
-  // triangle (in processing order) whose counters sum to the tile's row.
-  void process_tile(uint32_t tile, std::vector<TileTriangleWork>* per_triangle = nullptr);
+  // triangle (in processing order) whose counters sum to the tile's row. Returns 0, or with
+  // GoldenConfig::hybrid the cause of the tile's per-pixel fallback (hybrid_tile_columns()),
+  // whose records count covered and owned samples only.
+  int process_tile(uint32_t tile, std::vector<TileTriangleWork>* per_triangle = nullptr);
 
  private:
   class Impl;

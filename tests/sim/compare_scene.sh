@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # One CTest step of "sim == golden" on a real scene, through the CLI as a user runs it:
 #   compare_scene.sh TILEVIS TRACE TILE WORKDIR [tilevis sim options...]
-# golden and sim at the tile size, then `tilevis compare`: every covered sample the same
+# golden (--mode hybrid when sim runs sim.mode=hybrid) and sim at the tile size, then `tilevis compare`: every covered sample the same
 # id, every per-tile functional counter and every visible area equal, or the step fails.
 set -euo pipefail
 bin=$1 trace=$2 tile=$3 work=$4
@@ -9,7 +9,9 @@ shift 4
 name="$(basename "$trace" .tvt)_t${tile}${1:+_$(echo "$*" | tr -c 'A-Za-z0-9_.=' '_')}"
 rm -rf "${work:?}/$name"
 mkdir -p "$work/$name"
-"$bin" golden "$trace" --tile "$tile" -o "$work/$name/golden" >/dev/null
+golden_mode=analytic
+case " $* " in *sim.mode=hybrid*) golden_mode=hybrid ;; esac
+"$bin" golden "$trace" --tile "$tile" --mode "$golden_mode" -o "$work/$name/golden" >/dev/null
 "$bin" sim "$trace" --tile "$tile" "$@" -o "$work/$name/sim"
 "$bin" compare "$work/$name/sim" "$work/$name/golden"
 for f in tile_cycles.exr tile_cycles.png config.json; do

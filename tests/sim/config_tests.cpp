@@ -54,7 +54,7 @@ TEST(Config, UnknownKeyIsAOneLineErrorWithASuggestion) {
 
 TEST(Config, OutOfRangeAndWrongTypeNameTheExpectation) {
   EXPECT_NE(error_of("", {"evu.reject.lanes=0"}).find("expected an integer in [1, 1024], got 0"), std::string::npos);
-  EXPECT_NE(error_of("", {"sim.mode=magic"}).find("expected one of analytic, hsr, early_z, none"), std::string::npos);
+  EXPECT_NE(error_of("", {"sim.mode=magic"}).find("expected one of analytic, hybrid, hsr, early_z, none"), std::string::npos);
   EXPECT_NE(error_of("", {"fragment.texture_hit_rate=1.5"}).find("expected a number in [0, 1]"), std::string::npos);
   EXPECT_NE(error_of("", {"sim.tile_width"}).find("expected key=value"), std::string::npos);
   const fs::path f = write_temp("broken.json", R"({"sim": {"tile_width": 32,})");

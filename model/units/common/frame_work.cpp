@@ -9,6 +9,7 @@ namespace tilevis::sim {
 const char* to_string(Mode m) {
   switch (m) {
     case Mode::analytic: return "analytic";
+    case Mode::hybrid: return "hybrid";
     case Mode::hsr: return "hsr";
     case Mode::early_z: return "early_z";
     case Mode::none: return "none";
@@ -45,8 +46,8 @@ bool unit_present(TileUnit u, Mode m) {
   switch (u) {
     case TileUnit::reject:
     case TileUnit::clip:
-    case TileUnit::occlude: return m == Mode::analytic;
-    case TileUnit::hsr: return m == Mode::hsr;
+    case TileUnit::occlude: return uses_evu(m);
+    case TileUnit::hsr: return uses_hsr(m);
     default: return true;
   }
 }
@@ -91,10 +92,14 @@ FrameWork::FrameWork(const trace::Frame& frame, const FrameWorkConfig& config) :
   m_trace_triangles = uint32_t(frame.triangle_count());
   m_gcfg.tile_w = config.tile_w;
   m_gcfg.tile_h = config.tile_h;
+  m_gcfg.hybrid = config.mode == Mode::hybrid;
+  m_gcfg.hybrid_pair_budget = config.hybrid_pair_budget;
   m_grid = geom::TileGrid::make(frame.width, frame.height, config.tile_w, config.tile_h, frame.subpixel_bits);
-  if (m_cfg.mode == Mode::analytic) {
+  if (uses_evu(m_cfg.mode)) {
     m_columns = vis::golden_tile_columns();
     for (const char* c : {"fragments_shaded", "depth_tests", "passes", "segments"}) m_columns.push_back(c);
+    if (m_gcfg.hybrid)
+      m_columns.insert(m_columns.end(), vis::hybrid_tile_columns().begin(), vis::hybrid_tile_columns().end());
   } else {
     m_columns = {"triangles", "fragments_generated", "samples_covered", "fragments_shaded", "depth_tests", "segments"};
   }
@@ -147,7 +152,7 @@ void FrameWork::run_binning() {
 
   // Edge owners: the first front-facing triangle of the draw with the edge as one of its own.
   std::vector<uint32_t> owner(n_edges, kNone);
-  if (m_cfg.mode == Mode::analytic && n_edges > 0) {
+  if (uses_evu(m_cfg.mode) && n_edges > 0) {
     std::unordered_map<EdgeKey, uint32_t, EdgeKeyHash> by_key;
     by_key.reserve(n_edges * 2);
     for (uint32_t e = 0; e < n_edges; ++e) {
@@ -187,7 +192,7 @@ void FrameWork::set_segments(std::vector<uint32_t> first_ids) {
   m_seg_front.assign(m_seg_first.size(), 0);
   if (segment_count() > 1 && m_owner.empty())
     m_owner.assign(size_t(m_frame.width) * m_frame.height * samples(), kNone);
-  if (m_cfg.mode != Mode::analytic && m_owner.empty())
+  if (!uses_evu(m_cfg.mode) && m_owner.empty())
     m_owner.assign(size_t(m_frame.width) * m_frame.height * samples(), kNone);
 }
 
@@ -252,10 +257,11 @@ void FrameWork::prepare_segment(uint32_t k) {
   sg.open.resize(tile_count());
   for (uint32_t i = sg.setup_first; i < sg.setup_end; ++i) m_seg_front[k] += m_setup.triangles[i].front;
 
-  const size_t c_tri = 0, c_seg = m_cycles_col - 1;
-  const size_t c_edges = m_cfg.mode == Mode::analytic ? 1 : SIZE_MAX;
+  const size_t c_tri = 0,
+               c_seg = size_t(std::find(m_columns.begin(), m_columns.end(), "segments") - m_columns.begin());
+  const size_t c_edges = uses_evu(m_cfg.mode) ? 1 : SIZE_MAX;
   m_seg_tiles.clear();
-  if (m_cfg.mode == Mode::analytic) {
+  if (uses_evu(m_cfg.mode)) {
     if (segment_count() == 1) {
       sg.s = &m_setup;
       sg.golden = m_full_tiler.get();
@@ -299,14 +305,14 @@ TileWork* FrameWork::open_tile(uint32_t tile) {
   w->ty = m_grid.tile_y(tile);
   const uint32_t x0 = w->tx * m_cfg.tile_w, y0 = w->ty * m_cfg.tile_h;
   w->pixels = (std::min(m_frame.width, x0 + m_cfg.tile_w) - x0) * (std::min(m_frame.height, y0 + m_cfg.tile_h) - y0);
-  std::vector<uint32_t> list = m_cfg.mode == Mode::analytic ? sg.golden->tile_triangles(tile) : sg.lists[tile];
+  std::vector<uint32_t> list = uses_evu(m_cfg.mode) ? sg.golden->tile_triangles(tile) : sg.lists[tile];
   w->draws.reserve(list.size());
   for (uint32_t s : list) {
     const vis::SetupTriangle& t = sg.s->triangles[s];
     w->draws.push_back(t.draw);
     w->opaque += t.opaque;
   }
-  if (m_cfg.mode == Mode::analytic) {
+  if (uses_evu(m_cfg.mode)) {
     w->edges = uint32_t(sg.golden->tile_edges(tile).size());
     // SVGPU needs a tile's whole edge list beside each triangle: a list over the on-chip
     // capacity is streamed in passes (triangles in chunks, edges and occluders re-read).
@@ -343,7 +349,7 @@ uint32_t FrameWork::covering_fan(uint32_t id, geom::Point p) {
 void FrameWork::resolve_tile(TileWork& w) {
   if (w.resolved) return;
   m_raster_cache.clear();
-  if (m_cfg.mode == Mode::analytic) resolve_analytic(w);
+  if (uses_evu(m_cfg.mode)) resolve_analytic(w);
   else resolve_pixels(w);
   w.resolved = true;
 }
@@ -351,7 +357,7 @@ void FrameWork::resolve_tile(TileWork& w) {
 void FrameWork::resolve_analytic(TileWork& w) {
   Segment& sg = *m_seg;
   m_per_tri.clear();
-  sg.golden->process_tile(w.tile, &m_per_tri);
+  w.per_pixel = uint8_t(sg.golden->process_tile(w.tile, &m_per_tri));
   w.tris.resize(m_per_tri.size());
   for (size_t i = 0; i < m_per_tri.size(); ++i) {
     const auto& rec = m_per_tri[i];
@@ -368,6 +374,7 @@ void FrameWork::resolve_analytic(TileWork& w) {
     tw.visible_samples = uint32_t(rec.counters[6]);
     tw.fragments_generated = uint32_t(rec.counters[7]);
     tw.fragments_shaded = tw.visible_samples;
+    if (w.per_pixel) tw.depth_tests = tw.fragments_generated;  // the HSR unit: one test per covered sample
   }
   if (segment_count() == 1) return;
 
@@ -472,7 +479,7 @@ void FrameWork::close_tile(TileWork* w) {
     shaded += t.fragments_shaded;
     tests += t.depth_tests;
   }
-  if (m_cfg.mode == Mode::analytic) {
+  if (uses_evu(m_cfg.mode)) {
     for (const TriangleWork& t : w->tris) {
       row[2] += t.pair_tests;
       row[3] += t.candidate_pairs;
@@ -487,6 +494,11 @@ void FrameWork::close_tile(TileWork* w) {
     row[11] += int64_t(tests);
     row[12] += w->passes;
     m_passes_extra += w->passes - 1;
+    if (m_gcfg.hybrid && w->per_pixel) {
+      row[14] = 1;  // hybrid_tile_columns(), after "segments"
+      row[15] = w->per_pixel;
+      ++m_per_pixel_tiles;
+    }
   } else {
     for (const TriangleWork& t : w->tris) row[1] += t.fragments_generated;
     row[3] += int64_t(shaded);
@@ -526,7 +538,7 @@ void FrameWork::finish() {
     for (size_t i = 0; i < m_owner.size(); ++i)
       if (m_owner[i] != kNone) m_ids[i] = int32_t(m_setup.triangles[m_owner[i]].id);
     // samples_covered per tile: what is visible at the end of the frame.
-    const size_t c_cov = m_cfg.mode == Mode::analytic ? 8 : 2;
+    const size_t c_cov = uses_evu(m_cfg.mode) ? 8 : 2;
     for (auto& row : m_rows) row[c_cov] = 0;
     for (uint32_t py = 0; py < m_frame.height; ++py)
       for (uint32_t px = 0; px < m_frame.width; ++px)
@@ -553,7 +565,8 @@ nlohmann::json FrameWork::totals() const {
                       {"triangles_clipped", st.clipped},
                       {"triangles_frustum_culled", st.frustum_culled},
                       {"triangles_edge_on", st.edge_on},
-                      {"silhouette_edges", m_cfg.mode == Mode::analytic ? st.silhouette_edges : 0}};
+                      {"silhouette_edges", uses_evu(m_cfg.mode) ? st.silhouette_edges : 0}};
+  if (m_gcfg.hybrid) j["per_pixel_tiles"] = m_per_pixel_tiles;
   auto sum = [&](const std::string& name) {
     const auto it = std::find(m_columns.begin(), m_columns.end(), name);
     if (it == m_columns.end()) return uint64_t{0};
@@ -562,7 +575,7 @@ nlohmann::json FrameWork::totals() const {
     for (const auto& row : m_rows) s += uint64_t(row[c]);
     return s;
   };
-  if (m_cfg.mode == Mode::analytic) {
+  if (uses_evu(m_cfg.mode)) {
     j["pair_tests"] = sum("pair_tests");
     j["candidate_pairs"] = sum("candidate_pairs");
     j["clip_polygons"] = sum("clip_polygons");

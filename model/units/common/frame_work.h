@@ -36,6 +36,8 @@ struct FrameWorkConfig {
   uint32_t depth_bits = 24;
   // EVU on-chip list capacities: a tile with more triangles or edges takes several passes.
   uint32_t evu_triangle_entries = 512, evu_edge_entries = 256;
+  // Hybrid: a tile whose triangles x edges exceed this goes per pixel (0: no budget).
+  uint64_t hybrid_pair_budget = 0;
 };
 
 class FrameWork {
@@ -140,7 +142,7 @@ class FrameWork {
   size_t m_cycles_col = 0;
   std::vector<int32_t> m_ids;
   std::vector<double> m_visible_area;
-  uint64_t m_shaded = 0, m_depth_tests = 0, m_tiles_rendered = 0, m_passes_extra = 0;
+  uint64_t m_shaded = 0, m_depth_tests = 0, m_tiles_rendered = 0, m_passes_extra = 0, m_per_pixel_tiles = 0;
   std::vector<uint64_t> m_seg_front;     // front-facing triangles per segment
   uint64_t m_visible_triangles = 0;
   bool m_finished = false;

@@ -13,6 +13,7 @@ namespace tilevis::sim {
 // DESIGN.md "Visibility modes": what sits between tile fetch and the fragment unit.
 enum class Mode : uint8_t {
   analytic,  // the early-visibility unit (SVGPU silhouette clipping + Roberts occlusion)
+  hybrid,    // the EVU, and per-pixel HSR in tiles where the analytic answer can be wrong
   hsr,       // a per-pixel hidden-surface-removal unit (PowerVR ISP-like)
   early_z,   // no visibility unit; early depth test in the fragment path, submission order
   none       // no visibility unit, no early depth test (immediate mode)
@@ -25,6 +26,9 @@ enum class Fidelity : uint8_t {
 };
 
 const char* to_string(Mode m);
+// Modes with the early-visibility unit (and silhouettes, edge lists, SVGPU counters).
+inline bool uses_evu(Mode m) { return m == Mode::analytic || m == Mode::hybrid; }
+inline bool uses_hsr(Mode m) { return m == Mode::hsr || m == Mode::hybrid; }
 const char* to_string(Fidelity f);
 
 // One binned triangle of a tile: its functional counts, from which every unit's cost follows.
@@ -57,6 +61,8 @@ struct TileWork {
   std::vector<uint32_t> draws;        // per binned triangle, its draw (what tile fetch needs before visibility)
   std::vector<TriangleWork> tris;     // per binned triangle, after resolve (list order)
   bool resolved = false;
+  uint8_t per_pixel = 0;              // hybrid: 0 analytic, else why the tile went to the HSR unit
+                                      // (1 interpenetration, 2 non-opaque content, 3 work budget)
   uint64_t cycles[size_t(TileUnit::count)] = {};
   uint64_t start_cycle = 0, end_cycle = 0;  // first fetch to last write (event-driven levels)
 

@@ -7,14 +7,18 @@ namespace {
 
 uint64_t rasterised(const TriangleWork& t, Mode m) {
   switch (m) {
-    case Mode::analytic: return t.visible_samples;
+    case Mode::analytic:
+    case Mode::hybrid: return t.visible_samples;
     case Mode::hsr: return t.fragments_shaded;
     default: return t.fragments_generated;
   }
 }
 
-// Early depth tests in the fragment path: early-Z's, or the partial-render merge's.
-uint64_t fragment_depth_tests(const TriangleWork& t, Mode m) { return m == Mode::hsr ? 0 : t.depth_tests; }
+// Early depth tests in the fragment path: early-Z's, or the partial-render merge's (the HSR
+// unit's own tests, in hsr mode and in the hybrid's per-pixel tiles, are not the fragment's).
+uint64_t fragment_depth_tests(const TriangleWork& t, Mode m, const TileWork& w) {
+  return m == Mode::hsr || w.per_pixel ? 0 : t.depth_tests;
+}
 
 }  // namespace
 
@@ -38,7 +42,7 @@ FragmentUnit::FragmentUnit(const sc_core::sc_module_name& name, const UnitEnv& e
     const Mode mode = m_work.mode();
     for (const TriangleWork& t : w.tris) {
       m_rasterised.value += double(rasterised(t, mode));
-      m_tests.value += double(fragment_depth_tests(t, mode));
+      m_tests.value += double(fragment_depth_tests(t, mode, w));
       m_shaded.value += t.fragments_shaded;
       m_shader_cycles.value +=
           double(t.fragments_shaded) * double(m_work.frame().draws[t.draw].shader_cycles_per_fragment);
@@ -56,7 +60,7 @@ Cost FragmentUnit::cost(const Item& it) const {
     const TriangleWork& t = w.tris[i];
     const trace::Draw& d = m_work.frame().draws[t.draw];
     raster += rasterised(t, mode);
-    tests += fragment_depth_tests(t, mode);
+    tests += fragment_depth_tests(t, mode, w);
     shade += double(t.fragments_shaded) * double(d.shader_cycles_per_fragment);
     texture += double(t.fragments_shaded) * double(d.texture_bytes_per_fragment);
     if (t.fragments_shaded) c.pb_read_bytes += m_buffer.varying_bytes(t.draw);

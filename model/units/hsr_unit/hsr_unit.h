@@ -24,6 +24,7 @@ class HsrUnit : public Stage {
  private:
   HsrUnitConfig m_cfg;
   Stat& m_tests;
+  Stat& m_tiles;
 };
 
 }  // namespace tilevis::sim

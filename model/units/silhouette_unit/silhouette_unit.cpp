@@ -28,7 +28,7 @@ void SilhouetteUnit::prepare() {
   const vis::Setup& s = m_work.setup();
   const uint32_t n = m_work.trace_triangles();
   std::vector<uint64_t> ops(n, 0), wr(n, 0), rd(n, 0);
-  const bool on = m_work.mode() == Mode::analytic;
+  const bool on = uses_evu(m_work.mode());
   uint32_t id = 0;
   for (const trace::Draw& d : f.draws) {
     const uint32_t first = id;
@@ -99,7 +99,7 @@ Cost SilhouetteUnit::cost(const Item& it) const {
   Cost c;
   const uint32_t a = it.first, b = it.first + it.count;
   c.cycles = m_cycles[b] - m_cycles[a];
-  if (it.last && m_work.mode() == Mode::analytic) c.cycles += m_cfg.latency_cycles;
+  if (it.last && uses_evu(m_work.mode())) c.cycles += m_cfg.latency_cycles;
   c.write_bytes = m_spill_write[b] - m_spill_write[a];
   c.read_bytes = m_spill_read[b] - m_spill_read[a];
   return c;
