@@ -2,3 +2,13 @@
 add_executable(hybrid_tests ${CMAKE_CURRENT_LIST_DIR}/hybrid_tests.cpp)
 target_link_libraries(hybrid_tests PRIVATE tilevis_visibility tilevis_scene tilevis_warnings GTest::gtest_main)
 gtest_discover_tests(hybrid_tests DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT 900)
+
+# The failure scenes (traces/scenes): hybrid equals the truth through the CLI at 16, 32 and 128.
+if(TARGET tilevis)
+  foreach(scene interpenetrating decals glass)
+    add_test(NAME hybrid_scene_${scene}
+             COMMAND ${CMAKE_CURRENT_LIST_DIR}/hybrid_scene.sh $<TARGET_FILE:tilevis>
+                     ${PROJECT_SOURCE_DIR}/traces/scenes/${scene}.json ${CMAKE_CURRENT_BINARY_DIR}/hybrid_scenes 16 32 128)
+    set_tests_properties(hybrid_scene_${scene} PROPERTIES TIMEOUT 600)
+  endforeach()
+endif()
