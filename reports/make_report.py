@@ -683,6 +683,87 @@ def section_speed_accuracy(rep, rows):
     rep.table(["error", "producer", "points", "median s / frame", "mean error", "worst error"], table, numeric_from=2)
 
 
+def per_pixel_tiles(out, point):
+    """Tiles the hybrid sent per pixel, from the point's stats.json (None if it has none)."""
+    try:
+        t = json.loads((out / point["dir"] / "stats.json").read_text())["totals"]
+    except (KeyError, OSError, ValueError):
+        return None
+    return t.get("per_pixel_tiles")
+
+
+def section_stability(rep, out, rows, scenes):
+    """Where the analytic method fails: agreement with the truth, fallback and cost per scene and mode."""
+    modes = ["analytic", "hybrid", "hsr", "early_z"]
+    table, diff, used = [], [], []
+    for scene in scenes:
+        sims = {m: sim_point(rows, scene, "1920x1080", 1, "32x32", mode=m) for m in modes}
+        if not sims.get("analytic") or not sims.get("hybrid"):
+            continue
+        hyb = sims["hybrid"]
+        tiles = per_pixel_tiles(out, hyb)
+        ntiles = math.ceil(int(hyb["width"]) / int(hyb["tile_w"])) * math.ceil(int(hyb["height"]) / int(hyb["tile_h"]))
+        share = tiles / ntiles if tiles is not None else None
+        cells = []
+        for m in modes:
+            p = sims.get(m)
+            if p:
+                used.append(p)
+            agr = p.get("vs_truth_sample_agreement") if p else None
+            cells += ["–" if agr is None else f"{100 * agr:.4f} %", fmt_int(p.get("cycles")) if p else "–"]
+        a, h, z = sims["analytic"], sims["hybrid"], sims.get("hsr")
+        table.append([scene, "–" if share is None else f"{fmt_int(tiles)} ({100 * share:.2f} %)", *cells,
+                      fmt_s(h.get("frame_seconds")), f"{h.get('max_rss_mib', 0):.0f}"])
+        if share is not None and a.get("vs_truth_sample_agreement") is not None and a.get("cycles"):
+            diff.append((scene, share, 1 - a["vs_truth_sample_agreement"], 1 - (h.get("vs_truth_sample_agreement") or 0),
+                         h["cycles"] / a["cycles"], (z["cycles"] / a["cycles"]) if z and z.get("cycles") else None))
+    if not table:
+        return
+    rep.heading("Stability: where the analytic method fails", 2, "stability")
+    rep.para("SVGPU assumes geometry that does not interpenetrate. Per scene (1080p, 1 spp, 32×32 tiles, the model at "
+             "fidelity tile): agreement of each mode's id buffer with the exact z-buffer truth, the model's frame "
+             "cycles, and the tiles the hybrid mode resolved per pixel (its measure of how far the scene breaks the "
+             "assumption: interpenetration, non-opaque content, work over budget). Host time and peak memory are "
+             "the hybrid run's.")
+    head = ["scene", "hybrid tiles per pixel"]
+    for m in modes:
+        head += [f"agreement ({m})", f"cycles ({m})"]
+    rep.table(head + ["hybrid s / frame", "hybrid peak MiB"], table, numeric_from=1)
+    rep.para(provenance(used), "*" + provenance(used) + "*")
+    if not diff:
+        return
+    fig, axes = plt.subplots(1, 2, figsize=(12.4, 4.2), squeeze=False)
+    floor = 1e-7
+    xs = [max(d[1], 1e-4) for d in diff]
+    ax = axes[0][0]
+    ax.scatter(xs, [max(d[2], floor) for d in diff], label="analytic", s=30)
+    ax.scatter(xs, [max(d[3], floor) for d in diff], label="hybrid", marker="x", s=40)
+    for d, x in zip(diff, xs):
+        ax.annotate(d[0], (x, max(d[2], floor)), fontsize=7, xytext=(3, 3), textcoords="offset points")
+    ax.set_yscale("log")
+    ax.set_xscale("log")
+    ax.axhline(floor, color="grey", lw=0.8, ls=":")
+    ax.set_xlabel("difficulty: share of tiles hybrid resolves per pixel")
+    ax.set_ylabel("sample disagreement with the truth")
+    ax.set_title("error against difficulty (0 drawn on the dotted line)", fontsize=10)
+    ax2 = axes[0][1]
+    ax2.scatter(xs, [d[4] for d in diff], label="hybrid / analytic")
+    ax2.scatter([x for x, d in zip(xs, diff) if d[5]], [d[5] for d in diff if d[5]], marker="x", label="hsr / analytic")
+    for d, x in zip(diff, xs):
+        ax2.annotate(d[0], (x, d[4]), fontsize=7, xytext=(3, 3), textcoords="offset points")
+    ax2.set_xscale("log")
+    ax2.axhline(1.0, color="grey", lw=0.8, ls=":")
+    ax2.set_xlabel("difficulty: share of tiles hybrid resolves per pixel")
+    ax2.set_ylabel("frame cycles relative to analytic")
+    ax2.set_title("cost against difficulty", fontsize=10)
+    for a_ in (ax, ax2):
+        a_.grid(alpha=0.3, which="both")
+        a_.legend(fontsize=8)
+    fig.tight_layout()
+    rep.figure(fig, "stability", "Error and cost against scene difficulty (scenes with no tile per pixel are drawn "
+               "at 1e-4)", provenance(used))
+
+
 def section_configs(rep, rows):
     sims = [r for r in rows if r.get("status") == "done" and r.get("kind") == "timing"]
     configs = sorted({r["config"] for r in sims})
@@ -754,6 +835,7 @@ def main():
     section_configs(rep, rows)
     section_heatmaps(rep, out, rows, scenes)
     section_crosscheck(rep, rows, manifest)
+    section_stability(rep, out, rows, scenes)
     section_speed_accuracy(rep, rows)
     rep.heading("Producers", 2, "producers")
     rep.table(["producer", "kind", "available", "command"],
