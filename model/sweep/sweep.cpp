@@ -2,7 +2,8 @@
 
 #include <fcntl.h>
 #include <signal.h>
-#include <spawn.h>
+#include <sys/file.h>
+#include <sys/prctl.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/utsname.h>
@@ -533,21 +534,53 @@ struct Spawned {
   std::string error;
 };
 
+// Starts argv with stdin from /dev/null and stdout + stderr into `log`. The child asks the
+// kernel to kill it when the sweep dies (PR_SET_PDEATHSIG), so a sweep killed with SIGKILL
+// leaves no point writing into its folder; between fork and exec only async-signal-safe calls.
 Spawned spawn(const std::vector<std::string>& argv, const fs::path& log) {
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&fa, 1, 2);
   std::vector<char*> args;
   for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
+  const std::string log_path = log.string();
+  const pid_t parent = getpid();
+  int err_pipe[2];
   Spawned s;
-  int rc = posix_spawnp(&s.pid, args[0], &fa, nullptr, args.data(), environ);
-  posix_spawn_file_actions_destroy(&fa);
-  if (rc != 0) {
+  if (pipe2(err_pipe, O_CLOEXEC) != 0) {
+    s.error = fmt::format("cannot start {}: {}", argv[0], std::strerror(errno));
+    return s;
+  }
+  s.pid = fork();
+  if (s.pid == 0) {
+    int e = 0;
+    if (prctl(PR_SET_PDEATHSIG, SIGKILL) != 0 || getppid() != parent) _exit(127);  // the sweep is gone already
+    const int in = open("/dev/null", O_RDONLY);
+    const int out = open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (in < 0 || out < 0 || dup2(in, 0) < 0 || dup2(out, 1) < 0 || dup2(out, 2) < 0) {
+      e = errno;
+    } else {
+      execvp(args[0], args.data());
+      e = errno;
+    }
+    (void)!write(err_pipe[1], &e, sizeof e);
+    _exit(127);
+  }
+  close(err_pipe[1]);
+  if (s.pid < 0) {
+    s.error = fmt::format("cannot start {}: {}", argv[0], std::strerror(errno));
+    close(err_pipe[0]);
+    return s;
+  }
+  int e = 0;
+  ssize_t n;
+  while ((n = read(err_pipe[0], &e, sizeof e)) < 0 && errno == EINTR) {
+  }
+  close(err_pipe[0]);
+  if (n == ssize_t(sizeof e)) {  // exec failed: the child has exited
+    int status = 0;
+    while (waitpid(s.pid, &status, 0) < 0 && errno == EINTR) {
+    }
     s.pid = -1;
-    s.error = fmt::format("cannot start {}: {}", argv[0], std::strerror(rc));
+    s.error = fmt::format("cannot start {}: {}", argv[0], std::strerror(e));
   }
   return s;
 }
@@ -823,10 +856,44 @@ double megasamples(Size r, uint32_t samples) { return double(r.width) * r.height
 
 }  // namespace
 
+namespace {
+
+// One sweep at a time per output folder: an exclusive flock on OUT/.sweep.lock, held until the
+// run ends. Its descriptor is inherited by the points (no close-on-exec), so should a point
+// outlive its sweep, a re-run is refused instead of starting the same point in the same folder.
+class FolderLock {
+ public:
+  explicit FolderLock(const fs::path& out) {
+    std::error_code ec;
+    fs::create_directories(out, ec);
+    const fs::path file = out / ".sweep.lock";
+    m_fd = open(file.c_str(), O_RDWR | O_CREAT, 0644);
+    if (m_fd < 0) throw SweepError(fmt::format("cannot open {}: {}", file.string(), std::strerror(errno)));
+    if (flock(m_fd, LOCK_EX | LOCK_NB) != 0) {
+      const int e = errno;
+      close(m_fd);
+      if (e == EWOULDBLOCK)
+        throw SweepError(fmt::format("{} is in use by another sweep, or by points of a sweep that was killed and "
+                                     "are still running: wait for them to end (they hold {})",
+                                     out.string(), file.string()));
+      throw SweepError(fmt::format("cannot lock {}: {}", file.string(), std::strerror(e)));
+    }
+  }
+  ~FolderLock() { close(m_fd); }
+  FolderLock(const FolderLock&) = delete;
+  FolderLock& operator=(const FolderLock&) = delete;
+
+ private:
+  int m_fd = -1;
+};
+
+}  // namespace
+
 RunSummary run_plan(const Sweep& sw, const Plan& plan, std::map<std::string, Availability>& av, const RunOptions& opt) {
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
   const fs::path& out = opt.out;
+  const FolderLock lock(out);
   const std::string commit = source_commit();
   const nlohmann::json machine = machine_info();
   std::vector<Job> jobs;
