@@ -35,6 +35,15 @@ Command add_compare_command(CLI::App& app) {
             nlohmann::json j = c.to_json();
             j["a"] = args->a;
             j["b"] = args->b;
+            // Results of different traces (or frames) compare as noise: say so.
+            const std::string ha = a.stats.value("trace_fnv1a64", ""), hb = b.stats.value("trace_fnv1a64", "");
+            const bool same_frame = a.stats.value("frame", 0u) == b.stats.value("frame", 0u);
+            if (!ha.empty() && !hb.empty()) j["same_trace"] = ha == hb && same_frame;
+            if ((!ha.empty() && !hb.empty() && ha != hb) || !same_frame)
+              fmt::print(stderr, "compare: warning: {} and {} were made from different traces or frames ({} frame {}, "
+                                 "{} frame {}): the agreement below compares unrelated images\n",
+                         args->a, args->b, a.stats.value("trace", "?"), a.stats.value("frame", 0u),
+                         b.stats.value("trace", "?"), b.stats.value("frame", 0u));
             std::ofstream(out / "compare.json") << j.dump(2) << '\n';
             fmt::print("compare {} ({}) vs {} ({})\n", args->a, a.stats.value("tool", "?"), args->b,
                        b.stats.value("tool", "?"));
@@ -52,6 +61,15 @@ Command add_compare_command(CLI::App& app) {
               trace::Trace t = trace::read(args->explain);
               if (frame >= t.frames.size()) throw std::runtime_error(args->explain + ": no frame " + std::to_string(frame));
               trace::Frame f = std::move(t.frames[frame]);
+              // The trace must be the one the results come from: same size and triangle count (the
+              // sample count may have been overridden with --samples).
+              const uint64_t tris = a.stats.contains("totals") ? a.stats["totals"].value("triangles_in", uint64_t{0}) : 0;
+              if (f.width != a.width || f.height != a.height || (tris && tris != f.triangle_count()))
+                throw std::runtime_error(fmt::format(
+                    "--explain {}: frame {} is {}x{} with {} triangles, but {} holds a {}x{} result of {} triangles "
+                    "({}): explain needs the trace the results were made from",
+                    args->explain, frame, f.width, f.height, f.triangle_count(), args->a, a.width, a.height, tris,
+                    a.stats.value("trace", "?")));
               f.samples = trace::standard_samples(a.samples, f.subpixel_bits);
               vis::SetupConfig sc;
               sc.depth_bits = a.stats["config"].value("depth_bits", 24u);

@@ -87,8 +87,48 @@ def main():
     ok &= check("bad_tile", [binary, "golden", str(good), "--tile", "3", "-o", str(tmp / "g")], "--tile")
     ok &= check("occlusion_bin_over_tile", [binary, "golden", str(good), "--tile", "16", "--occlusion-bin", "32",
                                             "-o", str(tmp / "g")], "--occlusion-bin")
+    ok &= check_compare(binary, tmp, good)
     shutil.rmtree(tmp)
     sys.exit(0 if ok else 1)
+
+
+def check_compare(binary, tmp, good):
+    """compare and compare --explain on results that do not belong together."""
+    scene = tmp / "one_quad.json"
+    scene.write_text('{"viewport": [16, 8], "objects": [{"primitive": {"type": "quads"}}]}')
+    small = tmp / "small.tvt"
+    subprocess.run([binary, "trace", str(scene), "-q", "-o", str(small)], check=True)
+    big_res, small_res = tmp / "big_res", tmp / "small_res"
+    subprocess.run([binary, "golden", str(good), "-o", str(big_res)], check=True, capture_output=True)
+    subprocess.run([binary, "golden", str(small), "-o", str(small_res)], check=True, capture_output=True)
+    ok = check("explain_wrong_trace", [binary, "compare", str(big_res), str(big_res), "--explain", str(small)],
+               "--explain " + str(small))
+    bad = tmp / "bad_tiles"
+    shutil.copytree(big_res, bad)
+    lines = (bad / "tiles.csv").read_text().splitlines()
+    lines[1] = lines[1].rsplit(",", 1)[0] + ",12x"
+    (bad / "tiles.csv").write_text("\n".join(lines) + "\n")
+    ok &= check("bad_tiles_csv", [binary, "compare", str(bad), str(big_res)], "tiles.csv: line 2, field")
+    no_ids = tmp / "no_ids"
+    shutil.copytree(big_res, no_ids)
+    (no_ids / "ids.exr").unlink()
+    ok &= check("missing_ids", [binary, "compare", str(big_res), str(no_ids)], "the second result has no ids.exr")
+    # Results of two different traces of the same size: compared, but with a warning.
+    scene2 = tmp / "two_quads.json"
+    scene2.write_text('{"viewport": [16, 8], "objects": [{"primitive": {"type": "quads", "count": 2}}]}')
+    small2 = tmp / "small2.tvt"
+    subprocess.run([binary, "trace", str(scene2), "-q", "-o", str(small2)], check=True)
+    other = tmp / "other_res"
+    subprocess.run([binary, "golden", str(small2), "-o", str(other)], check=True, capture_output=True)
+    p = subprocess.run([binary, "compare", str(small_res), str(small_res), "-o", str(tmp / "c1")], capture_output=True,
+                       text=True)
+    same = "different traces" not in p.stderr and '"same_trace": true' in (tmp / "c1" / "compare.json").read_text()
+    p = subprocess.run([binary, "compare", str(small_res), str(other), "-o", str(tmp / "c2")], capture_output=True,
+                       text=True)
+    warned = "different traces" in p.stderr and '"same_trace": false' in (tmp / "c2" / "compare.json").read_text()
+    print(f"{'ok  ' if same and warned else 'FAIL'} compare_trace_identity: same trace quiet {same}, different traces "
+          f"warned {warned}")
+    return ok and same and warned
 
 
 if __name__ == "__main__":

@@ -18,7 +18,9 @@ nlohmann::json Comparison::to_json() const {
 
 Comparison compare(const Result& a, const Result& b) {
   Comparison c;
-  if (a.ids.empty() || b.ids.empty()) throw std::runtime_error("both results need ids.exr");
+  if (a.ids.empty() || b.ids.empty())
+    throw std::runtime_error(std::string(a.ids.empty() ? "the first" : "the second") +
+                             " result has no ids.exr: compare needs both id buffers");
   if (a.width != b.width || a.height != b.height || a.samples != b.samples)
     throw std::runtime_error("results differ in size or samples: " + std::to_string(a.width) + "x" +
                              std::to_string(a.height) + "x" + std::to_string(a.samples) + " vs " +

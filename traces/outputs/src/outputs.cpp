@@ -1,6 +1,7 @@
 #include "tilevis/outputs.h"
 
 #include <cstring>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -157,7 +158,22 @@ TileTable read_tiles(const fs::path& file, uint32_t width, uint32_t height) {
     ++line_no;
     std::vector<int64_t> v;
     std::stringstream ls(line);
-    for (std::string c; std::getline(ls, c, ',');) v.push_back(std::stoll(c));
+    size_t field = 0;
+    for (std::string c; std::getline(ls, c, ',');) {
+      ++field;
+      size_t used = 0;
+      int64_t value = 0;
+      try {
+        value = std::stoll(c, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      if (used == 0 || used != c.size())
+        fail(file, "line " + std::to_string(line_no) + ", field " + std::to_string(field) + " (" +
+                       (field <= cols.size() ? cols[field - 1] : std::string("beyond the header")) + "): expected an "
+                       "integer, got '" + c + "'");
+      v.push_back(value);
+    }
     if (v.size() != cols.size()) fail(file, "line " + std::to_string(line_no) + ": expected " + std::to_string(cols.size()) + " fields");
     max_tx = std::max(max_tx, uint32_t(v[0]));
     max_ty = std::max(max_ty, uint32_t(v[1]));
@@ -178,7 +194,29 @@ TileTable read_tiles(const fs::path& file, uint32_t width, uint32_t height) {
 
 }  // namespace
 
+// FNV-1a 64 of a file's bytes, hex; empty if it cannot be read.
+std::string file_fnv1a64(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) return {};
+  uint64_t h = 1469598103934665603ull;
+  std::vector<char> buf(1 << 20);
+  while (in) {
+    in.read(buf.data(), std::streamsize(buf.size()));
+    for (std::streamsize i = 0; i < in.gcount(); ++i) {
+      h ^= uint8_t(buf[size_t(i)]);
+      h *= 1099511628211ull;
+    }
+  }
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
+  return hex;
+}
+
 void write_result(const Result& r, const fs::path& dir) {
+  // The trace's identity beside its name, so that compare can tell results of different traces apart.
+  nlohmann::json stats = r.stats;
+  if (stats.contains("trace") && stats["trace"].is_string() && !stats.contains("trace_fnv1a64"))
+    if (const std::string h = file_fnv1a64(stats["trace"].get<std::string>()); !h.empty()) stats["trace_fnv1a64"] = h;
   fs::create_directories(dir);
   fs::remove(dir / "stats.json");  // its absence marks the directory as incomplete until the end
   if (!r.ids.empty()) {
@@ -190,7 +228,7 @@ void write_result(const Result& r, const fs::path& dir) {
   if (!r.tiles.rows.empty()) write_tiles(r.tiles, dir / "tiles.csv");
   atomic_write(dir / "stats.json", [&](const fs::path& tmp) {
     std::ofstream out(tmp);
-    out << r.stats.dump(2) << '\n';
+    out << stats.dump(2) << '\n';
     if (!out) fail(tmp, "write failed");
   });
 }
