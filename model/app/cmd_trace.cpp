@@ -34,6 +34,7 @@ Command add_trace_command(CLI::App& app) {
     }
     if (args->samples) opt.samples = args->samples;
     if (!args->quiet) opt.progress = [](const std::string& s) { fmt::print(stderr, "  {}\n", s); };
+    opt.warn = [](const std::string& s) { fmt::print(stderr, "tilevis trace: warning: {}\n", s); };
     trace::Trace t = scene::build_trace(args->scene, opt);
     trace::write(t, args->out);
     size_t tris = 0;

@@ -219,13 +219,7 @@ Sweep load_sweep(const fs::path& file) {
   Sweep sw;
   sw.file = file;
   const std::string file_name = file.string();
-  std::ifstream in(file);
-  if (!in) throw SweepError(fmt::format("{}: cannot open", file_name));
-  try {
-    sw.source = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw SweepError(fmt::format("{}: byte {}: invalid JSON: {}", file_name, e.byte, e.what()));
-  }
+  sw.source = tilevis::json::parse_file(file_name, &raise_sweep_error);
   Node root(sw.source, "$", file_name, &raise_sweep_error);
   root.allow_only({"description", "scenes_dir", "scenes", "resolutions", "samples", "tiles", "modes", "producers",
                    "configs", "grids", "compare"});

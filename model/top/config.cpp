@@ -1,9 +1,12 @@
 #include "top/config.h"
 
+#include "tilevis/json_node.h"
+
 #include <fstream>
 #include <functional>
 #include <limits>
 #include <map>
+#include <set>
 #include <sstream>
 
 namespace tilevis::sim {
@@ -217,18 +220,18 @@ void apply(TilerConfig& c, const std::string& where, const std::string& key, con
 TilerConfig load_config(const std::string& file, const std::vector<std::string>& overrides) {
   TilerConfig c;
   if (!file.empty()) {
-    std::ifstream in(file);
-    if (!in) throw ConfigError(file + ": cannot open");
-    nlohmann::json j;
-    try {
-      j = nlohmann::json::parse(in);
-    } catch (const nlohmann::json::parse_error& e) {
-      throw ConfigError(file + ": byte " + std::to_string(e.byte) + ": expected JSON (" + e.what() + ")");
-    }
+    const nlohmann::json j = json::parse_file(file, +[](const std::string& m) { throw ConfigError(m); });
     if (!j.is_object()) throw ConfigError(file + ": $: expected an object of parameters");
     std::vector<std::pair<std::string, nlohmann::json>> flat;
     flatten(j, "", flat);
-    for (const auto& [k, v] : flat) apply(c, file + ": $", k, v);
+    // "sim.mode" and {"sim": {"mode": ...}} name one parameter: giving both is an error, not a
+    // silent last-one-wins.
+    std::set<std::string> given;
+    for (const auto& [k, v] : flat) {
+      if (!given.insert(k).second)
+        throw ConfigError(file + ": $: parameter " + k + " is set twice (as \"" + k + "\" and nested); expected once");
+      apply(c, file + ": $", k, v);
+    }
   }
   for (const std::string& o : overrides) {
     const size_t eq = o.find('=');

@@ -78,11 +78,36 @@ def main():
         "unknown_key": '{"objects": [], "colour": 1}',
         "bad_mesh": '{"objects": [{"mesh": "nowhere.obj"}]}',
         "bad_viewport": '{"viewport": [0, 1], "objects": []}',
+        "duplicate_key": '{"viewport": [64, 32], "objects": [{"primitive": {"type": "box"}, "name": "a", "name": "b"}]}',
+        "number_overflow": '{"objects": [{"primitive": {"type": "box", "size": 1e400}}]}',
     }
     for name, text in scenes.items():
         f = tmp / f"{name}.json"
         f.write_text(text)
         ok &= check(name, [binary, "trace", str(f), "-o", str(tmp / "out.tvt")], str(f))
+    (tmp / "huge.obj").write_text("v 0 0 0\nv 1 0 0\nv 1e39 1 0\nf 1 2 3\n")
+    (tmp / "huge_vertex.json").write_text('{"objects": [{"name": "thing", "mesh": "huge.obj", "fit": false}]}')
+    ok &= check("huge_vertex", [binary, "trace", str(tmp / "huge_vertex.json"), "-q", "-o", str(tmp / "out.tvt")],
+                'object "thing": vertex 2')
+    configs = {
+        "config_duplicate_key": ('{"sim": {"mode": "hsr", "mode": "analytic"}}', "$.sim.mode"),
+        "config_two_spellings": ('{"sim.mode": "hsr", "sim": {"mode": "analytic"}}', "sim.mode is set twice"),
+        "config_overflow": ('{"evu": {"reject": {"lanes": 1e400}}}', "line 1, column"),
+    }
+    for name, (text, place) in configs.items():
+        f = tmp / f"{name}.json"
+        f.write_text(text)
+        ok &= check(name, [binary, "sim", str(good), "-c", str(f), "-o", str(tmp / "s")], place)
+    ok &= check("config_is_directory", [binary, "sim", str(good), "-c", str(tmp), "-o", str(tmp / "s")],
+                "is a directory")
+    # A mirroring transform is accepted with a warning (the winding is reversed).
+    (tmp / "mirror.json").write_text('{"objects": [{"name": "m", "primitive": {"type": "box"}, '
+                                     '"transform": {"scale": [-1, 1, 1]}}]}')
+    p = subprocess.run([binary, "trace", str(tmp / "mirror.json"), "-q", "-o", str(tmp / "m.tvt")],
+                       capture_output=True, text=True)
+    warned = p.returncode == 0 and "warning" in p.stderr and "mirrors it" in p.stderr
+    print(f"{'ok  ' if warned else 'FAIL'} mirror_warns: {p.stderr.strip()[:150]}")
+    ok &= warned
     ok &= check("missing_trace", [binary, "info", str(tmp / "missing.tvt")], "missing.tvt")
     ok &= check("bad_tile", [binary, "golden", str(good), "--tile", "3", "-o", str(tmp / "g")], "--tile")
     ok &= check("occlusion_bin_over_tile", [binary, "golden", str(good), "--tile", "16", "--occlusion-bin", "32",

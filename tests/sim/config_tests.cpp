@@ -58,7 +58,7 @@ TEST(Config, OutOfRangeAndWrongTypeNameTheExpectation) {
   EXPECT_NE(error_of("", {"fragment.texture_hit_rate=1.5"}).find("expected a number in [0, 1]"), std::string::npos);
   EXPECT_NE(error_of("", {"sim.tile_width"}).find("expected key=value"), std::string::npos);
   const fs::path f = write_temp("broken.json", R"({"sim": {"tile_width": 32,})");
-  EXPECT_NE(error_of(f.string(), {}).find(f.string() + ": byte"), std::string::npos);
+  EXPECT_NE(error_of(f.string(), {}).find(f.string() + ": line 1, column"), std::string::npos);
 }
 
 TEST(Config, FileThenOverridesApply) {

@@ -1,7 +1,10 @@
 #include "tilevis/scene.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <limits>
 #include <list>
 #include <map>
 
@@ -109,14 +112,7 @@ class SceneBuilder {
       : m_file(file.string()), m_dir(file.parent_path()), m_options(options) {}
 
   trace::Trace build() {
-    std::ifstream in(m_file);
-    if (!in) throw SceneError(fmt::format("{}: cannot open", m_file));
-    nlohmann::json doc;
-    try {
-      doc = nlohmann::json::parse(in);
-    } catch (const nlohmann::json::parse_error& e) {
-      throw SceneError(fmt::format("{}: byte {}: invalid JSON: {}", m_file, e.byte, e.what()));
-    }
+    const nlohmann::json doc = json::parse_file(m_file, &raise_scene_error);
     Node root(doc, "$", m_file, &raise_scene_error);
     root.allow_only({"description", "viewport", "samples", "depth_range", "camera", "objects"});
 
@@ -168,11 +164,26 @@ class SceneBuilder {
           d.texture_bytes_per_fragment = o.texture_bytes;
           glm::dmat4 mvp = proj * view * o.instances[k];
           d.vertices.reserve(o.mesh->positions.size());
-          for (const auto& p : o.mesh->positions) {
+          for (size_t vi = 0; vi < o.mesh->positions.size(); ++vi) {
+            const glm::dvec3& p = o.mesh->positions[vi];
             glm::dvec4 c = mvp * glm::dvec4(p, 1);
+            const double big = std::max({std::fabs(c.x), std::fabs(c.y), std::fabs(c.z), std::fabs(c.w)});
+            if (!(big <= double(std::numeric_limits<float>::max())))
+              throw SceneError(fmt::format("{}: object \"{}\": vertex {} at ({}, {}, {}): expected a finite position "
+                                           "whose clip-space coordinates fit in float (got {})",
+                                           m_file, o.name, vi, p.x, p.y, p.z, big));
             d.vertices.push_back({float(c.x), float(c.y), float(c.z), float(c.w)});
           }
           d.indices = o.mesh->indices;
+          // A mirroring transform (negative determinant: an odd number of negative scales) turns
+          // the mesh inside out; keep its outside facing out by reversing the winding.
+          if (glm::determinant(glm::dmat3(o.instances[k])) < 0) {
+            for (size_t i = 0; i + 2 < d.indices.size(); i += 3) std::swap(d.indices[i + 1], d.indices[i + 2]);
+            if (f == 0 && m_options.warn)
+              m_options.warn(fmt::format("{}: object \"{}\"{}: its transform mirrors it (negative determinant); "
+                                         "triangle winding reversed so that its front faces stay in front",
+                                         m_file, o.name, o.instances.size() == 1 ? "" : fmt::format(" instance {}", k)));
+          }
           frame.draws.push_back(std::move(d));
         }
       }

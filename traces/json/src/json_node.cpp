@@ -1,6 +1,12 @@
 #include "tilevis/json_node.h"
 
+#include <cerrno>
 #include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <set>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -8,6 +14,94 @@
 namespace tilevis::json {
 
 void raise_runtime_error(const std::string& message) { throw std::runtime_error(message); }
+
+namespace {
+
+// "line L, column C" of a byte offset (1-based) in text.
+std::string place_of(const std::string& text, size_t byte) {
+  size_t line = 1, col = 1;
+  for (size_t i = 0; i + 1 < byte && i < text.size(); ++i) {
+    if (text[i] == '\n') {
+      ++line;
+      col = 1;
+    } else {
+      ++col;
+    }
+  }
+  return fmt::format("line {}, column {}", line, col);
+}
+
+}  // namespace
+
+nlohmann::json parse_file(const std::string& file, Raise raise) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(file, ec)) {
+    raise(fmt::format("{}: is a directory, expected a JSON file", file));
+    throw std::logic_error("json::parse_file: the Raise function returned");
+  }
+  std::ifstream in(file, std::ios::binary);
+  if (!in) {
+    raise(fmt::format("{}: cannot open: {}", file, std::strerror(errno)));
+    throw std::logic_error("json::parse_file: the Raise function returned");
+  }
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // Duplicate keys: nlohmann::json keeps the last silently; its parser callback sees every key.
+  // One frame per open container: how it is reached from its parent, its keys so far.
+  struct Open {
+    bool array = false;
+    size_t next = 0;          // arrays: index of the next element
+    std::string label, key;   // label: ".key" or "[i]" from the parent; key: the object's current key
+    std::set<std::string> keys;
+  };
+  std::vector<Open> open;
+  std::string duplicate;
+  auto callback = [&](int, nlohmann::json::parse_event_t event, nlohmann::json& parsed) {
+    using E = nlohmann::json::parse_event_t;
+    switch (event) {
+      case E::object_start:
+      case E::array_start: {
+        Open o;
+        o.array = event == E::array_start;
+        if (!open.empty()) o.label = open.back().array ? fmt::format("[{}]", open.back().next++) : "." + open.back().key;
+        open.push_back(std::move(o));
+        break;
+      }
+      case E::object_end:
+      case E::array_end: open.pop_back(); break;
+      case E::key: {
+        Open& o = open.back();
+        o.key = parsed.get<std::string>();
+        if (!o.keys.insert(o.key).second && duplicate.empty()) {
+          duplicate = "$";
+          for (const Open& f : open) duplicate += f.label;
+          duplicate += "." + o.key;
+        }
+        break;
+      }
+      case E::value:
+        if (!open.empty() && open.back().array) ++open.back().next;
+        break;
+    }
+    return true;
+  };
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(text, callback);
+  } catch (const nlohmann::json::parse_error& e) {
+    raise(fmt::format("{}: {}: invalid JSON: {}", file, place_of(text, e.byte), e.what()));
+  } catch (const nlohmann::json::exception& e) {  // e.g. out_of_range 406: number overflow
+    std::string where;
+    const std::string what = e.what();
+    const size_t q = what.find('\''), q2 = q == std::string::npos ? q : what.find('\'', q + 1);
+    if (q2 != std::string::npos) {
+      const size_t at = text.find(what.substr(q + 1, q2 - q - 1));
+      if (at != std::string::npos) where = place_of(text, at + 1) + ": ";
+    }
+    raise(fmt::format("{}: {}expected a number within double's range ({})", file, where, what));
+  }
+  if (!duplicate.empty()) raise(fmt::format("{}: {}: key given twice in one object (expected each once)", file, duplicate));
+  return j;
+}
 
 void Node::fail(const std::string& expected) const {
   m_raise(fmt::format("{}: {}: {}", m_file, m_path, expected));

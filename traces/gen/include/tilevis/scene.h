@@ -24,6 +24,7 @@ struct BuildOptions {
   std::optional<uint32_t> width, height;   // override the scene's viewport
   std::optional<uint32_t> samples;         // override the scene's sample count
   std::function<void(const std::string&)> progress;  // called per loaded mesh / frame
+  std::function<void(const std::string&)> warn;      // what was accepted but changed (a flipped winding)
 };
 
 trace::Trace build_trace(const std::filesystem::path& scene_file, const BuildOptions& options = {});

@@ -18,6 +18,11 @@ using Raise = void (*)(const std::string& message);
 // Throws std::runtime_error.
 [[noreturn]] void raise_runtime_error(const std::string& message);
 
+// Reads and parses a JSON file strictly: a missing file, a directory, invalid JSON (with its
+// line and column), a number out of double's range, and a key that appears twice in one object
+// (with its JSON path) all end in raise("FILE: ...").
+nlohmann::json parse_file(const std::string& file, Raise raise = &raise_runtime_error);
+
 class Node {
  public:
   // `value` and `file` must outlive the node and every node reached from it.
