@@ -1,6 +1,10 @@
 // Arguments several commands share: sizes ("N" or "WxH"), tile sizes, and the frame of a
 // trace with an optional sample-count override.
+#include <sys/resource.h>
+
+#include <algorithm>
 #include <cstdio>
+#include <fstream>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -58,6 +62,38 @@ trace::Frame load_frame(const std::string& path, uint32_t frame_index, uint32_t 
     }
   }
   return frame;
+}
+
+void check_memory(const std::string& what, const trace::Frame& frame, uint32_t tile_w, uint32_t tile_h) {
+  const uint64_t pixels = uint64_t(frame.width) * frame.height;
+  const uint64_t samples = pixels * std::max<size_t>(1, frame.samples.size());
+  const uint64_t tiles = ((frame.width + tile_w - 1) / tile_w) * uint64_t((frame.height + tile_h - 1) / tile_h);
+  // ids and owners (4 B each, twice: the result and its copy on output), overdraw (4 B per pixel),
+  // tile rows (about 24 counters of 8 B plus a vector's 40 B), setup and binning (~256 B per triangle).
+  const uint64_t need = samples * 16 + pixels * 8 + tiles * (24 * 8 + 40) + uint64_t(frame.triangle_count()) * 256;
+  uint64_t limit = 0;
+  std::string source;
+  rlimit rl{};
+  if (getrlimit(RLIMIT_AS, &rl) == 0 && rl.rlim_cur != RLIM_INFINITY) {
+    limit = rl.rlim_cur;
+    source = "the address-space limit (ulimit -v)";
+  }
+  std::ifstream meminfo("/proc/meminfo");
+  for (std::string key; meminfo >> key;) {
+    uint64_t kib = 0;
+    meminfo >> kib;
+    if (key == "MemAvailable:" && (limit == 0 || kib * 1024 < limit)) {
+      limit = kib * 1024;
+      source = "the memory available (MemAvailable)";
+    }
+    meminfo.ignore(1 << 10, '\n');
+  }
+  if (limit && need > limit)
+    throw std::runtime_error(fmt::format(
+        "{}: a {}x{} frame at {} sample(s) and {}x{} tiles ({} tiles, {} triangles) needs about {:.1f} GiB, over {} "
+        "of {:.1f} GiB: use larger tiles, fewer samples or a smaller viewport",
+        what, frame.width, frame.height, frame.samples.size(), tile_w, tile_h, tiles, frame.triangle_count(),
+        double(need) / double(1ull << 30), source, double(limit) / double(1ull << 30)));
 }
 
 }  // namespace tilevis::app

@@ -177,6 +177,7 @@ Command add_golden_command(CLI::App& app) {
             uint32_t tw = 0, th = 0;
             parse_tile(a->tile, tw, th);
             trace::Frame frame = load_frame(a->trace, a->frame, a->samples);
+            check_memory(std::string(a->truth ? "golden --truth " : "golden ") + a->trace, frame, tw, th);
             if (a->truth) return run_truth(*a, frame, tw, th);
             return run_golden(*a, frame, tw, th);
           }};

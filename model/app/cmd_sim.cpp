@@ -49,6 +49,7 @@ int run_sim(const SimArgs& a) {
   if (!a.vcd.empty() && cfg.sim.fidelity == sim::Fidelity::analytic)
     throw std::runtime_error("--vcd " + a.vcd + ": fidelity analytic simulates no events; use tile or primitive");
   const trace::Frame frame = load_frame(a.trace, a.frame, a.samples);
+  check_memory("sim " + a.trace, frame, cfg.sim.tile_width, cfg.sim.tile_height);
   sim::SimOptions opt;
   opt.trace_name = a.trace;
   opt.frame_index = a.frame;

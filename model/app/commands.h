@@ -37,5 +37,9 @@ nlohmann::json visibility_config(uint32_t tile_w, uint32_t tile_h, uint32_t occl
 // Frame `frame_index` of the trace at `path`; samples != 0 replaces its sample pattern with
 // the standard one of that count (--samples). Errors name the option.
 trace::Frame load_frame(const std::string& path, uint32_t frame_index, uint32_t samples);
+// Estimated peak memory of one golden, truth or sim run of `frame` at tile_w x tile_h: sample
+// buffers, per-tile tables, setup. Refuses (one line: estimate, limit, what to change) when it
+// exceeds the address-space limit or the memory available.
+void check_memory(const std::string& what, const trace::Frame& frame, uint32_t tile_w, uint32_t tile_h);
 
 }  // namespace tilevis::app

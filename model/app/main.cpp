@@ -1,6 +1,7 @@
 // tilevis: one binary, one subcommand per job (DESIGN.md "CLI").
 #include <cstdio>
 #include <exception>
+#include <new>
 
 #include <fmt/format.h>
 
@@ -26,6 +27,13 @@ int main(int argc, char** argv) {
   try {
     for (const auto& c : commands)
       if (c.sub->parsed()) return c.run();
+  } catch (const std::bad_alloc&) {
+    for (const auto& c : commands)
+      if (c.sub->parsed())
+        fmt::print(stderr, "tilevis: error: {}: out of memory (over the address-space limit or the machine's memory): "
+                           "use larger tiles, fewer samples or a smaller viewport\n",
+                   c.sub->get_name());
+    return 1;
   } catch (const std::exception& e) {
     fmt::print(stderr, "tilevis: error: {}\n", e.what());
     return 1;

@@ -620,11 +620,15 @@ std::string now_iso() {
 void write_json_atomically(const fs::path& file, const nlohmann::json& j) {
   const fs::path tmp = file.string() + ".tmp";
   {
+    errno = 0;
     std::ofstream o(tmp);
+    if (!o) throw SweepError(fmt::format("cannot write {}: {}", tmp.string(), std::strerror(errno ? errno : EIO)));
     o << j.dump(2) << '\n';
-    if (!o) throw SweepError("cannot write " + tmp.string());
+    if (!o) throw SweepError(fmt::format("cannot write {}: {}", tmp.string(), std::strerror(errno ? errno : EIO)));
   }
-  fs::rename(tmp, file);
+  std::error_code ec;
+  fs::rename(tmp, file, ec);
+  if (ec) throw SweepError(fmt::format("cannot rename {} to {}: {}", tmp.string(), file.string(), ec.message()));
 }
 
 std::string duration_text(double s) {

@@ -100,6 +100,12 @@ def main():
         ok &= check(name, [binary, "sim", str(good), "-c", str(f), "-o", str(tmp / "s")], place)
     ok &= check("config_is_directory", [binary, "sim", str(good), "-c", str(tmp), "-o", str(tmp / "s")],
                 "is a directory")
+    if not SANITIZED:  # under the 2 GiB address-space limit of run(): refused up front, with the estimate
+        (tmp / "huge_frame.json").write_text('{"viewport": [16384, 16384], "objects": [{"primitive": {"type": "quads"}}]}')
+        subprocess.run([binary, "trace", str(tmp / "huge_frame.json"), "-q", "-o", str(tmp / "huge.tvt")], check=True)
+        for cmd in ("golden", "sim"):
+            ok &= check(f"huge_frame_{cmd}", [binary, cmd, str(tmp / "huge.tvt"), "--tile", "4", "-o", str(tmp / "h")],
+                        "needs about")
     # A mirroring transform is accepted with a warning (the winding is reversed).
     (tmp / "mirror.json").write_text('{"objects": [{"name": "m", "primitive": {"type": "box"}, '
                                      '"transform": {"scale": [-1, 1, 1]}}]}')
