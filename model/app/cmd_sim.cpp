@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include "commands.h"
+#include "progress.h"
 #include "tilevis/trace.h"
 
 #if TILEVIS_HAVE_SIM
@@ -54,6 +55,8 @@ int run_sim(const SimArgs& a) {
   opt.trace_name = a.trace;
   opt.frame_index = a.frame;
   opt.vcd = a.vcd;
+  Progress progress("sim: tiles");
+  if (progress.enabled()) opt.progress = [&](uint64_t done, uint64_t total) { progress.update(done, total); };
   const sim::SimOutput out = sim::simulate(frame, cfg, opt);
   sim::write_sim_outputs(out, a.out);
   for (const std::string& r : out.systemc_reports) fmt::print(stderr, "tilevis: systemc: {}\n", r);

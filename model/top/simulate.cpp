@@ -50,6 +50,7 @@ SimOutput simulate(const trace::Frame& frame, const TilerConfig& config, const S
   fc.depth_bits = config.sim.depth_bits;
   fc.evu_triangle_entries = config.evu.triangle_list_entries;
   fc.evu_edge_entries = config.evu.edge_list_entries;
+  fc.progress = options.progress;
   FrameWork work(frame, fc);
   const bool event_driven = config.sim.fidelity != Fidelity::analytic;
   Tiler tiler("tiler", config, work, event_driven && !options.vcd.empty());

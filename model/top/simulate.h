@@ -8,6 +8,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,8 @@ struct SimOptions {
   std::string trace_name;   // for stats.json
   uint32_t frame_index = 0;
   std::string vcd;          // VCD of unit busy and queue occupancy; empty: none
+  // Called as tiles are resolved: (tiles resolved, tiles binned) over every segment so far.
+  std::function<void(uint64_t done, uint64_t total)> progress;
 };
 
 struct SimOutput {

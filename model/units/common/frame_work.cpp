@@ -294,6 +294,7 @@ void FrameWork::prepare_segment(uint32_t k) {
     }
   }
   for (uint32_t tile : m_seg_tiles) ++m_rows[tile][c_seg];
+  m_tiles_binned += m_seg_tiles.size();
 }
 
 TileWork* FrameWork::open_tile(uint32_t tile) {
@@ -352,6 +353,7 @@ void FrameWork::resolve_tile(TileWork& w) {
   if (uses_evu(m_cfg.mode)) resolve_analytic(w);
   else resolve_pixels(w);
   w.resolved = true;
+  if (m_cfg.progress) m_cfg.progress(++m_tiles_resolved, m_tiles_binned);
 }
 
 void FrameWork::resolve_analytic(TileWork& w) {

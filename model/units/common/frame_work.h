@@ -13,6 +13,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <unordered_map>
 #include <vector>
@@ -38,6 +39,8 @@ struct FrameWorkConfig {
   uint32_t evu_triangle_entries = 512, evu_edge_entries = 256;
   // Hybrid: a tile whose triangles x edges exceed this goes per pixel (0: no budget).
   uint64_t hybrid_pair_budget = 0;
+  // Called after each tile's visibility with (tiles resolved, tiles binned so far).
+  std::function<void(uint64_t, uint64_t)> progress;
 };
 
 class FrameWork {
@@ -143,6 +146,7 @@ class FrameWork {
   std::vector<int32_t> m_ids;
   std::vector<double> m_visible_area;
   uint64_t m_shaded = 0, m_depth_tests = 0, m_tiles_rendered = 0, m_passes_extra = 0, m_per_pixel_tiles = 0;
+  uint64_t m_tiles_resolved = 0, m_tiles_binned = 0;  // progress
   std::vector<uint64_t> m_seg_front;     // front-facing triangles per segment
   uint64_t m_visible_triangles = 0;
   bool m_finished = false;
