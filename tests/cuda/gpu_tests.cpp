@@ -43,6 +43,10 @@ TEST_P(ExactGpu, BitIdenticalToGolden) {
 INSTANTIATE_TEST_SUITE_P(Scenes, ExactGpu,
                          ::testing::Combine(::testing::ValuesIn(ct::scene_names()), ::testing::Values(16u, 32u, 64u),
                                             ::testing::Values(1u, 4u)));
+// Near the eye every tile size gives golden's answer, from the smallest tile to the largest.
+INSTANTIATE_TEST_SUITE_P(NearEyeTiles, ExactGpu,
+                         ::testing::Combine(::testing::Values("near_eye", "near_eye_pair"),
+                                            ::testing::Values(4u, 8u, 128u, 256u), ::testing::Values(1u)));
 
 TEST(Gpu, FinerOcclusionBinsStayBitIdentical) {
   REQUIRE_GPU();
