@@ -11,77 +11,21 @@
 #include "geom/polygon.h"
 #include "geom/predicates.h"
 #include "geom/tile_grid.h"
+#include "visibility/svgpu.h"
 
 namespace tilevis::vis {
 namespace {
 
 using geom::ConvexPolygon;
-using geom::ImplicitPoint;
-using geom::Int128;
-using geom::Line;
 using geom::Point;
 using geom::Rect;
 
 // A front-facing setup triangle with what the tile stage needs of it.
-struct TileTriangle {
-  const SetupTriangle* t;
-  geom::Triangle tri;
-  geom::TriangleEdges edges;
-  geom::DepthPlane plane;
-  Rect bbox;               // closed, sub-pixel units
-  uint32_t z_min, z_max;
+struct TileTriangle : svgpu::Triangle {
+  const SetupTriangle* t = nullptr;
 };
 
-struct Edge {
-  geom::Vertex a, b;
-  Line line;
-  uint32_t z_min, z_max;
-  Rect bbox;
-};
-
-Rect bbox_of(const geom::Vertex& a, const geom::Vertex& b, const geom::Vertex& c) {
-  return {std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}), std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y})};
-}
-
-bool same_edge(const Edge& e, const geom::Triangle& t) {
-  // SVGPU §3.2.1 test 4: the silhouette edge is an edge of the triangle.
-  for (int i = 0; i < 3; ++i) {
-    const geom::Vertex &p = t.v[i], &q = t.v[(i + 1) % 3];
-    if ((p == e.a && q == e.b) || (p == e.b && q == e.a)) return true;
-  }
-  return false;
-}
-
-// sign((c - a) · d) for an implicit point c on the line through a with direction d:
-// |x - a.x w| <= 2^72 + 2^23 · 2^49 = 2^73, times |d| <= 2^24, two terms: < 2^98 (Int128).
-int along(const ImplicitPoint& c, const geom::Vertex& a, int64_t dx, int64_t dy) {
-  const Int128 v = (c.x - Int128{a.x} * c.w) * dx + (c.y - Int128{a.y} * c.w) * dy;
-  return (v > 0) - (v < 0);
-}
-
-// SVGPU §3.2.1 tests 1–3 of a silhouette edge against a (piece of a) triangle, exactly.
-// true = the pair survives (the piece must be split by the edge's line).
-bool survives(const ConvexPolygon& poly, const TileTriangle& tt, const Edge& e) {
-  // Test 1: the polygon lies on one side of the line (touching counts as one side).
-  if (geom::classify(poly, e.line) != geom::LineRelation::crosses) return false;
-  // Test 2 (exact form): the segment AB misses the polygon's interior.
-  if (!geom::segment_overlaps(poly, e.a.xy(), e.b.xy())) return false;
-  // Test 3: over the part of AB inside the polygon the edge is behind (or level with)
-  // the triangle's plane; depth is affine along it, so its two ends decide.
-  ImplicitPoint first, second;
-  if (!geom::chord(poly, e.line, first, second)) return false;
-  const int64_t dx = int64_t{e.b.x} - e.a.x, dy = int64_t{e.b.y} - e.a.y;
-  // sign(z_triangle - z_edge) at each end of the overlap; > 0: the edge is nearer there.
-  const int s1 = along(first, e.a, dx, dy) < 0 ? geom::depth_order(tt.plane, e.a.xy(), e.a.z)
-                                               : geom::depth_order_edge(tt.plane, e.a, e.b, first);
-  if (s1 > 0) return true;
-  const int s2 = along(second, e.b, dx, dy) > 0 ? geom::depth_order(tt.plane, e.b.xy(), e.b.z)
-                                                : geom::depth_order_edge(tt.plane, e.a, e.b, second);
-  // Level at both ends: the edge lies in the triangle's plane over the overlap, so it can
-  // bound a coplanar occluder whose tie (the earlier triangle stays in front) the piece's
-  // interior point decides: split there too, or a piece straddling it is judged whole.
-  return s2 > 0 || (s1 == 0 && s2 == 0);
-}
+using Edge = svgpu::Edge;
 
 }  // namespace
 
@@ -103,20 +47,11 @@ class GoldenTiler::Impl {
     for (const SetupTriangle& t : m_s.triangles) {
       if (!t.front) continue;
       TileTriangle tt;
+      static_cast<svgpu::Triangle&>(tt) = svgpu::Triangle::from(t.v[0], t.v[1], t.v[2]);
       tt.t = &t;
-      tt.tri = geom::Triangle{{t.v[0], t.v[1], t.v[2]}};
-      tt.edges = geom::TriangleEdges::from(tt.tri);
-      tt.plane = geom::DepthPlane::from(tt.tri);
-      tt.bbox = bbox_of(t.v[0], t.v[1], t.v[2]);
-      tt.z_min = std::min({t.v[0].z, t.v[1].z, t.v[2].z});
-      tt.z_max = std::max({t.v[0].z, t.v[1].z, t.v[2].z});
       m_tris.push_back(tt);
     }
-    for (const SilhouetteEdge& se : m_s.silhouettes) {
-      Edge e{se.a, se.b, Line::through(se.a.xy(), se.b.xy()), std::min(se.a.z, se.b.z), std::max(se.a.z, se.b.z),
-             {std::min(se.a.x, se.b.x), std::min(se.a.y, se.b.y), std::max(se.a.x, se.b.x), std::max(se.a.y, se.b.y)}};
-      m_edges.push_back(e);
-    }
+    for (const SilhouetteEdge& se : m_s.silhouettes) m_edges.push_back(svgpu::Edge::from(se.a, se.b));
     m_grid = geom::TileGrid::make(m_s.width, m_s.height, m_cfg.tile_w, m_cfg.tile_h, m_s.subpixel_bits);
   }
 
@@ -209,13 +144,10 @@ class GoldenTiler::Impl {
     m_candidates.clear();
     for (uint32_t ei : m_sorted_edges) {
       const Edge& e = m_edges[ei];
-      if (e.z_min > tt.z_max) break;  // test 6: the triangle is in front of this edge and all later ones
+      if (svgpu::edge_behind(e, tt)) break;  // test 6: and so is every later edge
       ++row[2];
-      // Bounding boxes that at most touch: the segment cannot meet the interior (test 2).
-      if (e.bbox.x1 <= tt.bbox.x0 || e.bbox.x0 >= tt.bbox.x1 || e.bbox.y1 <= tt.bbox.y0 || e.bbox.y0 >= tt.bbox.y1)
-        continue;
-      if (same_edge(e, tt.tri)) continue;  // test 4
-      if (survives(poly, tt, e)) m_candidates.push_back(ei);
+      if (svgpu::boxes_apart(e, tt) || svgpu::shares_edge(e, tt.tri)) continue;  // tests 2 (boxes) and 4
+      if (svgpu::survives(poly, tt, e)) m_candidates.push_back(ei);
     }
     std::sort(m_candidates.begin(), m_candidates.end());
     row[3] += int64_t(m_candidates.size());
@@ -227,8 +159,8 @@ class GoldenTiler::Impl {
       const Edge& e = m_edges[ei];
       const size_t n = m_pieces.size();
       for (size_t k = 0; k < n; ++k) {
-        if (!survives(m_pieces[k], tt, e)) continue;
-        geom::SplitResult sr = geom::split(m_pieces[k], e.line);
+        if (!svgpu::survives(m_pieces[k], tt, e)) continue;
+        geom::SplitResult sr = svgpu::split(m_pieces[k], e);
         ++row[4];
         m_pieces[k] = std::move(sr.inside);
         if (!sr.outside.empty()) m_pieces.push_back(std::move(sr.outside));
@@ -293,21 +225,7 @@ class GoldenTiler::Impl {
     for (uint32_t oi : m_occluders) {
       const TileTriangle& u = m_tris[oi];
       if (u.z_min >= tt.z_max) break;  // u at or behind tt everywhere: so are all later occluders
-      if (u.t->id == tt.t->id || u.z_max <= tt.z_min) continue;  // same triangle; u nearer everywhere
-      if (u.bbox.x1 <= tt.bbox.x0 || u.bbox.x0 >= tt.bbox.x1 || u.bbox.y1 <= tt.bbox.y0 || u.bbox.y0 >= tt.bbox.y1)
-        continue;
-      ConvexPolygon overlap = poly;
-      for (const Line& l : u.edges.edge) {
-        overlap = geom::clip(overlap, l);
-        if (overlap.empty()) break;
-      }
-      bool nearer = false, farther = false;
-      for (const auto& e : overlap.edges()) {
-        const int order = geom::depth_order(u.plane, tt.plane, e.start);
-        nearer = nearer || order < 0;
-        farther = farther || order > 0;
-      }
-      if (nearer && farther) return true;
+      if (u.t->id != tt.t->id && svgpu::planes_cross(poly, tt, u)) return true;
     }
     return false;
   }
@@ -383,9 +301,7 @@ class GoldenTiler::Impl {
       // The bounding box rejects with a margin far above the error of qx, qy.
       if (qx < u.bbox.x0 - 1.0 || qx > u.bbox.x1 + 1.0 || qy < u.bbox.y0 - 1.0 || qy > u.bbox.y1 + 1.0) continue;
       ++row[7];
-      if (!u.edges.contains(q)) continue;
-      const int order = geom::depth_order(u.plane, tt.plane, q);
-      if (order < 0 || (order == 0 && u.t->id < tt.t->id)) return true;
+      if (svgpu::occludes(u, u.t->id, tt, tt.t->id, q)) return true;
     }
     return false;
   }

@@ -12,3 +12,8 @@ if(TARGET tilevis)
     set_tests_properties(hybrid_scene_${scene} PROPERTIES TIMEOUT 600)
   endforeach()
 endif()
+
+# The public SVGPU functions on hand-made cases.
+add_executable(svgpu_tests ${CMAKE_CURRENT_LIST_DIR}/svgpu_tests.cpp)
+target_link_libraries(svgpu_tests PRIVATE tilevis_visibility tilevis_warnings GTest::gtest_main)
+gtest_discover_tests(svgpu_tests DISCOVERY_TIMEOUT 60)

@@ -1,0 +1,71 @@
+// SVGPU's per-tile decisions as public functions (Ellis, Hunt & Hart, HPG 2016, §3.2-3.3), on
+// snapped integer geometry and exact predicates: the culling tests of a silhouette edge against
+// a triangle, the split of a piece, the occlusion test of a piece's interior point, and the
+// hybrid mode's test for where the method can be wrong. The golden pipeline is built from
+// them; the SystemC model inherits them through it; RTL scoreboards and the CUDA emulation
+// tests call them directly.
+#pragma once
+
+#include <cstdint>
+
+#include "geom/clip.h"
+#include "geom/depth.h"
+#include "geom/polygon.h"
+#include "geom/predicates.h"
+
+namespace tilevis::vis::svgpu {
+
+// A front-facing triangle as the tile stage sees it.
+struct Triangle {
+  geom::Triangle tri;
+  geom::TriangleEdges edges;
+  geom::DepthPlane plane;
+  geom::Rect bbox;  // closed, sub-pixel units
+  uint32_t z_min = 0, z_max = 0;
+  static Triangle from(const geom::Vertex& a, const geom::Vertex& b, const geom::Vertex& c);
+};
+
+// A silhouette edge as the tile stage sees it.
+struct Edge {
+  geom::Vertex a, b;
+  geom::Line line;
+  uint32_t z_min = 0, z_max = 0;
+  geom::Rect bbox;
+  static Edge from(const geom::Vertex& a, const geom::Vertex& b);
+};
+
+// Test 6 (§3.2.1): the triangle's farthest depth is nearer than the edge's nearest, so the
+// edge cannot split it (nor can any edge that is farther still).
+inline bool edge_behind(const Edge& e, const Triangle& t) { return e.z_min > t.z_max; }
+
+// The bounding boxes at most touch: the segment cannot meet the triangle's interior (test 2's cheap form).
+inline bool boxes_apart(const Edge& e, const Triangle& t) {
+  return e.bbox.x1 <= t.bbox.x0 || e.bbox.x0 >= t.bbox.x1 || e.bbox.y1 <= t.bbox.y0 || e.bbox.y0 >= t.bbox.y1;
+}
+
+// Test 4: the silhouette edge is one of the triangle's own edges.
+bool shares_edge(const Edge& e, const geom::Triangle& t);
+
+// Tests 1-3 of an edge against a piece of triangle t: true when the pair survives, i.e. the
+// piece must be split by the edge's line. 1: the piece lies on one side of the line; 2: the
+// segment misses the piece's interior; 3: over the part of the segment inside the piece the
+// edge is behind t's plane. An edge level with the plane at both ends of that part survives:
+// it can bound a coplanar occluder whose tie (the earlier triangle in front) the piece's
+// interior point then decides.
+bool survives(const geom::ConvexPolygon& piece, const Triangle& t, const Edge& e);
+
+// The clip step (§3.2.2): both sides of the piece, inside (the line's positive side) first.
+inline geom::SplitResult split(const geom::ConvexPolygon& piece, const Edge& e) { return geom::split(piece, e.line); }
+
+// Occlusion (§3.3) of a piece of t by an original opaque triangle u at the piece's interior
+// point q: u contains q and is nearer there; at equal depth the earlier-submitted triangle
+// (smaller id) stays in front, as under a less-than depth test.
+bool occludes(const Triangle& u, uint32_t u_id, const Triangle& t, uint32_t t_id, const geom::RationalPoint& q);
+
+// Hybrid: do the planes of t and u cross strictly inside their overlap within `region` (a
+// convex polygon, e.g. t clipped to the tile)? Depth is affine over the overlap, so they cross
+// exactly when z_u - z_t is positive at one of its vertices and negative at another. Where no
+// pair of a tile's triangles crosses, silhouette splitting makes the analytic answer exact.
+bool planes_cross(const geom::ConvexPolygon& region, const Triangle& t, const Triangle& u);
+
+}  // namespace tilevis::vis::svgpu
