@@ -10,6 +10,7 @@
 #include <cub/device/device_radix_sort.cuh>
 #include <cub/device/device_scan.cuh>
 
+#include "geom/tile_grid.h"
 #include "pieces.cuh"
 
 namespace tilevis::cuda {
@@ -639,8 +640,9 @@ bool cuda_available(std::string* why) {
 }
 
 CudaResult run_cuda(const trace::Frame& frame, const CudaConfig& cfg) {
-  if (cfg.tile_w < 1 || cfg.tile_h < 1 || cfg.tile_w > 4096 || cfg.tile_h > 4096)
-    throw std::runtime_error("cuda: tile size out of range");
+  if (!geom::TileGrid::valid_tile(cfg.tile_w) || !geom::TileGrid::valid_tile(cfg.tile_h))
+    throw std::runtime_error("cuda: tile " + std::to_string(cfg.tile_w) + "x" + std::to_string(cfg.tile_h) +
+                             ": expected " + geom::TileGrid::valid_range() + " on each side");
   if (cfg.depth_bits < 1 || cfg.depth_bits > 32) throw std::runtime_error("cuda: depth bits must be 1..32");
   if (frame.samples.empty()) throw std::runtime_error("cuda: frame has no sample positions");
   if (cfg.device == Device::gpu) {

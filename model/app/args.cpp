@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "commands.h"
+#include "geom/tile_grid.h"
 
 namespace tilevis::app {
 
@@ -26,8 +27,8 @@ bool parse_size(const std::string& text, uint32_t& width, uint32_t& height) {
 }
 
 void parse_tile(const std::string& text, uint32_t& width, uint32_t& height) {
-  if (!parse_size(text, width, height) || width < 4 || height < 4 || width > 256 || height > 256)
-    throw std::runtime_error(fmt::format("--tile {}: expected N or WxH with 4 <= N <= 256", text));
+  if (!parse_size(text, width, height) || !geom::TileGrid::valid_tile(width) || !geom::TileGrid::valid_tile(height))
+    throw std::runtime_error(fmt::format("--tile {}: expected N or WxH with {}", text, geom::TileGrid::valid_range()));
 }
 
 void parse_occlusion_bin(const std::string& text, uint32_t tile_w, uint32_t tile_h, uint32_t& width,

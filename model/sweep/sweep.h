@@ -25,6 +25,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "geom/tile_grid.h"
+
 namespace tilevis::sweep {
 
 class SweepError : public std::runtime_error {
@@ -32,7 +34,7 @@ class SweepError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-inline constexpr uint32_t kMinTile = 8, kMaxTile = 128;
+inline constexpr uint32_t kMinTile = geom::TileGrid::kMinTile, kMaxTile = geom::TileGrid::kMaxTile;
 
 struct Size {
   uint32_t width = 0, height = 0;

@@ -1,5 +1,6 @@
 #include "top/config.h"
 
+#include "geom/tile_grid.h"
 #include "tilevis/json_node.h"
 
 #include <fstream>
@@ -103,8 +104,9 @@ Registry::Registry() {
                      +[](TilerConfig& c) -> Fidelity& { return c.sim.fidelity; });
   add_enum<Mode>("sim.mode", "visibility: analytic (EVU), hsr (per-pixel HSR unit), early_z, none",
                  {Mode::analytic, Mode::hybrid, Mode::hsr, Mode::early_z, Mode::none}, +[](TilerConfig& c) -> Mode& { return c.sim.mode; });
-  TV_UINT("sim.tile_width", sim.tile_width, "pixels", 4, 256, "tile width");
-  TV_UINT("sim.tile_height", sim.tile_height, "pixels", 4, 256, "tile height");
+  TV_UINT("sim.tile_width", sim.tile_width, "pixels", geom::TileGrid::kMinTile, geom::TileGrid::kMaxTile, "tile width");
+  TV_UINT("sim.tile_height", sim.tile_height, "pixels", geom::TileGrid::kMinTile, geom::TileGrid::kMaxTile,
+          "tile height");
   TV_UINT("sim.depth_bits", sim.depth_bits, "bits", 1, 24, "bits of snapped depth");
   TV_REAL("sim.clock_mhz", sim.clock_mhz, "MHz", 1.0, 10000.0, "GPU clock; every latency below is in its cycles");
   TV_UINT("sim.batch_triangles", sim.batch_triangles, "triangles", 1, kMaxU32, "geometry transaction size at fidelity tile");

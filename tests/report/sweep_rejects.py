@@ -13,8 +13,8 @@ from pathlib import Path
 GRID = '{"name": "g", "scenes": ["dragon"], "producers": ["golden"]'
 CASES = [  # (sweep file text, expected in the message)
     ('{"grids": [' + GRID + ', "tile": [8]}]}', "$.grids[0].tile: unknown member"),
-    ('{"grids": [' + GRID + ', "tiles": [4]}]}', "$.grids[0].tiles[0]: expected an integer in [8, 128], got 4"),
-    ('{"grids": [' + GRID + ', "tiles": ["16x256"]}]}', "$.grids[0].tiles[0]: expected a tile size"),
+    ('{"grids": [' + GRID + ', "tiles": [2]}]}', "$.grids[0].tiles[0]: expected an integer in [4, 256], got 2"),
+    ('{"grids": [' + GRID + ', "tiles": ["16x512"]}]}', "$.grids[0].tiles[0]: expected a tile size"),
     ('{"grids": [' + GRID + ', "samples": [3]}]}', "$.grids[0].samples[0]: expected 1, 2, 4, 8 or 16"),
     ('{"grids": [' + GRID + ', "resolutions": ["1920"]}]}', "$.grids[0].resolutions[0]: expected a resolution"),
     ('{"grids": [{"name": "g", "scenes": ["no_such_scene"], "producers": ["golden"]}]}', "$.grids[0].scenes[0]: no scene file"),
