@@ -88,11 +88,18 @@ class GoldenTiler::Impl {
     const auto& tris = m_tile_tris[tile];
     const auto& edge_ids = m_tile_edges[tile];
     auto& row = m_r.tiles.rows[tile];
-    row[0] = int64_t(tris.size());
-    row[1] = int64_t(edge_ids.size());
+    TileCounters c;
+    c.triangles = int64_t(tris.size());
+    c.edges = int64_t(edge_ids.size());
     m_r.max_tile_triangles = std::max<uint64_t>(m_r.max_tile_triangles, tris.size());
     m_r.max_tile_edges = std::max<uint64_t>(m_r.max_tile_edges, edge_ids.size());
-    if (tris.empty()) return 0;
+    const int cause = tris.empty() ? 0 : resolve(tile, tris, edge_ids, c, row, per_triangle);
+    c.add_to(row.data());
+    return cause;
+  }
+
+  int resolve(uint32_t tile, const std::vector<uint32_t>& tris, const std::vector<uint32_t>& edge_ids, TileCounters& c,
+              std::vector<int64_t>& row, std::vector<TileTriangleWork>* per_triangle) {
     const uint32_t tx = m_grid.tile_x(tile), ty = m_grid.tile_y(tile);
     const Rect rect = m_grid.rect(tx, ty);
 
@@ -111,33 +118,28 @@ class GoldenTiler::Impl {
 
     if (m_cfg.hybrid)
       if (const int cause = fallback_cause(tris, edge_ids.size(), rect)) {
-        resolve_per_pixel(tris, tx, ty, row, cause, per_triangle);
+        resolve_per_pixel(tris, tx, ty, c, per_triangle);
+        row[TileCounters::kCount] = 1;  // hybrid_tile_columns()
+        row[TileCounters::kCount + 1] = cause;
+        ++m_r.fallback_tiles;
+        (cause == 1 ? m_r.fallback_interpenetration : cause == 2 ? m_r.fallback_non_opaque : m_r.fallback_budget) += 1;
         return cause;
       }
 
-    if (!per_triangle) {
-      const uint64_t step = edge_ids.size() + tris.size();
-      for (uint32_t i : tris) {
-        process_triangle(m_tris[i], rect, tx, ty, row);
-        if (m_cfg.progress) m_cfg.progress(m_work_done += step, m_work_total);
-      }
-      if (m_cfg.progress) m_cfg.progress(m_work_done += 1, m_work_total);
-      return 0;
-    }
+    const uint64_t step = edge_ids.size() + tris.size();
     for (uint32_t i : tris) {
-      TileTriangleWork w;
-      w.triangle = setup_index(i);
-      for (size_t c = 0; c < 8; ++c) w.counters[c] = -row[c + 2];
-      process_triangle(m_tris[i], rect, tx, ty, row);
-      for (size_t c = 0; c < 8; ++c) w.counters[c] += row[c + 2];
-      per_triangle->push_back(w);
+      const TileCounters before = c;
+      process_triangle(m_tris[i], rect, tx, ty, c);
+      if (per_triangle) per_triangle->push_back({setup_index(i), c - before});
+      if (m_cfg.progress && !per_triangle) m_cfg.progress(m_work_done += step, m_work_total);
     }
+    if (m_cfg.progress && !per_triangle) m_cfg.progress(m_work_done += 1, m_work_total);
     return 0;
   }
 
   uint32_t setup_index(uint32_t front) const { return uint32_t(m_tris[front].t - m_s.triangles.data()); }
 
-  void process_triangle(const TileTriangle& tt, const Rect& rect, uint32_t tx, uint32_t ty, std::vector<int64_t>& row) {
+  void process_triangle(const TileTriangle& tt, const Rect& rect, uint32_t tx, uint32_t ty, TileCounters& c) {
     ConvexPolygon poly = geom::clip_to_rect(ConvexPolygon::from_triangle(tt.tri), rect);
     if (poly.empty()) return;
     // Candidate edges (tests 1–6 against the triangle's tile polygon), in ascending id.
@@ -145,12 +147,12 @@ class GoldenTiler::Impl {
     for (uint32_t ei : m_sorted_edges) {
       const Edge& e = m_edges[ei];
       if (svgpu::edge_behind(e, tt)) break;  // test 6: and so is every later edge
-      ++row[2];
+      ++c.pair_tests;
       if (svgpu::boxes_apart(e, tt) || svgpu::shares_edge(e, tt.tri)) continue;  // tests 2 (boxes) and 4
       if (svgpu::survives(poly, tt, e)) m_candidates.push_back(ei);
     }
     std::sort(m_candidates.begin(), m_candidates.end());
-    row[3] += int64_t(m_candidates.size());
+    c.candidate_pairs += int64_t(m_candidates.size());
 
     // Clipping (SVGPU §3.2.2): every piece re-checked against every candidate edge.
     m_pieces.clear();
@@ -161,21 +163,21 @@ class GoldenTiler::Impl {
       for (size_t k = 0; k < n; ++k) {
         if (!svgpu::survives(m_pieces[k], tt, e)) continue;
         geom::SplitResult sr = svgpu::split(m_pieces[k], e);
-        ++row[4];
+        ++c.clip_polygons;
         m_pieces[k] = std::move(sr.inside);
         if (!sr.outside.empty()) m_pieces.push_back(std::move(sr.outside));
       }
     }
     // Canonical order of pieces: a split puts the inside part in place of its parent and
     // appends the outside part (the order the CUDA reference reproduces).
-    row[5] += int64_t(m_pieces.size());
+    c.pieces += int64_t(m_pieces.size());
     m_r.max_tile_pieces = std::max<uint64_t>(m_r.max_tile_pieces, m_pieces.size());
 
     const int32_t sb = int32_t(m_s.subpixel_bits);
     const uint32_t n_samples = uint32_t(m_s.samples.size());
     for (const ConvexPolygon& piece : m_pieces) {
       if (piece.empty()) continue;
-      const bool visible = !occluded(piece, tt, row);
+      const bool visible = !occluded(piece, tt, c);
       // Samples of the piece: a pixel's samples lie in [px·2^sb, (px+1)·2^sb).
       const Rect b = geom::bounding_box(piece);
       const int64_t px0 = std::max<int64_t>(int64_t(tx) * m_cfg.tile_w, (int64_t(b.x0) >> sb));
@@ -191,10 +193,10 @@ class GoldenTiler::Impl {
             ++covered;
             if (visible) m_r.ids[(size_t(py) * m_s.width + size_t(px)) * n_samples + k] = int32_t(tt.t->id);
           }
-      row[9] += covered;
+      c.fragments_generated += covered;
       if (!visible) continue;
-      ++row[6];
-      row[8] += covered;
+      ++c.visible_pieces;
+      c.samples_covered += covered;
       m_r.visible_triangles += piece.size() - 2;
       m_r.visible_area[tt.t->id] += geom::doubled_area(piece) / (2.0 * double(1 << sb) * double(1 << sb));
       if (m_cfg.keep_pieces) keep(piece, tt);
@@ -233,8 +235,8 @@ class GoldenTiler::Impl {
   // The tile per pixel: every binned triangle in submission order, an exact less-than depth
   // test, opaque triangles taking the samples they win (the z-buffer truth's rule). Visible
   // areas of these tiles are sample counts times the sample's share of a pixel.
-  void resolve_per_pixel(const std::vector<uint32_t>& tris, uint32_t tx, uint32_t ty, std::vector<int64_t>& row,
-                         int cause, std::vector<TileTriangleWork>* per_triangle) {
+  void resolve_per_pixel(const std::vector<uint32_t>& tris, uint32_t tx, uint32_t ty, TileCounters& c,
+                         std::vector<TileTriangleWork>* per_triangle) {
     const size_t first_record = per_triangle ? per_triangle->size() : 0;
     const int32_t sb = int32_t(m_s.subpixel_bits);
     const uint32_t ns = uint32_t(m_s.samples.size());
@@ -261,7 +263,7 @@ class GoldenTiler::Impl {
       if (per_triangle) {
         TileTriangleWork record;
         record.triangle = setup_index(i);
-        record.counters[7] = generated - generated_before;
+        record.counters.fragments_generated = generated - generated_before;
         per_triangle->push_back(record);
         m_record_of[i] = uint32_t(n);
       }
@@ -277,21 +279,17 @@ class GoldenTiler::Impl {
           m_r.ids[(size_t(py) * m_s.width + px) * ns + k] = int32_t(id);
           m_r.visible_area[id] += sample_area;
           ++covered;
-          if (per_triangle) ++(*per_triangle)[first_record + m_record_of[uint32_t(o)]].counters[6];
+          if (per_triangle) ++(*per_triangle)[first_record + m_record_of[uint32_t(o)]].counters.samples_covered;
         }
-    row[8] += covered;
-    row[9] += generated;
-    row[10] = 1;
-    row[11] = cause;
-    ++m_r.fallback_tiles;
+    c.samples_covered += covered;
+    c.fragments_generated += generated;
     m_r.fallback_samples += uint64_t(covered);
-    (cause == 1 ? m_r.fallback_interpenetration : cause == 2 ? m_r.fallback_non_opaque : m_r.fallback_budget) += 1;
   }
 
   // SVGPU §3.3: the piece is hidden if an original opaque triangle nearer at its interior
   // point contains that point. Equal depth: the earlier-submitted triangle stays in front,
   // as under a less-than depth test.
-  bool occluded(const ConvexPolygon& piece, const TileTriangle& tt, std::vector<int64_t>& row) {
+  bool occluded(const ConvexPolygon& piece, const TileTriangle& tt, TileCounters& c) {
     const geom::RationalPoint q = geom::interior_point(piece);
     const double qx = q.fx / q.fw, qy = q.fy / q.fw;
     for (uint32_t oi : occluders_at(qx, qy)) {
@@ -300,7 +298,7 @@ class GoldenTiler::Impl {
       if (u.t->id == tt.t->id) continue;
       // The bounding box rejects with a margin far above the error of qx, qy.
       if (qx < u.bbox.x0 - 1.0 || qx > u.bbox.x1 + 1.0 || qy < u.bbox.y0 - 1.0 || qy > u.bbox.y1 + 1.0) continue;
-      ++row[7];
+      ++c.occlusion_tests;
       if (svgpu::occludes(u, u.t->id, tt, tt.t->id, q)) return true;
     }
     return false;
@@ -421,18 +419,18 @@ GoldenResult golden_visibility(const Setup& s, const GoldenConfig& cfg) {
 }
 
 void sum_golden_totals(GoldenResult& r) {
-  r.pair_tests = r.candidate_pairs = r.clip_polygons = r.pieces_total = r.visible_pieces = r.occlusion_tests =
-      r.samples_covered = r.fragments_generated = 0;
+  TileCounters sum;
   for (const auto& row : r.tiles.rows) {
-    r.pair_tests += uint64_t(row[2]);
-    r.candidate_pairs += uint64_t(row[3]);
-    r.clip_polygons += uint64_t(row[4]);
-    r.pieces_total += uint64_t(row[5]);
-    r.visible_pieces += uint64_t(row[6]);
-    r.occlusion_tests += uint64_t(row[7]);
-    r.samples_covered += uint64_t(row[8]);
-    r.fragments_generated += uint64_t(row[9]);
+    sum = sum + TileCounters::from(row.data());
   }
+  r.pair_tests = uint64_t(sum.pair_tests);
+  r.candidate_pairs = uint64_t(sum.candidate_pairs);
+  r.clip_polygons = uint64_t(sum.clip_polygons);
+  r.pieces_total = uint64_t(sum.pieces);
+  r.visible_pieces = uint64_t(sum.visible_pieces);
+  r.occlusion_tests = uint64_t(sum.occlusion_tests);
+  r.samples_covered = uint64_t(sum.samples_covered);
+  r.fragments_generated = uint64_t(sum.fragments_generated);
 }
 
 }  // namespace tilevis::vis

@@ -43,21 +43,52 @@ struct GoldenConfig {
   std::function<void(uint64_t done, uint64_t total)> progress;
 };
 
-// Per-tile counters (SVGPU Table 2 and more), in tiles.csv column order.
-inline const std::vector<std::string>& golden_tile_columns() {
-  static const std::vector<std::string> cols = {
-      "triangles",        // front-facing triangles binned to the tile
-      "edges",            // silhouette edges binned to the tile
-      "pair_tests",       // triangle × edge pairs examined (after the test-6 depth sort)
-      "candidate_pairs",  // pairs surviving tests 1–6 against the triangle's tile polygon
-      "clip_polygons",    // splits performed (each makes two polygons from one)
-      "pieces",           // polygons after clipping
-      "visible_pieces",   // pieces not occluded
-      "occlusion_tests",  // piece × occluder exact containment tests
-      "samples_covered",  // samples covered by visible pieces
-      "fragments_generated"};  // samples covered by all pieces (= by the tile's triangles)
-  return cols;
-}
+// A tile's counters (SVGPU Table 2 and more), or one triangle's share of them: the one
+// definition behind tiles.csv's first columns, the model's per-triangle work and stats.json.
+struct TileCounters {
+  int64_t triangles = 0;            // front-facing triangles binned to the tile
+  int64_t edges = 0;                // silhouette edges binned to the tile
+  int64_t pair_tests = 0;           // triangle × edge pairs examined (after the test-6 depth sort)
+  int64_t candidate_pairs = 0;      // pairs surviving tests 1–6 against the triangle's tile polygon
+  int64_t clip_polygons = 0;        // splits performed (each makes two polygons from one)
+  int64_t pieces = 0;               // polygons after clipping
+  int64_t visible_pieces = 0;       // pieces not occluded
+  int64_t occlusion_tests = 0;      // piece × occluder exact containment tests
+  int64_t samples_covered = 0;      // samples covered by visible pieces
+  int64_t fragments_generated = 0;  // samples covered by all pieces (= by the tile's triangles)
+
+  static constexpr size_t kCount = 10;
+  // Column names in member order (tiles.csv).
+  static const std::vector<std::string>& columns() {
+    static const std::vector<std::string> cols = {"triangles",      "edges",           "pair_tests",
+                                                  "candidate_pairs", "clip_polygons",   "pieces",
+                                                  "visible_pieces",  "occlusion_tests", "samples_covered",
+                                                  "fragments_generated"};
+    return cols;
+  }
+  void add_to(int64_t* row) const {
+    const int64_t v[kCount] = {triangles,      edges,          pair_tests,      candidate_pairs, clip_polygons,
+                               pieces,         visible_pieces, occlusion_tests, samples_covered, fragments_generated};
+    for (size_t i = 0; i < kCount; ++i) row[i] += v[i];
+  }
+  static TileCounters from(const int64_t* row) {
+    return {row[0], row[1], row[2], row[3], row[4], row[5], row[6], row[7], row[8], row[9]};
+  }
+  // Member-wise sum and difference (a triangle's share is the tile's counters after it minus before).
+  friend TileCounters operator+(const TileCounters& a, const TileCounters& b) { return combine(a, b, 1); }
+  friend TileCounters operator-(const TileCounters& a, const TileCounters& b) { return combine(a, b, -1); }
+
+ private:
+  static TileCounters combine(const TileCounters& a, const TileCounters& b, int64_t sign) {
+    int64_t ra[kCount] = {}, rb[kCount] = {};
+    a.add_to(ra);
+    b.add_to(rb);
+    for (size_t i = 0; i < kCount; ++i) ra[i] += sign * rb[i];
+    return from(ra);
+  }
+};
+
+inline const std::vector<std::string>& golden_tile_columns() { return TileCounters::columns(); }
 
 struct GoldenResult {
   uint32_t width = 0, height = 0, samples = 1;
@@ -83,12 +114,10 @@ inline const std::vector<std::string>& hybrid_tile_columns() {
 
 GoldenResult golden_visibility(const Setup& setup, const GoldenConfig& config);
 
-// One front-facing triangle's share of a tile's counters: columns 2..9 of
-// golden_tile_columns() (pair_tests .. fragments_generated) counted for it alone.
+// One front-facing triangle's share of a tile's counters (triangles and edges stay 0).
 struct TileTriangleWork {
-  uint32_t triangle = 0;        // index into Setup::triangles
-  int64_t counters[8] = {};     // pair_tests, candidate_pairs, clip_polygons, pieces, visible_pieces,
-                                // occlusion_tests, samples_covered, fragments_generated
+  uint32_t triangle = 0;  // index into Setup::triangles
+  TileCounters counters;
 };
 
 // The golden pipeline in reusable pieces, for producers that add time to it (the SystemC

@@ -367,14 +367,14 @@ void FrameWork::resolve_analytic(TileWork& w) {
     TriangleWork& tw = w.tris[i];
     tw.id = t.id;
     tw.draw = t.draw;
-    tw.pair_tests = uint32_t(rec.counters[0]);
-    tw.candidate_pairs = uint32_t(rec.counters[1]);
-    tw.clip_polygons = uint32_t(rec.counters[2]);
-    tw.pieces = uint32_t(rec.counters[3]);
-    tw.visible_pieces = uint32_t(rec.counters[4]);
-    tw.occlusion_tests = uint32_t(rec.counters[5]);
-    tw.visible_samples = uint32_t(rec.counters[6]);
-    tw.fragments_generated = uint32_t(rec.counters[7]);
+    tw.pair_tests = uint32_t(rec.counters.pair_tests);
+    tw.candidate_pairs = uint32_t(rec.counters.candidate_pairs);
+    tw.clip_polygons = uint32_t(rec.counters.clip_polygons);
+    tw.pieces = uint32_t(rec.counters.pieces);
+    tw.visible_pieces = uint32_t(rec.counters.visible_pieces);
+    tw.occlusion_tests = uint32_t(rec.counters.occlusion_tests);
+    tw.visible_samples = uint32_t(rec.counters.samples_covered);
+    tw.fragments_generated = uint32_t(rec.counters.fragments_generated);
     tw.fragments_shaded = tw.visible_samples;
     if (w.per_pixel) tw.depth_tests = tw.fragments_generated;  // the HSR unit: one test per covered sample
   }
