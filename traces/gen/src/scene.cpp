@@ -9,6 +9,7 @@
 #include <map>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <fmt/std.h>
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/mat4x4.hpp>
@@ -212,9 +213,21 @@ class SceneBuilder {
     auto it = m_meshes.find(key);
     if (it != m_meshes.end()) return &it->second;
     if (!std::filesystem::is_regular_file(path)) {
-      std::string hint = ref.starts_with("glmark2/") ? " (install Debian package glmark2-data)"
-                         : ref.starts_with("cgal/")  ? " (install libcgal-demo and re-run cmake)"
-                                                     : "";
+      const auto dir = path.parent_path();
+      std::string hint;
+      if (ref.starts_with("glmark2/") || ref.starts_with("cgal/")) {
+        if (!std::filesystem::is_directory(dir)) {
+          hint = ref.starts_with("glmark2/") ? " (install Debian package glmark2-data)"
+                                             : " (install libcgal-demo and re-run cmake)";
+        } else {  // the package is there: name what it holds
+          std::vector<std::string> names;
+          for (const auto& e : std::filesystem::directory_iterator(dir))
+            if (e.is_regular_file() && e.path().filename().string()[0] != '.') names.push_back(e.path().filename());
+          std::sort(names.begin(), names.end());
+          if (names.size() > 12) names.resize(12), names.push_back("...");
+          hint = fmt::format(" (no such mesh in {}; it holds {})", dir, fmt::join(names, ", "));
+        }
+      }
       n.fail(fmt::format("mesh file {} not found{}", path, hint));
     }
     Mesh m;
