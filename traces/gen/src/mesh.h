@@ -15,6 +15,13 @@ namespace tilevis::scene {
 struct Mesh {
   std::vector<glm::dvec3> positions;
   std::vector<uint32_t> indices;  // 3 per triangle
+  // The meshes of a multi-mesh file, each a range of `indices` (empty: one part). Each becomes
+  // its own draw, as the file's author made them separate objects.
+  struct Part {
+    std::string name;
+    size_t first = 0, count = 0;  // in indices
+  };
+  std::vector<Part> parts;
 
   size_t triangle_count() const { return indices.size() / 3; }
   void append(const Mesh& other);

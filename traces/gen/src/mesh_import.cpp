@@ -1,6 +1,7 @@
 #include <stdexcept>
 
 #include <assimp/Importer.hpp>
+#include <assimp/config.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <fmt/format.h>
@@ -20,6 +21,9 @@ Mesh import_mesh(const std::filesystem::path& file) {
                                   aiComponent_TEXCOORDS | aiComponent_BONEWEIGHTS | aiComponent_ANIMATIONS |
                                   aiComponent_TEXTURES | aiComponent_LIGHTS | aiComponent_CAMERAS |
                                   aiComponent_MATERIALS);
+  // Node transforms applied, but meshes kept apart (by default the step joins meshes that share a
+  // material, and with materials removed that is all of them): a multi-mesh file's objects stay draws.
+  importer.SetPropertyBool(AI_CONFIG_PP_PTV_KEEP_HIERARCHY, true);
   const aiScene* s = importer.ReadFile(file.string(), aiProcess_RemoveComponent | aiProcess_Triangulate |
                                                           aiProcess_JoinIdenticalVertices |
                                                           aiProcess_PreTransformVertices);
@@ -36,9 +40,14 @@ Mesh import_mesh(const std::filesystem::path& file) {
       if (face.mNumIndices != 3) continue;  // points and lines carry no area
       part.indices.insert(part.indices.end(), {face.mIndices[0], face.mIndices[1], face.mIndices[2]});
     }
+    if (part.indices.empty()) continue;
+    const size_t first = out.indices.size();
     out.append(part);
+    out.parts.push_back({am->mName.length ? std::string(am->mName.C_Str()) : fmt::format("mesh{}", mi), first,
+                         part.indices.size()});
   }
   if (out.indices.empty()) throw std::runtime_error(fmt::format("{}: no triangles", file));
+  if (out.parts.size() == 1) out.parts.clear();
   return out;
 }
 

@@ -156,9 +156,12 @@ class SceneBuilder {
       glm::dmat4 proj = glm::perspective(glm::radians(camera.fov_y_deg), double(frame.width) / frame.height,
                                          camera.near, camera.far);
       for (const Object& o : objs) {
-        for (size_t k = 0; k < o.instances.size(); ++k) {
+        const size_t n_parts = std::max<size_t>(1, o.mesh->parts.size());
+        for (size_t k = 0; k < o.instances.size(); ++k)
+          for (size_t part = 0; part < n_parts; ++part) {
           trace::Draw d;
           d.name = o.instances.size() == 1 ? o.name : fmt::format("{}#{}", o.name, k);
+          if (!o.mesh->parts.empty()) d.name += "/" + o.mesh->parts[part].name;
           d.flags = o.flags;
           d.shader_cycles_per_fragment = o.shader_cycles;
           d.varying_bytes_per_vertex = o.varying_bytes;
@@ -176,6 +179,21 @@ class SceneBuilder {
             d.vertices.push_back({float(c.x), float(c.y), float(c.z), float(c.w)});
           }
           d.indices = o.mesh->indices;
+          if (!o.mesh->parts.empty()) {  // this part's triangles over the vertices they use
+            const Mesh::Part& p = o.mesh->parts[part];
+            std::vector<uint32_t> local(d.vertices.size(), ~0u);
+            std::vector<trace::Vec4> used;
+            d.indices.clear();
+            for (size_t i = p.first; i < p.first + p.count; ++i) {
+              const uint32_t vi = o.mesh->indices[i];
+              if (local[vi] == ~0u) {
+                local[vi] = uint32_t(used.size());
+                used.push_back(d.vertices[vi]);
+              }
+              d.indices.push_back(local[vi]);
+            }
+            d.vertices = std::move(used);
+          }
           // A mirroring transform (negative determinant: an odd number of negative scales) turns
           // the mesh inside out; keep its outside facing out by reversing the winding.
           if (glm::determinant(glm::dmat3(o.instances[k])) < 0) {
@@ -186,7 +204,7 @@ class SceneBuilder {
                                          m_file, o.name, o.instances.size() == 1 ? "" : fmt::format(" instance {}", k)));
           }
           frame.draws.push_back(std::move(d));
-        }
+          }
       }
       t.frames.push_back(std::move(frame));
       report(fmt::format("frame {}/{} built", f + 1, camera.orbit_frames));
