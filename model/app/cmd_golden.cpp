@@ -87,8 +87,9 @@ int run_golden(const GoldenArgs& a, const trace::Frame& frame, uint32_t tw, uint
   cfg.tile_w = tw;
   cfg.tile_h = th;
   cfg.keep_pieces = !a.svg.empty();
-  cfg.hybrid = a.mode == "hybrid";
-  cfg.hybrid_pair_budget = a.pair_budget;
+  cfg.mode = a.mode;
+  cfg.pair_budget = a.pair_budget;
+  const bool hybrid = a.mode == "hybrid";
   parse_occlusion_bin(a.occlusion_bin, tw, th, cfg.occlusion_bin_w, cfg.occlusion_bin_h);
   Progress progress("golden: tiles");
   if (progress.enabled()) cfg.progress = [&](uint64_t done, uint64_t total) { progress.update(done, total); };
@@ -117,7 +118,7 @@ int run_golden(const GoldenArgs& a, const trace::Frame& frame, uint32_t tw, uint
   totals["max_tile_triangles"] = r.max_tile_triangles;
   totals["max_tile_edges"] = r.max_tile_edges;
   totals["max_tile_pieces"] = r.max_tile_pieces;
-  if (cfg.hybrid)
+  if (hybrid)
     totals["per_pixel_fallback"] = {{"tiles", r.fallback_tiles},
                                     {"tiles_interpenetration", r.fallback_interpenetration},
                                     {"tiles_non_opaque", r.fallback_non_opaque},
@@ -125,7 +126,7 @@ int run_golden(const GoldenArgs& a, const trace::Frame& frame, uint32_t tw, uint
                                     {"samples", r.fallback_samples}};
   nlohmann::json config = visibility_config(tw, th, cfg.occlusion_bin_w, cfg.occlusion_bin_h, r.samples, a.depth_bits);
   config["mode"] = a.mode;
-  if (cfg.hybrid) config["pair_budget"] = a.pair_budget;
+  if (hybrid) config["pair_budget"] = a.pair_budget;
   out.stats = {{"tool", "golden"},
                {"trace", a.trace},
                {"frame", a.frame},
@@ -139,7 +140,7 @@ int run_golden(const GoldenArgs& a, const trace::Frame& frame, uint32_t tw, uint
              "{} pieces ({} visible), {:.3f} s -> {}\n",
              a.trace, a.frame, tw, th, s.stats.triangles_in, s.stats.silhouette_edges, r.candidate_pairs,
              r.clip_polygons, r.pieces_total, r.visible_pieces, setup_s + tiles_s, a.out);
-  if (cfg.hybrid)
+  if (hybrid)
     fmt::print("  hybrid: {} of {} tiles per pixel ({} interpenetration, {} non-opaque, {} over budget), {} samples\n",
                r.fallback_tiles, out.tiles.rows.size(), r.fallback_interpenetration, r.fallback_non_opaque,
                r.fallback_budget, r.fallback_samples);
@@ -162,9 +163,10 @@ Command add_golden_command(CLI::App& app) {
                   "With --truth: compare depth rounded to N bits, as hardware does (shows z-fighting)")
       ->check(CLI::Range(1, 24));
   cmd->add_option("--mode", a->mode,
-                  "analytic: SVGPU in every tile; hybrid: tiles where the analytic answer can be wrong "
-                  "(interpenetration, non-opaque content, work over --pair-budget) go per pixel")
-      ->check(CLI::IsMember({"analytic", "hybrid"}))
+                  "Tile resolver. analytic: SVGPU in every tile; hybrid: tiles where the analytic answer can be "
+                  "wrong (interpenetration, non-opaque content, work over --pair-budget) go per pixel; per_pixel: "
+                  "the exact z-buffer in every tile (the truth's ids, tile by tile)")
+      ->check(CLI::IsMember(vis::tile_resolver_modes()))
       ->capture_default_str();
   cmd->add_option("--pair-budget", a->pair_budget,
                   "With --mode hybrid: a tile whose triangles x edges exceed this goes per pixel (0: no budget)")

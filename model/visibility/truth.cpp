@@ -6,53 +6,33 @@
 #include "geom/depth.h"
 #include "geom/predicates.h"
 #include "geom/tile_grid.h"
+#include "visibility/zbuffer.h"
 
 namespace tilevis::vis {
 namespace {
 
-// A front-facing setup triangle prepared for rasterisation.
-struct RasterTriangle {
-  geom::TriangleEdges edges;   // top-left rule coverage
-  geom::DepthPlane plane;      // exact depth
-  int32_t min_x, max_x, min_y, max_y;
-
-  explicit RasterTriangle(const SetupTriangle& t)
-      : edges(geom::TriangleEdges::from(t.v[0].xy(), t.v[1].xy(), t.v[2].xy())),
-        plane(geom::DepthPlane::from(geom::Triangle{{t.v[0], t.v[1], t.v[2]}})),
-        min_x(std::min({t.v[0].x, t.v[1].x, t.v[2].x})),
-        max_x(std::max({t.v[0].x, t.v[1].x, t.v[2].x})),
-        min_y(std::min({t.v[0].y, t.v[1].y, t.v[2].y})),
-        max_y(std::max({t.v[0].y, t.v[1].y, t.v[2].y})) {}
-};
-
 class ZBuffer {
  public:
-  ZBuffer(const Setup& s, const TruthConfig& cfg, const std::vector<RasterTriangle>& tris)
-      : m_s(s), m_cfg(cfg), m_tris(tris), m_samples(uint32_t(s.samples.size())),
-        m_owner(size_t(s.width) * s.height * m_samples, -1) {}
+  ZBuffer(const Setup& s, const TruthConfig& cfg, const std::vector<svgpu::Triangle>& tris)
+      : m_s(s), m_cfg(cfg), m_tris(tris), m_owner(size_t(s.width) * s.height * s.samples.size(), -1) {}
 
-  // Does triangle t pass a less-than depth test at s against the current owner? Equal
-  // depth fails, so the earlier-submitted triangle keeps the sample.
+  // Does triangle t pass the depth test at s against the current owner (zbuffer.h), or with
+  // quantized depth, is its rounded depth strictly smaller?
   bool passes(int32_t t, geom::Point s, int32_t current) const {
     if (current < 0) return true;
     const geom::DepthPlane &p = m_tris[size_t(t)].plane, &q = m_tris[size_t(current)].plane;
-    if (m_cfg.quantized_depth_bits == 0) return geom::depth_order(p, q, s) < 0;
+    if (m_cfg.quantized_depth_bits == 0) return zbuffer::passes(p, q, s);
     const int bits = int(m_cfg.quantized_depth_bits);
     return geom::quantized_depth(p, s, bits) < geom::quantized_depth(q, s, bits);
   }
 
-  // Calls visit(sample_index, point) for each sample the triangle covers.
+  // Calls visit(sample index, point) for each sample of the frame the triangle covers.
   template <typename Visit>
-  void raster(const RasterTriangle& r, Visit&& visit) const {
-    const uint32_t sb = m_s.subpixel_bits;
-    const int64_t px0 = std::max<int64_t>(0, r.min_x >> sb), px1 = std::min<int64_t>(m_s.width - 1, r.max_x >> sb);
-    const int64_t py0 = std::max<int64_t>(0, r.min_y >> sb), py1 = std::min<int64_t>(m_s.height - 1, r.max_y >> sb);
-    for (int64_t py = py0; py <= py1; ++py)
-      for (int64_t px = px0; px <= px1; ++px)
-        for (uint32_t k = 0; k < m_samples; ++k) {
-          const geom::Point p{int32_t((px << sb) + m_s.samples[k].x), int32_t((py << sb) + m_s.samples[k].y)};
-          if (r.edges.covers(p)) visit((size_t(py) * m_s.width + size_t(px)) * m_samples + k, p);
-        }
+  void raster(const svgpu::Triangle& t, Visit&& visit) const {
+    zbuffer::for_covered_samples(m_s, t, zbuffer::whole_frame(m_s), [&](uint32_t px, uint32_t py, uint32_t k,
+                                                                          geom::Point p) {
+      visit(zbuffer::sample_index(m_s, px, py, k), p);
+    });
   }
 
   std::vector<int32_t>& owner() { return m_owner; }
@@ -61,8 +41,7 @@ class ZBuffer {
  private:
   const Setup& m_s;
   const TruthConfig& m_cfg;
-  const std::vector<RasterTriangle>& m_tris;
-  uint32_t m_samples;
+  const std::vector<svgpu::Triangle>& m_tris;
   std::vector<int32_t> m_owner;  // per sample: index into m_tris of the nearest so far
 };
 
@@ -75,11 +54,11 @@ TruthResult zbuffer_truth(const Setup& s, const TruthConfig& cfg) {
   r.samples = uint32_t(s.samples.size());
   const size_t n_samples = size_t(s.width) * s.height * r.samples;
 
-  std::vector<RasterTriangle> tris;
+  std::vector<svgpu::Triangle> tris;
   std::vector<const SetupTriangle*> src;
   for (const auto& t : s.triangles)
     if (t.front) {
-      tris.emplace_back(t);
+      tris.push_back(svgpu::Triangle::from(t.v[0], t.v[1], t.v[2]));
       src.push_back(&t);
     }
   ZBuffer zb(s, cfg, tris);

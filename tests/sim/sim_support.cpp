@@ -4,14 +4,7 @@
 #include <unistd.h>
 
 #include <cstdio>
-#include <filesystem>
-#include <fstream>
-
 #include <systemc>
-
-#include "tilevis/scene.h"
-
-namespace fs = std::filesystem;
 
 // libsystemc brings a main() that calls sc_main(); GoogleTest's main() is used instead.
 int sc_main(int, char**) { return 1; }
@@ -54,22 +47,6 @@ nlohmann::json in_child(const std::function<nlohmann::json()>& fn) {
   auto j = nlohmann::json::parse(text, nullptr, false);
   if (j.is_discarded()) return {{"error", "child wrote no result (exit " + std::to_string(WEXITSTATUS(status)) + ")"}};
   return j;
-}
-
-trace::Frame frame_of(const std::string& name, const std::string& json) {
-  const fs::path dir = fs::temp_directory_path() / ("tilevis_sim_tests_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  const fs::path p = dir / (name + ".json");
-  std::ofstream(p) << json;
-  return scene::build_trace(p).frames.at(0);
-}
-
-trace::Frame shipped(const std::string& name, uint32_t width, uint32_t height, uint32_t samples) {
-  scene::BuildOptions o;
-  o.width = width;
-  o.height = height;
-  o.samples = samples;
-  return scene::build_trace(fs::path(TILEVIS_SOURCE_DIR) / "traces/scenes" / (name + ".json"), o).frames.at(0);
 }
 
 const char* const kCubes = R"({

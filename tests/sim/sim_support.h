@@ -9,6 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "scene_frames.h"
 #include "tilevis/trace.h"
 
 namespace tilevis::simtest {
@@ -16,10 +17,9 @@ namespace tilevis::simtest {
 // Runs fn in a child process; returns its JSON, or {"error": ...} if it threw or died.
 nlohmann::json in_child(const std::function<nlohmann::json()>& fn);
 
-// A scene built in-process from JSON text (scene file format, traces/scenes/README.md).
-trace::Frame frame_of(const std::string& name, const std::string& json);
-// A shipped scene at a given viewport.
-trace::Frame shipped(const std::string& name, uint32_t width, uint32_t height, uint32_t samples = 1);
+// Scenes from JSON text or traces/scenes (tests/support/scene_frames.h).
+using testsupport::frame_of;
+using testsupport::shipped;
 
 // Small scenes.
 extern const char* const kCubes;    // floor, box, sphere, cards: clipping and occlusion

@@ -1,6 +1,6 @@
 # Hybrid visibility against the z-buffer truth on interpenetrating, blended and overloaded scenes.
 add_executable(hybrid_tests ${CMAKE_CURRENT_LIST_DIR}/hybrid_tests.cpp)
-target_link_libraries(hybrid_tests PRIVATE tilevis_visibility tilevis_scene tilevis_warnings GTest::gtest_main)
+target_link_libraries(hybrid_tests PRIVATE tilevis_visibility tilevis_test_scenes tilevis_warnings GTest::gtest_main)
 gtest_discover_tests(hybrid_tests DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT 900)
 
 # The failure scenes (traces/scenes): hybrid equals the truth through the CLI at 16, 32 and 128.
@@ -17,3 +17,8 @@ endif()
 add_executable(svgpu_tests ${CMAKE_CURRENT_LIST_DIR}/svgpu_tests.cpp)
 target_link_libraries(svgpu_tests PRIVATE tilevis_visibility tilevis_warnings GTest::gtest_main)
 gtest_discover_tests(svgpu_tests DISCOVERY_TIMEOUT 60)
+
+# The per-tile visibility interface: registry, per_pixel = truth, records, tile order.
+add_executable(tile_resolver_tests ${CMAKE_CURRENT_LIST_DIR}/tile_resolver_tests.cpp)
+target_link_libraries(tile_resolver_tests PRIVATE tilevis_visibility tilevis_test_scenes tilevis_warnings GTest::gtest_main)
+gtest_discover_tests(tile_resolver_tests DISCOVERY_TIMEOUT 60)

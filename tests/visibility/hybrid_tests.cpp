@@ -1,32 +1,20 @@
 // Hybrid visibility: tiles where the analytic answer can be wrong go per pixel, so the result
 // equals the exact z-buffer truth on interpenetrating, non-opaque and overloaded content,
 // while tiles where it cannot be wrong stay analytic (same ids, counters and exact areas).
-#include <filesystem>
-#include <fstream>
 
-#include <unistd.h>
 
 #include <gtest/gtest.h>
 
-#include "tilevis/scene.h"
+#include "scene_frames.h"
 #include "visibility/golden.h"
 #include "visibility/setup.h"
 #include "visibility/truth.h"
 
-namespace fs = std::filesystem;
 using namespace tilevis;
 
 namespace {
 
-trace::Frame frame_of(const std::string& name, const std::string& json, uint32_t samples = 1) {
-  fs::path dir = fs::temp_directory_path() / ("tilevis_hybrid_tests_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  fs::path p = dir / (name + ".json");
-  std::ofstream(p) << json;
-  scene::BuildOptions o;
-  o.samples = samples;
-  return scene::build_trace(p, o).frames.at(0);
-}
+using testsupport::frame_of;
 
 uint64_t mismatches(const std::vector<int32_t>& a, const std::vector<int32_t>& b) {
   uint64_t n = 0;
@@ -60,8 +48,8 @@ void expect_hybrid_is_truth(const trace::Frame& f, const std::string& what, uint
   for (uint32_t tile : {8u, 32u, 128u}) {
     vis::GoldenConfig cfg;
     cfg.tile_w = cfg.tile_h = tile;
-    cfg.hybrid = true;
-    cfg.hybrid_pair_budget = budget;
+    cfg.mode = "hybrid";
+    cfg.pair_budget = budget;
     const vis::GoldenResult h = vis::golden_visibility(s, cfg);
     EXPECT_EQ(mismatches(h.ids, truth.ids), 0u) << what << " at " << tile << "x" << tile << " tiles";
     EXPECT_GT(h.fallback_tiles, 0u) << what << ": nothing went per pixel";
@@ -86,7 +74,7 @@ TEST(Hybrid, NonOpaqueTilesGoPerPixel) {
   const trace::Frame f = frame_of("blended", kBlended);
   expect_hybrid_is_truth(f, "blended card");
   vis::GoldenConfig cfg;
-  cfg.hybrid = true;
+  cfg.mode = "hybrid";
   const vis::GoldenResult h = vis::golden_visibility(vis::primitive_setup(f, {}), cfg);
   EXPECT_EQ(h.fallback_tiles, h.fallback_non_opaque);
 }
@@ -95,8 +83,8 @@ TEST(Hybrid, WorkOverTheBudgetGoesPerPixel) {
   const trace::Frame f = frame_of("interpenetrating", kInterpenetrating);
   vis::GoldenConfig cfg;
   cfg.tile_w = cfg.tile_h = 32;
-  cfg.hybrid = true;
-  cfg.hybrid_pair_budget = 50;
+  cfg.mode = "hybrid";
+  cfg.pair_budget = 50;
   const vis::GoldenResult h = vis::golden_visibility(vis::primitive_setup(f, {}), cfg);
   EXPECT_GT(h.fallback_budget, 0u);
   expect_hybrid_is_truth(f, "budget 50", 50);
@@ -110,7 +98,7 @@ TEST(Hybrid, IsAnalyticWhereNothingCanGoWrong) {
   const vis::Setup s = vis::primitive_setup(f, {});
   vis::GoldenConfig cfg;
   const vis::GoldenResult a = vis::golden_visibility(s, cfg);
-  cfg.hybrid = true;
+  cfg.mode = "hybrid";
   const vis::GoldenResult h = vis::golden_visibility(s, cfg);
   EXPECT_EQ(h.fallback_tiles, 0u);
   EXPECT_EQ(h.ids, a.ids);

@@ -2,41 +2,23 @@
 // agrees with the truth sample for sample, runs are deterministic, clipping conserves
 // area, and the per-pixel modes count what they must.
 #include <cmath>
-#include <filesystem>
-#include <fstream>
 #include <numeric>
 
-#include <unistd.h>
 
 #include <gtest/gtest.h>
 
 #include "geom/predicates.h"
-#include "tilevis/scene.h"
+#include "scene_frames.h"
 #include "visibility/golden.h"
 #include "visibility/setup.h"
 #include "visibility/truth.h"
 
-namespace fs = std::filesystem;
 using namespace tilevis;
 
 namespace {
 
-trace::Frame frame_of(const std::string& name, const std::string& json) {
-  // One folder per process: CTest runs these tests in parallel processes.
-  fs::path dir = fs::temp_directory_path() / ("tilevis_visibility_tests_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  fs::path p = dir / (name + ".json");
-  std::ofstream(p) << json;
-  return scene::build_trace(p).frames.at(0);
-}
-
-trace::Frame shipped(const std::string& name, uint32_t w, uint32_t h, uint32_t samples) {
-  scene::BuildOptions o;
-  o.width = w;
-  o.height = h;
-  o.samples = samples;
-  return scene::build_trace(fs::path(TILEVIS_SOURCE_DIR) / "traces/scenes" / (name + ".json"), o).frames.at(0);
-}
+using testsupport::frame_of;
+using testsupport::shipped;
 
 struct Agreement {
   uint64_t compared = 0, mismatched = 0;

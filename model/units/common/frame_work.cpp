@@ -92,14 +92,14 @@ FrameWork::FrameWork(const trace::Frame& frame, const FrameWorkConfig& config) :
   m_trace_triangles = uint32_t(frame.triangle_count());
   m_gcfg.tile_w = config.tile_w;
   m_gcfg.tile_h = config.tile_h;
-  m_gcfg.hybrid = config.mode == Mode::hybrid;
-  m_gcfg.hybrid_pair_budget = config.hybrid_pair_budget;
+  m_gcfg.mode = uses_evu(config.mode) ? to_string(config.mode) : "per_pixel";
+  m_gcfg.pair_budget = config.hybrid_pair_budget;
   m_grid = geom::TileGrid::make(frame.width, frame.height, config.tile_w, config.tile_h, frame.subpixel_bits);
   if (uses_evu(m_cfg.mode)) {
-    m_columns = vis::golden_tile_columns();
+    m_columns = vis::TileCounters::columns();
     for (const char* c : {"fragments_shaded", "depth_tests", "passes", "segments"}) m_columns.push_back(c);
-    if (m_gcfg.hybrid)
-      m_columns.insert(m_columns.end(), vis::hybrid_tile_columns().begin(), vis::hybrid_tile_columns().end());
+    if (m_cfg.mode == Mode::hybrid)
+      for (const char* c : {"per_pixel", "per_pixel_cause"}) m_columns.push_back(c);
   } else {
     m_columns = {"triangles", "fragments_generated", "samples_covered", "fragments_shaded", "depth_tests", "segments"};
   }
@@ -126,6 +126,9 @@ void FrameWork::run_binning() {
   m_full.samples = samples();
   m_full_tiler = std::make_unique<vis::GoldenTiler>(m_setup, m_gcfg, m_full);
   m_full_tiler->bin();
+  m_front_of.assign(m_setup.triangles.size(), kNone);
+  const auto& front = m_full_tiler->frame().triangles();
+  for (uint32_t i = 0; i < front.size(); ++i) m_front_of[front[i].setup_index] = i;
   const size_t n_tris = m_setup.triangles.size(), n_edges = m_setup.silhouettes.size();
   m_tri_refs.assign(n_tris, 0);
   m_tri_tests.assign(n_tris, 0);
@@ -133,7 +136,7 @@ void FrameWork::run_binning() {
   m_edge_tests.assign(n_edges, 0);
   for (uint32_t tile = 0; tile < tile_count(); ++tile) {
     for (uint32_t s : m_full_tiler->tile_triangles(tile)) ++m_tri_refs[s];
-    for (uint32_t e : m_full_tiler->tile_edges(tile)) ++m_edge_refs[e];
+    for (uint32_t e : m_full_tiler->frame().tile_edges(tile)) ++m_edge_refs[e];
   }
   for (size_t i = 0; i < n_tris; ++i) {
     const auto& v = m_setup.triangles[i].v;
@@ -278,9 +281,9 @@ void FrameWork::prepare_segment(uint32_t k) {
       sg.golden = sg.tiler.get();
     }
     for (uint32_t tile = 0; tile < tile_count(); ++tile) {
-      const size_t n = sg.golden->tile_triangle_count(tile);
+      const size_t n = sg.golden->frame().tile_triangles(tile).size();
       m_rows[tile][c_tri] += int64_t(n);
-      m_rows[tile][c_edges] += int64_t(sg.golden->tile_edges(tile).size());
+      m_rows[tile][c_edges] += int64_t(sg.golden->frame().tile_edges(tile).size());
       if (n) m_seg_tiles.push_back(tile);
     }
   } else {
@@ -314,7 +317,7 @@ TileWork* FrameWork::open_tile(uint32_t tile) {
     w->opaque += t.opaque;
   }
   if (uses_evu(m_cfg.mode)) {
-    w->edges = uint32_t(sg.golden->tile_edges(tile).size());
+    w->edges = uint32_t(sg.golden->frame().tile_edges(tile).size());
     // SVGPU needs a tile's whole edge list beside each triangle: a list over the on-chip
     // capacity is streamed in passes (triangles in chunks, edges and occluders re-read).
     const uint32_t tp = (w->triangles() + m_cfg.evu_triangle_entries - 1) / m_cfg.evu_triangle_entries;
@@ -328,17 +331,8 @@ TileWork* FrameWork::open_tile(uint32_t tile) {
   return sg.open[tile].get();
 }
 
-geom::Point FrameWork::sample_point(int64_t px, int64_t py, uint32_t k) const {
-  const int32_t sb = int32_t(m_setup.subpixel_bits);
-  return {int32_t((px << sb) + m_frame.samples[k].x), int32_t((py << sb) + m_frame.samples[k].y)};
-}
-
-const FrameWork::Raster& FrameWork::raster(uint32_t s) {
-  auto it = m_raster_cache.find(s);
-  if (it != m_raster_cache.end()) return it->second;
-  const vis::SetupTriangle& t = m_setup.triangles[s];
-  const geom::Triangle tri{{t.v[0], t.v[1], t.v[2]}};
-  return m_raster_cache.emplace(s, Raster{geom::TriangleEdges::from(tri), geom::DepthPlane::from(tri)}).first->second;
+const vis::FrontTriangle& FrameWork::raster(uint32_t s) const {
+  return m_full_tiler->frame().triangles()[m_front_of[s]];
 }
 
 uint32_t FrameWork::covering_fan(uint32_t id, geom::Point p) {
@@ -349,7 +343,6 @@ uint32_t FrameWork::covering_fan(uint32_t id, geom::Point p) {
 
 void FrameWork::resolve_tile(TileWork& w) {
   if (w.resolved) return;
-  m_raster_cache.clear();
   if (uses_evu(m_cfg.mode)) resolve_analytic(w);
   else resolve_pixels(w);
   w.resolved = true;
@@ -359,24 +352,17 @@ void FrameWork::resolve_tile(TileWork& w) {
 void FrameWork::resolve_analytic(TileWork& w) {
   Segment& sg = *m_seg;
   m_per_tri.clear();
-  w.per_pixel = uint8_t(sg.golden->process_tile(w.tile, &m_per_tri));
+  w.per_pixel = uint8_t(sg.golden->process_tile(w.tile, &m_per_tri).per_pixel_cause);
   w.tris.resize(m_per_tri.size());
   for (size_t i = 0; i < m_per_tri.size(); ++i) {
     const auto& rec = m_per_tri[i];
     const vis::SetupTriangle& t = sg.s->triangles[rec.triangle];
     TriangleWork& tw = w.tris[i];
+    static_cast<vis::TileCounters&>(tw) = rec.counters;
     tw.id = t.id;
     tw.draw = t.draw;
-    tw.pair_tests = uint32_t(rec.counters.pair_tests);
-    tw.candidate_pairs = uint32_t(rec.counters.candidate_pairs);
-    tw.clip_polygons = uint32_t(rec.counters.clip_polygons);
-    tw.pieces = uint32_t(rec.counters.pieces);
-    tw.visible_pieces = uint32_t(rec.counters.visible_pieces);
-    tw.occlusion_tests = uint32_t(rec.counters.occlusion_tests);
-    tw.visible_samples = uint32_t(rec.counters.samples_covered);
-    tw.fragments_generated = uint32_t(rec.counters.fragments_generated);
-    tw.fragments_shaded = tw.visible_samples;
-    if (w.per_pixel) tw.depth_tests = tw.fragments_generated;  // the HSR unit: one test per covered sample
+    tw.fragments_shaded = uint32_t(tw.samples_covered);
+    if (w.per_pixel) tw.depth_tests = uint32_t(tw.fragments_generated);  // the HSR unit: one test per covered sample
   }
   if (segment_count() == 1) return;
 
@@ -396,13 +382,13 @@ void FrameWork::resolve_analytic(TileWork& w) {
         const size_t idx = (size_t(py) * m_frame.width + px) * ns + k;
         const int32_t sid = sg.result->ids[idx];
         if (sid < 0) continue;
-        const geom::Point p = sample_point(px, py, k);
+        const geom::Point p = vis::zbuffer::sample_point(m_setup, px, py, k);
         const uint32_t fan = covering_fan(uint32_t(sid), p);
         TriangleWork& tw = w.tris[first_of_id.at(uint32_t(sid))];
         const uint32_t old = m_owner[idx];
         if (old != kNone) {
           ++tw.depth_tests;
-          if (geom::depth_order(raster(fan).plane, raster(old).plane, p) >= 0) continue;
+          if (!vis::zbuffer::passes(raster(fan).plane, raster(old).plane, p)) continue;
         }
         m_owner[idx] = fan;
         ++tw.fragments_shaded;
@@ -412,9 +398,8 @@ void FrameWork::resolve_analytic(TileWork& w) {
 void FrameWork::resolve_pixels(TileWork& w) {
   Segment& sg = *m_seg;
   const std::vector<uint32_t>& list = sg.lists[w.tile];
-  const uint32_t ns = samples(), sb = m_setup.subpixel_bits;
-  const uint32_t x0 = w.tx * m_cfg.tile_w, y0 = w.ty * m_cfg.tile_h;
-  const uint32_t x1 = std::min(m_frame.width, x0 + m_cfg.tile_w), y1 = std::min(m_frame.height, y0 + m_cfg.tile_h);
+  const uint32_t ns = samples();
+  const vis::zbuffer::PixelRect region = vis::zbuffer::tile_pixels(m_grid, w.tile);
   std::unordered_map<uint32_t, size_t> local;
   w.tris.resize(list.size());
   for (size_t i = 0; i < list.size(); ++i) {
@@ -423,52 +408,39 @@ void FrameWork::resolve_pixels(TileWork& w) {
     w.tris[i].draw = t.draw;
     local.emplace(list[i], i);
   }
-  // Rasterise in submission order with an exact less-than depth test against the tile's
-  // depth (equal depth keeps the earlier triangle, as the z-buffer truth does).
-  auto visit = [&](size_t i, auto&& fn) {
-    const vis::SetupTriangle& t = m_setup.triangles[list[i]];
-    const int64_t bx0 = std::max<int64_t>(x0, std::min({t.v[0].x, t.v[1].x, t.v[2].x}) >> sb);
-    const int64_t bx1 = std::min<int64_t>(int64_t(x1) - 1, std::max({t.v[0].x, t.v[1].x, t.v[2].x}) >> sb);
-    const int64_t by0 = std::max<int64_t>(y0, std::min({t.v[0].y, t.v[1].y, t.v[2].y}) >> sb);
-    const int64_t by1 = std::min<int64_t>(int64_t(y1) - 1, std::max({t.v[0].y, t.v[1].y, t.v[2].y}) >> sb);
-    const Raster& r = raster(list[i]);
-    for (int64_t py = by0; py <= by1; ++py)
-      for (int64_t px = bx0; px <= bx1; ++px)
-        for (uint32_t k = 0; k < ns; ++k) {
-          const geom::Point p = sample_point(px, py, k);
-          if (r.edges.covers(p)) fn((size_t(py) * m_frame.width + size_t(px)) * ns + k, p, r);
-        }
-  };
+  // The exact z-buffer (vis::zbuffer) in submission order against the tile's depth, which
+  // earlier partial renders may have stored.
   for (size_t i = 0; i < list.size(); ++i) {
     TriangleWork& tw = w.tris[i];
-    const bool opaque = m_setup.triangles[list[i]].opaque;
-    visit(i, [&](size_t idx, geom::Point p, const Raster& r) {
+    const vis::FrontTriangle& t = raster(list[i]);
+    vis::zbuffer::for_covered_samples(m_setup, t, region, [&](uint32_t px, uint32_t py, uint32_t k, geom::Point p) {
       ++tw.fragments_generated;
-      const uint32_t old = m_owner[idx];
-      const bool pass = old == kNone || geom::depth_order(r.plane, raster(old).plane, p) < 0;
+      uint32_t& owner = m_owner[vis::zbuffer::sample_index(m_setup, px, py, k)];
+      const bool pass = owner == kNone || vis::zbuffer::passes(t.plane, raster(owner).plane, p);
       if (m_cfg.mode != Mode::none) ++tw.depth_tests;  // one test per covered sample
       if (m_cfg.mode == Mode::none || (m_cfg.mode == Mode::early_z && pass)) ++tw.fragments_shaded;
-      if (pass && opaque) m_owner[idx] = list[i];
+      if (pass && t.t->opaque) owner = list[i];
     });
   }
   // Samples the tile's triangles own now; HSR shades exactly those (the tag buffer), then
   // translucent fragments in front of them.
-  for (uint32_t py = y0; py < y1; ++py)
-    for (uint32_t px = x0; px < x1; ++px)
+  for (uint32_t py = region.y0; py < region.y1; ++py)
+    for (uint32_t px = region.x0; px < region.x1; ++px)
       for (uint32_t k = 0; k < ns; ++k) {
-        const uint32_t o = m_owner[(size_t(py) * m_frame.width + px) * ns + k];
+        const uint32_t o = m_owner[vis::zbuffer::sample_index(m_setup, px, py, k)];
         if (o == kNone) continue;
         auto it = local.find(o);
         if (it == local.end()) continue;
-        ++w.tris[it->second].visible_samples;
+        ++w.tris[it->second].samples_covered;
         if (m_cfg.mode == Mode::hsr) ++w.tris[it->second].fragments_shaded;
       }
   if (m_cfg.mode == Mode::hsr)
     for (size_t i = 0; i < list.size(); ++i) {
-      if (m_setup.triangles[list[i]].opaque) continue;
-      visit(i, [&](size_t idx, geom::Point p, const Raster& r) {
-        const uint32_t o = m_owner[idx];
-        if (o == kNone || geom::depth_order(r.plane, raster(o).plane, p) < 0) ++w.tris[i].fragments_shaded;
+      const vis::FrontTriangle& t = raster(list[i]);
+      if (t.t->opaque) continue;
+      vis::zbuffer::for_covered_samples(m_setup, t, region, [&](uint32_t px, uint32_t py, uint32_t k, geom::Point p) {
+        const uint32_t o = m_owner[vis::zbuffer::sample_index(m_setup, px, py, k)];
+        if (o == kNone || vis::zbuffer::passes(t.plane, raster(o).plane, p)) ++w.tris[i].fragments_shaded;
       });
     }
 }
@@ -482,23 +454,17 @@ void FrameWork::close_tile(TileWork* w) {
     tests += t.depth_tests;
   }
   if (uses_evu(m_cfg.mode)) {
-    for (const TriangleWork& t : w->tris) {
-      row[2] += t.pair_tests;
-      row[3] += t.candidate_pairs;
-      row[4] += t.clip_polygons;
-      row[5] += t.pieces;
-      row[6] += t.visible_pieces;
-      row[7] += t.occlusion_tests;
-      row[8] += t.visible_samples;
-      row[9] += t.fragments_generated;
-    }
-    row[10] += int64_t(shaded);
-    row[11] += int64_t(tests);
-    row[12] += w->passes;
+    vis::TileCounters sum = vis::TileCounters::read(row);
+    for (const TriangleWork& t : w->tris) sum += t;
+    sum.write(row.data());
+    const size_t c = vis::TileCounters::kCount;  // then fragments_shaded, depth_tests, passes, segments
+    row[c] += int64_t(shaded);
+    row[c + 1] += int64_t(tests);
+    row[c + 2] += w->passes;
     m_passes_extra += w->passes - 1;
-    if (m_gcfg.hybrid && w->per_pixel) {
-      row[14] = 1;  // hybrid_tile_columns(), after "segments"
-      row[15] = w->per_pixel;
+    if (m_cfg.mode == Mode::hybrid && w->per_pixel) {
+      row[c + 4] = 1;  // per_pixel, per_pixel_cause
+      row[c + 5] = w->per_pixel;
       ++m_per_pixel_tiles;
     }
   } else {
@@ -568,7 +534,7 @@ nlohmann::json FrameWork::totals() const {
                       {"triangles_frustum_culled", st.frustum_culled},
                       {"triangles_edge_on", st.edge_on},
                       {"silhouette_edges", uses_evu(m_cfg.mode) ? st.silhouette_edges : 0}};
-  if (m_gcfg.hybrid) j["per_pixel_tiles"] = m_per_pixel_tiles;
+  if (m_cfg.mode == Mode::hybrid) j["per_pixel_tiles"] = m_per_pixel_tiles;
   auto sum = [&](const std::string& name) {
     const auto it = std::find(m_columns.begin(), m_columns.end(), name);
     if (it == m_columns.end()) return uint64_t{0};

@@ -28,6 +28,7 @@
 #include "units/common/work.h"
 #include "visibility/golden.h"
 #include "visibility/setup.h"
+#include "visibility/zbuffer.h"
 
 namespace tilevis::sim {
 
@@ -108,15 +109,11 @@ class FrameWork {
 
  private:
   struct Segment;
-  struct Raster {
-    geom::TriangleEdges edges;
-    geom::DepthPlane plane;
-  };
-  const Raster& raster(uint32_t setup_triangle);
+  // A front-facing setup triangle's coverage and depth plane (the frame's binning has them).
+  const vis::FrontTriangle& raster(uint32_t setup_triangle) const;
   uint32_t covering_fan(uint32_t id, geom::Point p);
   void resolve_analytic(TileWork& w);
   void resolve_pixels(TileWork& w);
-  geom::Point sample_point(int64_t px, int64_t py, uint32_t k) const;
 
   trace::Frame m_frame;
   FrameWorkConfig m_cfg;
@@ -128,6 +125,7 @@ class FrameWork {
   vis::GoldenResult m_full;  // the whole frame's golden result (one segment: the output)
   std::unique_ptr<vis::GoldenTiler> m_full_tiler;
   geom::TileGrid m_grid;
+  std::vector<uint32_t> m_front_of;      // per setup triangle: index into the frame's front triangles, kNone
   std::vector<uint32_t> m_tri_refs, m_tri_tests, m_edge_refs, m_edge_tests;
   std::vector<uint32_t> m_owned_begin, m_owned;
 
@@ -136,7 +134,6 @@ class FrameWork {
   std::vector<uint32_t> m_seg_tiles;
   std::vector<bool> m_stored;            // per tile: a partial render stored its depth/colour
   std::vector<uint32_t> m_owner;         // per sample: setup triangle in front (stored depth), kNone
-  std::unordered_map<uint32_t, Raster> m_raster_cache;  // per tile
   std::vector<vis::TileTriangleWork> m_per_tri;
 
   // Accumulated results.

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "visibility/tile_counters.h"
+
 namespace tilevis::sim {
 
 // DESIGN.md "Visibility modes": what sits between tile fetch and the fragment unit.
@@ -32,14 +34,12 @@ inline bool uses_hsr(Mode m) { return m == Mode::hsr || m == Mode::hybrid; }
 const char* to_string(Fidelity f);
 
 // One binned triangle of a tile: its functional counts, from which every unit's cost follows.
-struct TriangleWork {
+// Its share of the tile's counters is the tile resolver's (vis::TileCounters: SVGPU counters
+// in analytic tiles, zero in per-pixel ones; fragments_generated: samples it covers in the
+// tile; samples_covered: samples of its visible pieces, or samples it owns after the tile).
+struct TriangleWork : vis::TileCounters {
   uint32_t id = 0;     // original (trace) triangle id
   uint32_t draw = 0;
-  // SVGPU counters (analytic mode; zero otherwise), as golden counts them.
-  uint32_t pair_tests = 0, candidate_pairs = 0, clip_polygons = 0, pieces = 0, visible_pieces = 0,
-           occlusion_tests = 0;
-  uint32_t fragments_generated = 0;  // samples the triangle covers in the tile
-  uint32_t visible_samples = 0;      // samples of its visible pieces / samples it owns after the tile
   uint32_t depth_tests = 0;          // per-sample depth tests spent on it (HSR, early-Z, partial-render merge)
   uint32_t fragments_shaded = 0;
 };

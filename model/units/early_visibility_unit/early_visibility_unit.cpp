@@ -82,12 +82,12 @@ EarlyVisibilityUnit::EarlyVisibilityUnit(const sc_core::sc_module_name& name, co
 
 void EarlyVisibilityUnit::count_tile(const TileWork& w) {
   for (const TriangleWork& t : w.tris) {
-    m_pairs.value += t.pair_tests;
-    m_candidates.value += t.candidate_pairs;
-    m_clips.value += t.clip_polygons;
-    m_pieces.value += t.pieces;
-    m_visible.value += t.visible_pieces;
-    m_occlusion_tests.value += t.occlusion_tests;
+    m_pairs.value += double(t.pair_tests);
+    m_candidates.value += double(t.candidate_pairs);
+    m_clips.value += double(t.clip_polygons);
+    m_pieces.value += double(t.pieces);
+    m_visible.value += double(t.visible_pieces);
+    m_occlusion_tests.value += double(t.occlusion_tests);
   }
   m_tiles.value += 1;
   m_multi_pass.value += w.passes > 1;

@@ -8,7 +8,7 @@ namespace {
 uint64_t rasterised(const TriangleWork& t, Mode m) {
   switch (m) {
     case Mode::analytic:
-    case Mode::hybrid: return t.visible_samples;
+    case Mode::hybrid: return t.samples_covered;
     case Mode::hsr: return t.fragments_shaded;
     default: return t.fragments_generated;
   }

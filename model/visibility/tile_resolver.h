@@ -1,0 +1,126 @@
+// Per-tile visibility, one home for every mode (DESIGN.md "Visibility modes").
+//
+// A TileFrame is a snapped scene prepared for tiles: its front-facing triangles and
+// silhouette edges as the tile stage sees them, and their exact binning into the TileGrid.
+// A TileResolver decides one tile of it: which triangle owns each sample of the tile, and
+// the tile's counters (TileCounters). Resolvers are registered by mode name:
+//   analytic   SVGPU §3.2-3.3: culling tests, clipping, occlusion of pieces (analytic_resolver.cpp)
+//   per_pixel  the exact z-buffer (zbuffer.h) over the tile's triangles (per_pixel_resolver.cpp)
+//   hybrid     per_pixel where the analytic answer can be wrong, else analytic (hybrid_resolver.cpp)
+// A new mode is one file with a factory plus one line in the registry (tile_resolver.cpp).
+//
+// Producers drive them: golden_visibility() over every tile in row-major order, the SystemC
+// model's EVU per tile as its units ask.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "geom/tile_grid.h"
+#include "visibility/setup.h"
+#include "visibility/svg.h"
+#include "visibility/svgpu.h"
+#include "visibility/tile_counters.h"
+
+namespace tilevis::vis {
+
+// A front-facing setup triangle as the tile stage sees it.
+struct FrontTriangle : svgpu::Triangle {
+  const SetupTriangle* t = nullptr;
+  uint32_t setup_index = 0;  // index into Setup::triangles
+};
+
+class TileFrame {
+ public:
+  // `setup` must outlive the frame. Prepares the front-facing triangles and the edges.
+  TileFrame(const Setup& setup, const geom::TileGrid& grid);
+
+  // Bins front-facing triangles and silhouette edges into tiles (exact overlap).
+  void bin();
+
+  const Setup& setup() const { return m_s; }
+  const geom::TileGrid& grid() const { return m_grid; }
+  const std::vector<FrontTriangle>& triangles() const { return m_tris; }  // setup order
+  const std::vector<svgpu::Edge>& edges() const { return m_edges; }       // Setup::silhouettes order
+  // After bin(): the tile's triangles (ascending index into triangles()) and silhouette
+  // edges (ascending index into edges()).
+  const std::vector<uint32_t>& tile_triangles(uint32_t tile) const { return m_tile_tris[tile]; }
+  const std::vector<uint32_t>& tile_edges(uint32_t tile) const { return m_tile_edges[tile]; }
+  // The tile's opaque triangles (its possible occluders), nearest z_min first, ties in index order.
+  void occluders(uint32_t tile, std::vector<uint32_t>& out) const;
+
+ private:
+  const Setup& m_s;
+  geom::TileGrid m_grid;
+  std::vector<FrontTriangle> m_tris;
+  std::vector<svgpu::Edge> m_edges;
+  std::vector<std::vector<uint32_t>> m_tile_tris, m_tile_edges;
+};
+
+// One binned triangle's share of its tile's counters (triangles and edges stay 0).
+struct TileTriangleWork {
+  uint32_t triangle = 0;  // index into Setup::triangles
+  TileCounters counters;
+};
+
+// Where a resolver writes: frame-sized outputs shared by all tiles.
+struct FrameOutput {
+  std::vector<int32_t> ids;            // per sample, original triangle id; -1 background
+  std::vector<double> visible_area;    // per original triangle id, pixels²
+  std::vector<PlanarPiece> pieces;     // visible pieces as polygons (analytic tiles, ResolverOptions::keep_pieces)
+  uint64_t visible_triangles = 0;      // visible pieces fan-triangulated (per-pixel tiles: none)
+  uint64_t max_tile_pieces = 0;        // most pieces of one triangle in one tile
+};
+
+// What a resolver reports about a tile besides its counters.
+struct TileVerdict {
+  // 0: resolved analytically; else why the tile went per pixel: kPerPixelCause* below.
+  int per_pixel_cause = 0;
+};
+inline constexpr int kPerPixelInterpenetration = 1;  // two opaque triangles' planes cross inside their overlap
+inline constexpr int kPerPixelNonOpaque = 2;         // a non-opaque triangle (it never occludes)
+inline constexpr int kPerPixelBudget = 3;            // estimated pair tests over the budget
+inline constexpr int kPerPixelMode = 4;              // the per_pixel mode: every tile
+
+struct ResolverOptions {
+  // analytic: finer occlusion bins (SVGPU §4.1) of this many pixels (0: one bin per tile).
+  // Only the scanning of occluders shrinks; results and counters are those of one bin.
+  uint32_t occlusion_bin_w = 0, occlusion_bin_h = 0;
+  bool keep_pieces = false;  // analytic: collect visible pieces (SVG)
+  // hybrid: a tile whose triangles x edges exceed this goes per pixel (0: no budget).
+  uint64_t pair_budget = 0;
+  // Called with units of work done as the tile proceeds (a triangle of an analytic tile
+  // weighs edges + triangles of the tile), so one overloaded tile still shows progress.
+  std::function<void(uint64_t)> work_done;
+};
+
+class TileResolver {
+ public:
+  virtual ~TileResolver() = default;
+  // Decides tile `tile` of `frame` (after bin()): writes the tile's samples of out.ids and
+  // its triangles' visible areas, adds the tile's work to `counters` (triangles and edges
+  // are the caller's), and with `per_triangle` appends one record per binned triangle, in
+  // processing order, whose counters sum to what was added.
+  virtual TileVerdict resolve(const TileFrame& frame, uint32_t tile, FrameOutput& out, TileCounters& counters,
+                              std::vector<TileTriangleWork>* per_triangle) = 0;
+  // tiles.csv columns the mode adds after TileCounters::columns() (hybrid: per_pixel, per_pixel_cause).
+  virtual std::vector<std::string> extra_columns() const { return {}; }
+  // Writes those columns' values for a tile with `verdict` at row + 0, 1, ...
+  virtual void write_extra(const TileVerdict&, int64_t* /*row*/) const {}
+};
+
+// The registered modes, in registration order.
+const std::vector<std::string>& tile_resolver_modes();
+// A resolver for `mode`; throws std::invalid_argument naming the registered modes.
+std::unique_ptr<TileResolver> make_tile_resolver(std::string_view mode, const ResolverOptions& options);
+
+// Factories of the registered modes (one per file).
+std::unique_ptr<TileResolver> make_analytic_resolver(const ResolverOptions&);
+std::unique_ptr<TileResolver> make_per_pixel_resolver(const ResolverOptions&);
+std::unique_ptr<TileResolver> make_hybrid_resolver(const ResolverOptions&);
+
+}  // namespace tilevis::vis

@@ -1,0 +1,128 @@
+// The per-tile visibility interface (tile_resolver.h): the registry of modes, the per_pixel
+// mode against the z-buffer truth (two producers of the one z-buffer rule), per-triangle
+// records that sum to their tile, tiles resolved in any order, and TileCounters' columns.
+#include <algorithm>
+#include <numeric>
+#include <stdexcept>
+
+#include <gtest/gtest.h>
+
+#include "scene_frames.h"
+#include "visibility/golden.h"
+#include "visibility/setup.h"
+#include "visibility/tile_resolver.h"
+#include "visibility/truth.h"
+
+using namespace tilevis;
+
+namespace {
+
+// Boxes through each other over a floor, a blended card in front: every mode has work.
+const char* kMixed = R"({
+  "viewport": [200, 150],
+  "camera": {"eye": [1.8, 1.4, 3.0], "target": [0, 0, 0], "fov_y_deg": 50, "near": 0.1, "far": 20},
+  "objects": [
+    {"name": "floor", "primitive": {"type": "plane", "size": [6, 6], "subdivisions": 2}, "transform": {"translate": [0, -0.5, 0]}},
+    {"name": "box_a", "primitive": {"type": "box", "size": [1, 1, 1]}, "transform": {"rotate_deg": [0, 20, 0]}},
+    {"name": "box_b", "primitive": {"type": "box", "size": [1.2, 0.6, 0.6]}, "transform": {"translate": [0.4, 0.1, 0.2], "rotate_deg": [15, 60, 5]}},
+    {"name": "card", "primitive": {"type": "quads", "count": 1, "size": [0.5, 0.4], "origin": [-0.6, 0.2, 1]}, "flags": ["blended"]}
+  ]})";
+
+vis::GoldenConfig config(const std::string& mode, uint32_t tile) {
+  vis::GoldenConfig c;
+  c.mode = mode;
+  c.tile_w = c.tile_h = tile;
+  return c;
+}
+
+}  // namespace
+
+TEST(TileResolver, RegistryNamesEveryMode) {
+  const auto& modes = vis::tile_resolver_modes();
+  for (const char* m : {"analytic", "hybrid", "per_pixel"})
+    EXPECT_NE(std::find(modes.begin(), modes.end(), m), modes.end()) << m;
+  for (const std::string& m : modes) EXPECT_NE(vis::make_tile_resolver(m, {}), nullptr) << m;
+  try {
+    vis::make_tile_resolver("z_prepass", {});
+    FAIL() << "an unknown mode was accepted";
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("z_prepass"), std::string::npos) << what;
+    for (const std::string& m : modes) EXPECT_NE(what.find(m), std::string::npos) << what;
+  }
+}
+
+// per_pixel is the truth's z-buffer run tile by tile: the same ids, covered and generated
+// samples, and visible areas equal to covered samples over samples per pixel.
+TEST(TileResolver, PerPixelIsTheTruthTileByTile) {
+  for (uint32_t samples : {1u, 4u}) {
+    const trace::Frame f = testsupport::frame_of("mixed", kMixed, samples);
+    const vis::Setup s = vis::primitive_setup(f, {});
+    const vis::TruthResult truth = vis::zbuffer_truth(s, {});
+    for (uint32_t tile : {4u, 16u, 64u, 256u}) {
+      const vis::GoldenResult r = vis::golden_visibility(s, config("per_pixel", tile));
+      SCOPED_TRACE(std::to_string(samples) + " samples, tile " + std::to_string(tile));
+      EXPECT_EQ(r.ids, truth.ids);
+      EXPECT_EQ(r.samples_covered, truth.samples_covered);
+      EXPECT_EQ(r.fragments_generated, truth.fragments_generated);
+      EXPECT_EQ(r.pair_tests + r.pieces_total + r.occlusion_tests, 0u);
+      for (size_t id = 0; id < truth.covered.size(); ++id)
+        ASSERT_DOUBLE_EQ(r.visible_area[id], double(truth.covered[id]) / samples) << "triangle " << id;
+    }
+  }
+}
+
+// Every mode's per-triangle records sum to its tile's row, and tiles may be resolved in any
+// order (the model's units ask for them as they flow): results equal the row-major run's.
+TEST(TileResolver, RecordsSumToTheTileInAnyTileOrder) {
+  const trace::Frame f = testsupport::frame_of("mixed", kMixed, 4);
+  const vis::Setup s = vis::primitive_setup(f, {});
+  for (const std::string& mode : vis::tile_resolver_modes()) {
+    SCOPED_TRACE(mode);
+    const vis::GoldenConfig cfg = config(mode, 16);
+    const vis::GoldenResult reference = vis::golden_visibility(s, cfg);
+    vis::GoldenResult r;
+    vis::GoldenTiler tiler(s, cfg, r);
+    tiler.bin();
+    std::vector<uint32_t> order(tiler.tile_count());
+    std::iota(order.begin(), order.end(), 0u);
+    std::reverse(order.begin(), order.end());
+    for (uint32_t tile : order) {
+      std::vector<vis::TileTriangleWork> records;
+      tiler.process_tile(tile, &records);
+      ASSERT_EQ(records.size(), tiler.frame().tile_triangles(tile).size());
+      vis::TileCounters sum;
+      for (const auto& rec : records) {
+        EXPECT_EQ(rec.counters.triangles + rec.counters.edges, 0);
+        sum += rec.counters;
+      }
+      vis::TileCounters row = vis::TileCounters::read(r.tiles.rows[tile]);
+      row.triangles = row.edges = 0;
+      ASSERT_EQ(sum, row) << "tile " << tile;
+    }
+    vis::sum_golden_totals(r);
+    EXPECT_EQ(r.ids, reference.ids);
+    EXPECT_EQ(r.tiles.rows, reference.tiles.rows);
+    EXPECT_EQ(r.visible_area.size(), reference.visible_area.size());
+    for (size_t id = 0; id < r.visible_area.size(); ++id)  // summed in another order: equal to rounding
+      EXPECT_NEAR(r.visible_area[id], reference.visible_area[id], 1e-9 * (1.0 + reference.visible_area[id]));
+  }
+}
+
+TEST(TileCounters, ColumnsFollowTheFieldsAndRowsRoundTrip) {
+  const auto& cols = vis::TileCounters::columns();
+  ASSERT_EQ(cols.size(), vis::TileCounters::kCount);
+  EXPECT_EQ(cols.front(), "triangles");
+  EXPECT_EQ(cols.back(), "fragments_generated");
+  vis::TileCounters c;
+  for (size_t i = 0; i < vis::TileCounters::kCount; ++i) c.*vis::TileCounters::kFields[i].second = int64_t(i * i + 1);
+  EXPECT_EQ(c.pieces, 26);  // "pieces" is column 5
+  int64_t row[vis::TileCounters::kCount];
+  c.write(row);
+  EXPECT_EQ(row[5], c.pieces);
+  EXPECT_EQ(vis::TileCounters::read(row), c);
+  const vis::TileCounters twice = c + c;
+  EXPECT_EQ(twice.occlusion_tests, 2 * c.occlusion_tests);
+  EXPECT_EQ(twice - c, c);
+  EXPECT_THROW(vis::TileCounters::read(std::vector<int64_t>(3)), std::invalid_argument);
+}
