@@ -586,23 +586,23 @@ CudaResult run(const trace::Frame& frame, const CudaConfig& cfg) {
   r.tiles_y = p.tiles_y;
   r.tile_w = cfg.tile_w;
   r.tile_h = cfg.tile_h;
-  r.tile_columns = {"triangles",       "edges",          "pair_tests",      "candidate_pairs", "clip_polygons",
-                    "pieces",          "visible_pieces", "occlusion_tests", "samples_covered", "fragments_generated"};
-  r.tile_rows.resize(p.n_tiles);
+  static_assert(kTileColumns == vis::TileCounters::kCount, "device tile rows hold the TileCounters columns");
+  r.tiles.resize(p.n_tiles);
+  vis::TileCounters sum;
   for (uint32_t t = 0; t < p.n_tiles; ++t) {
-    r.tile_rows[t].assign(rows.begin() + int64_t(t) * kTileColumns, rows.begin() + int64_t(t + 1) * kTileColumns);
-    const auto& row = r.tile_rows[t];
-    r.max_tile_triangles = std::max<uint64_t>(r.max_tile_triangles, uint64_t(row[kColTriangles]));
-    r.max_tile_edges = std::max<uint64_t>(r.max_tile_edges, uint64_t(row[kColEdges]));
-    r.pair_tests += uint64_t(row[kColPairTests]);
-    r.candidate_pairs += uint64_t(row[kColCandidates]);
-    r.clip_polygons += uint64_t(row[kColClips]);
-    r.pieces += uint64_t(row[kColPieces]);
-    r.visible_pieces += uint64_t(row[kColVisiblePieces]);
-    r.occlusion_tests += uint64_t(row[kColOcclusionTests]);
-    r.samples_covered += uint64_t(row[kColSamplesCovered]);
-    r.fragments_generated += uint64_t(row[kColFragments]);
+    const vis::TileCounters& c = r.tiles[t] = vis::TileCounters::read(rows.data() + uint64_t(t) * kTileColumns);
+    r.max_tile_triangles = std::max<uint64_t>(r.max_tile_triangles, uint64_t(c.triangles));
+    r.max_tile_edges = std::max<uint64_t>(r.max_tile_edges, uint64_t(c.edges));
+    sum += c;
   }
+  r.pair_tests = uint64_t(sum.pair_tests);
+  r.candidate_pairs = uint64_t(sum.candidate_pairs);
+  r.clip_polygons = uint64_t(sum.clip_polygons);
+  r.pieces = uint64_t(sum.pieces);
+  r.visible_pieces = uint64_t(sum.visible_pieces);
+  r.occlusion_tests = uint64_t(sum.occlusion_tests);
+  r.samples_covered = uint64_t(sum.samples_covered);
+  r.fragments_generated = uint64_t(sum.fragments_generated);
   r.triangles_in = p.f.n_triangles;
   r.triangles_front = c[kFrontFacing];
   r.triangles_back = c[kBackFacing];

@@ -159,7 +159,7 @@ struct Pipeline {
   Buf<uint32_t> area_item, area_item_sorted;
   uint64_t n_items = 0, n_tile_edges = 0;
 
-  // Per-tile counters, golden_tile_columns() order.
+  // Per-tile counters, vis::TileCounters::columns() order (kCol* below).
   Buf<int64_t> tile_rows;
 
   // Cull and clip.

@@ -21,14 +21,6 @@ struct CudaArgs {
 };
 
 #if TILEVIS_HAVE_CUDA_REF
-const std::vector<std::string>& tile_columns() {
-  static const std::vector<std::string> cols = {"triangles",       "edges",          "pair_tests",
-                                                "candidate_pairs", "clip_polygons",  "pieces",
-                                                "visible_pieces",  "occlusion_tests", "samples_covered",
-                                                "fragments_generated"};
-  return cols;
-}
-
 int run(const CudaArgs& a, const trace::Frame& frame, uint32_t tw, uint32_t th) {
   cuda::CudaConfig cfg;
   cfg.tile_w = tw;
@@ -60,9 +52,9 @@ int run(const CudaArgs& a, const trace::Frame& frame, uint32_t tw, uint32_t th) 
   out.samples = r.samples;
   out.ids = std::move(r.ids);
   out.visible_area = std::move(r.visible_area);
-  out.tiles.resize(tw, th, r.width, r.height, tile_columns());
-  if (out.tiles.rows.size() != r.tile_rows.size()) throw std::runtime_error("cuda: tile table size mismatch");
-  out.tiles.rows = std::move(r.tile_rows);
+  out.tiles.resize(tw, th, r.width, r.height, vis::TileCounters::columns());
+  if (out.tiles.rows.size() != r.tiles.size()) throw std::runtime_error("cuda: tile table size mismatch");
+  for (size_t t = 0; t < r.tiles.size(); ++t) r.tiles[t].write(out.tiles.rows[t].data());
   nlohmann::json totals = {{"triangles_in", r.triangles_in},
                            {"triangles_front", r.triangles_front},
                            {"triangles_back", r.triangles_back},

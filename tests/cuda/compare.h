@@ -38,7 +38,8 @@ inline Diff diff(const vis::GoldenResult& g, const cuda::CudaResult& c) {
   for (size_t t = 0; t < g.tiles.rows.size(); ++t)
     for (size_t k = 0; k < g.tiles.rows[t].size(); ++k) {
       ++d.tile_cells;
-      const int64_t cv = t < c.tile_rows.size() && k < c.tile_rows[t].size() ? c.tile_rows[t][k] : -1;
+      const int64_t cv =
+          t < c.tiles.size() && k < vis::TileCounters::kCount ? c.tiles[t].*vis::TileCounters::kFields[k].second : -1;
       if (g.tiles.rows[t][k] == cv) continue;
       if (!d.tile_cell_mismatches)
         d.first_tile_mismatch = "tile " + std::to_string(t) + " " + g.tiles.columns[k] + ": golden " +

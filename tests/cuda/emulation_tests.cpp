@@ -98,7 +98,7 @@ TEST(Emulation, OrderIndependent) {
     cfg.shuffle_cpu = true;
     const auto b = cuda::run_cuda(f, cfg);
     EXPECT_EQ(a.ids, b.ids) << s;
-    EXPECT_EQ(a.tile_rows, b.tile_rows) << s;
+    EXPECT_EQ(a.tiles, b.tiles) << s;
     EXPECT_EQ(a.visible_area, b.visible_area) << s;
   }
 }

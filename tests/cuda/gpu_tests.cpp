@@ -71,7 +71,7 @@ TEST(Gpu, SameAsHostEmulation) {
     const auto gpu = cuda::run_cuda(f, ct::config(cuda::Device::gpu, cuda::Precision::exact, 32, 32));
     const auto cpu = cuda::run_cuda(f, ct::config(cuda::Device::cpu, cuda::Precision::exact, 32, 32));
     EXPECT_EQ(gpu.ids, cpu.ids) << name;
-    EXPECT_EQ(gpu.tile_rows, cpu.tile_rows) << name;
+    EXPECT_EQ(gpu.tiles, cpu.tiles) << name;
     EXPECT_EQ(gpu.visible_area, cpu.visible_area) << name;
   }
 }
@@ -82,7 +82,7 @@ TEST(Gpu, DeterministicAcrossRuns) {
   const auto a = cuda::run_cuda(f, ct::config(cuda::Device::gpu, cuda::Precision::exact, 16, 16));
   const auto b = cuda::run_cuda(f, ct::config(cuda::Device::gpu, cuda::Precision::exact, 16, 16));
   EXPECT_EQ(a.ids, b.ids);
-  EXPECT_EQ(a.tile_rows, b.tile_rows);
+  EXPECT_EQ(a.tiles, b.tiles);
   EXPECT_EQ(a.visible_area, b.visible_area);
 }
 

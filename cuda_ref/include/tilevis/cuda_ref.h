@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "tilevis/trace.h"
+#include "visibility/tile_counters.h"
 
 namespace tilevis::cuda {
 
@@ -48,8 +49,7 @@ struct CudaResult {
   std::vector<int32_t> ids;            // (y * width + x) * samples + s; -1 background
   std::vector<double> visible_area;    // per original triangle, pixels²
   uint32_t tiles_x = 0, tiles_y = 0, tile_w = 0, tile_h = 0;
-  std::vector<std::string> tile_columns;       // golden_tile_columns() order
-  std::vector<std::vector<int64_t>> tile_rows;  // row-major tiles
+  std::vector<vis::TileCounters> tiles;  // row-major, the golden tiles.csv's counters
 
   // Totals (names as in the golden stats.json).
   uint64_t triangles_in = 0, triangles_front = 0, triangles_back = 0, triangles_degenerate = 0,
