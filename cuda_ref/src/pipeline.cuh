@@ -112,6 +112,7 @@ struct Pipeline {
   Buf<uint32_t> weld_table;
   Buf<SetupTri> setup;
   Buf<uint64_t> use_key;        // 3 per setup triangle: edge key, or kBoundary
+  Buf<uint32_t> use_forward;    // 3 per setup triangle: 1 where the keyed edge runs from its lower index
   uint64_t n_setup = 0;
 
   // Silhouettes.
@@ -188,7 +189,7 @@ struct Pipeline {
   Buf<double> area;                // per trace triangle
 
   explicit Pipeline(Exec& e) : ex(e) {
-    for (auto* b : {&fan_count, &weld, &weld_table, &sil_flag, &sil_use, &sil_use_sorted, &front_flag,
+    for (auto* b : {&fan_count, &weld, &weld_table, &use_forward, &sil_flag, &sil_use, &sil_use_sorted, &front_flag,
                     &tri_tiles, &edge_tiles, &item_tri, &item_tri_sorted, &occ_tri, &occ_tri_sorted, &tedge_id,
                     &tedge_id_sorted, &tile_item_begin, &tile_edge_begin, &tile_occ_count, &area_item,
                     &area_item_sorted, &piece_count, &cand_count, &cand_cursor, &cand_offset,

@@ -31,6 +31,7 @@ struct SetupArgs {
   const uint64_t* fan_offset;
   SetupTri* setup;
   uint64_t* use_key;
+  uint32_t* use_forward;
   uint64_t* counters;
   double gx, gy;  // guard band half-widths in NDC
 };
@@ -233,6 +234,7 @@ TV_HD inline void emit_one(const SetupArgs& a, uint64_t t, uint64_t out, const V
   const uint64_t boundary = (uint64_t(di.vertex_offset + di.vertex_count - 1) << 32) | 0xffffffffu;
   for (int e = 0; e < 3; ++e) {
     uint64_t key;
+    uint32_t forward = 0;
     if (!di.opaque) {
       key = ~uint64_t{0};  // no silhouettes from non-opaque draws
     } else if (cut) {
@@ -244,8 +246,10 @@ TV_HD inline void emit_one(const SetupArgs& a, uint64_t t, uint64_t out, const V
         i1 = a.weld[i1];
       }
       key = (uint64_t(i0 < i1 ? i0 : i1) << 32) | (i0 < i1 ? i1 : i0);
+      forward = i0 < i1;
     }
     a.use_key[3 * out + e] = key;
+    a.use_forward[3 * out + e] = forward;
   }
 }
 
@@ -429,13 +433,14 @@ void stage_setup(Pipeline<P>& p) {
   }
 
   SetupArgs a{f,       p.vertices.get(), p.indices.get(), p.tri_draw.get(), p.draws.get(), weld, p.fan_count.need(n + 1),
-              nullptr, nullptr,          nullptr,         p.counters.get(), gx,            gy};
+              nullptr, nullptr,          nullptr,         nullptr,          p.counters.get(), gx, gy};
   a.fan_offset = p.fan_offset.need(n + 1);
   ex.launch(k_setup_count, setup_count, n, a);
   ex.exclusive_scan(a.fan_count, p.fan_offset.get(), n);
   p.n_setup = ex.read(p.fan_offset.get() + n);  // sync: the setup triangle count sizes what follows
   a.setup = p.setup.need(p.n_setup + 1);
   a.use_key = p.use_key.need(3 * p.n_setup + 1);
+  a.use_forward = p.use_forward.need(3 * p.n_setup + 1);
   ex.launch(k_setup_emit, setup_emit, n, a);
 }
 

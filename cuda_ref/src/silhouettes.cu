@@ -1,7 +1,8 @@
 // Silhouette extraction (SVGPU §3.1) with a GPU hash table keyed by edge: one thread per edge
 // use inserts its key (lowest global vertex index << 32 | highest) and counts the use and
-// whether its triangle faces front; the lowest use index of each key is kept. An edge is a
-// silhouette when some adjacent triangle faces front and not exactly two do. Edges made by
+// whether its triangle faces front and whether it runs from its lower index; the lowest use
+// index of each key is kept. An edge is a silhouette when some adjacent triangle faces front
+// and not exactly two do from opposite sides (traversing it in opposite directions). Edges made by
 // clip-space clipping are boundaries on their own. The canonical silhouette order (by draw,
 // then key, then use; a draw's boundaries after its keyed edges) is one stable radix sort of
 // the silhouettes by key, after compaction in use order.
@@ -25,6 +26,7 @@ TV_HD inline uint64_t hash64(uint64_t k) {
 
 struct HashArgs {
   const uint64_t* use_key;
+  const uint32_t* use_forward;
   const SetupTri* setup;
   HashSlot* slots;
   uint64_t mask;
@@ -52,14 +54,17 @@ TV_HD void hash_insert(const HashArgs& a, uint64_t u) {
   const uint64_t key = a.use_key[u];
   if (key == kSkip || is_boundary(key)) return;
   const uint64_t h = find_slot(a, key, true);
-  const uint64_t front = a.setup[u / 3].front;
+  const uint64_t front = a.setup[u / 3].front, forward = a.use_forward[u];
+  // Payload: uses, front uses and forward uses in 10 bits each (saturating: only "two" matters),
+  // the complement of the lowest use index in the high 32 bits.
   uint64_t* p = &a.slots[h].payload;
   uint64_t old = *p;
   for (;;) {
-    const uint64_t count = tmin<uint64_t>((old & 0xffffu) + 1, 0xffffu);
-    const uint64_t fronts = tmin<uint64_t>(((old >> 16) & 0xffffu) + front, 0xffffu);
+    const uint64_t count = tmin<uint64_t>((old & 0x3ffu) + 1, 0x3ffu);
+    const uint64_t fronts = tmin<uint64_t>(((old >> 10) & 0x3ffu) + front, 0x3ffu);
+    const uint64_t forwards = tmin<uint64_t>(((old >> 20) & 0x3ffu) + forward, 0x3ffu);
     const uint64_t inv_first = tmax<uint64_t>(old >> 32, uint64_t(~uint32_t(u)));
-    const uint64_t next = count | fronts << 16 | inv_first << 32;
+    const uint64_t next = count | fronts << 10 | forwards << 20 | inv_first << 32;
     const uint64_t seen = atomic_cas(p, old, next);
     if (seen == old) break;
     old = seen;
@@ -76,8 +81,8 @@ TV_HD void hash_judge(const HashArgs& a, uint64_t u) {
   } else {
     const uint64_t c = a.slots[find_slot(a, key, false)].payload;
     if (~uint32_t(c >> 32) == uint32_t(u)) {
-      const uint64_t count = c & 0xffffu, front = (c >> 16) & 0xffffu;
-      sil = front > 0 && (count != 2 || front != count);
+      const uint64_t count = c & 0x3ffu, front = (c >> 10) & 0x3ffu, forwards = (c >> 20) & 0x3ffu;
+      sil = front > 0 && (count != 2 || front != count || forwards != 1);
     }
   }
   a.flag[u] = sil;
@@ -155,8 +160,8 @@ void stage_silhouettes(Pipeline<P>& p) {
   uint64_t cap = 16;
   while (cap < 2 * uses) cap <<= 1;  // load factor <= 1/2
   p.hash_cap = cap;
-  HashArgs h{p.use_key.get(),          p.setup.get(), p.hash_slots.need(cap), cap - 1, p.sil_flag.need(uses + 1),
-             p.sil_offset.need(uses + 1), nullptr,       nullptr};
+  HashArgs h{p.use_key.get(),    p.use_forward.get(),         p.setup.get(), p.hash_slots.need(cap), cap - 1,
+             p.sil_flag.need(uses + 1), p.sil_offset.need(uses + 1), nullptr,       nullptr};
   // The table is all zeros between runs: cleared once when (re)allocated, and after each run's
   // last use on a side stream, off the stages' chain.
   if (p.hash_clean_at != h.slots || p.hash_clean < cap) ex.zero(h.slots, cap * sizeof(HashSlot));

@@ -102,7 +102,7 @@ Registry::Registry() {
                      "primitive: per-primitive transactions, FIFO back-pressure, memory contention",
                      {Fidelity::analytic, Fidelity::tile, Fidelity::primitive},
                      +[](TilerConfig& c) -> Fidelity& { return c.sim.fidelity; });
-  add_enum<Mode>("sim.mode", "visibility: analytic (EVU), hsr (per-pixel HSR unit), early_z, none",
+  add_enum<Mode>("sim.mode", "visibility: analytic (EVU), hybrid (EVU, and the HSR unit for tiles where the analytic answer can be wrong), hsr (per-pixel HSR unit), early_z, none",
                  {Mode::analytic, Mode::hybrid, Mode::hsr, Mode::early_z, Mode::none}, +[](TilerConfig& c) -> Mode& { return c.sim.mode; });
   TV_UINT("sim.tile_width", sim.tile_width, "pixels", geom::TileGrid::kMinTile, geom::TileGrid::kMaxTile, "tile width");
   TV_UINT("sim.tile_height", sim.tile_height, "pixels", geom::TileGrid::kMinTile, geom::TileGrid::kMaxTile,

@@ -103,6 +103,7 @@ struct EdgeUse {
   uint64_t key;        // (min index << 32) | max index within the draw
   uint32_t triangle;   // setup triangle
   uint8_t edge;        // 0..2: v[edge] -> v[(edge+1)%3]
+  bool forward = true; // the edge runs from the smaller index to the larger
 };
 
 std::vector<uint32_t> weld_by_position(const std::vector<trace::Vec4>& v) {
@@ -234,7 +235,7 @@ Setup primitive_setup(const trace::Frame& frame, const SetupConfig& config) {
             continue;
           }
           uint64_t key = (uint64_t(std::min(i0, i1)) << 32) | std::max(i0, i1);
-          edges.push_back({key, tri, e});
+          edges.push_back({key, tri, e, i0 < i1});
         }
         s.triangles.push_back(st);
       }
@@ -251,7 +252,11 @@ Setup primitive_setup(const trace::Frame& frame, const SetupConfig& config) {
       size_t front = 0;
       for (size_t k = i; k < j; ++k) front += s.triangles[edges[k].triangle].front;
       size_t count = j - i;
-      if (front > 0 && (count != 2 || front != count)) {
+      // An edge is interior to the visible surface only where exactly two front-facing
+      // triangles share it from opposite sides, i.e. traverse it in opposite directions. Two
+      // that traverse it the same way (a duplicated face, a mesh folded onto itself, faces
+      // wound inconsistently) lie on the same side of it on screen: it bounds them both.
+      if (front > 0 && (count != 2 || front != count || edges[i].forward == edges[i + 1].forward)) {
         const SetupTriangle& t = s.triangles[edges[i].triangle];
         SilhouetteEdge se{t.v[edges[i].edge], t.v[(edges[i].edge + 1) % 3], di};
         s.silhouettes.push_back(se);

@@ -193,6 +193,17 @@ trace::Frame scene(const std::string& name, uint32_t samples) {
     a.quad(c0, 1.2f, 1.0f);
     b.quad(c1, 1.0f, 0.8f);
     f.draws = {make_draw("first", a, mvp), make_draw("second", b, mvp)};
+  } else if (name == "folded") {
+    const float eye[3] = {0.4f, 0.9f, 2.5f}, at[3] = {0, 0, 0};
+    const Mat4 mvp = look_at_perspective(eye, at, 45, aspect, 0.1f, 20);
+    MeshBuilder floor, card;
+    floor.plane(-0.5f, 2, 3);
+    const float c[3] = {0.1f, 0.1f, 0.4f};
+    card.quad(c, 0.8f, 0.6f);
+    // Every face twice with the same indices: each edge is shared by two faces on one side.
+    const std::vector<uint32_t> once = card.index;
+    card.index.insert(card.index.end(), once.begin(), once.end());
+    f.draws = {make_draw("floor", floor, mvp), make_draw("card_twice", card, mvp)};
   } else if (name == "near_eye" || name == "near_eye_pair") {
     f = name == "near_eye" ? near_eye::random_near_eye(1, 60, f.width, f.height)
                            : near_eye::two_triangles(f.width, f.height, 0.0f, 0.0f);
@@ -207,7 +218,7 @@ trace::Frame scene(const std::string& name, uint32_t samples) {
 }
 
 std::vector<std::string> scene_names() {
-  return {"cubes", "ground", "stack", "mixed", "coplanar", "near_eye", "near_eye_pair"};
+  return {"cubes", "ground", "stack", "mixed", "coplanar", "folded", "near_eye", "near_eye_pair"};
 }
 
 }  // namespace tilevis::cudatest

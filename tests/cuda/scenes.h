@@ -33,6 +33,8 @@ trace::Draw make_draw(const std::string& name, const MeshBuilder& m, const Mat4&
 //   "stack"      cards one behind another, back to front (many edges per tile, the test-6 break)
 //   "mixed"      a blended draw, a depth-writing draw and a soup draw among opaque ones
 //   "coplanar"   two coplanar overlapping cards (equal-depth ties: the earlier triangle wins)
+//   "folded"     a card whose faces are all given twice over a floor (edges shared from one side
+//                are silhouettes)
 //   "near_eye"   60 triangles through w = 0 at five exact depths over a far-plane quad (clipping
 //                next to the eye, clip-space facing, coplanar ties; tests/visibility/near_eye)
 //   "near_eye_pair"  two such triangles at one depth (the tile-size-dependent case)

@@ -202,12 +202,13 @@ TEST_P(ShippedScene, Builds) {
 INSTANTIATE_TEST_SUITE_P(All, ShippedScene,
                          ::testing::Values("bunny", "armadillo", "dragon", "elephant", "armadillo_box",
                                            "dragon_bunnies", "stack", "teapot_stadium", "million",
-                                           "interpenetrating", "decals", "glass"));
+                                           "interpenetrating", "decals", "glass", "broken_mesh", "slivers",
+                                           "hot_tile"));
 
 // The list above must name every file in traces/scenes.
 TEST(ShippedScenes, ListIsComplete) {
   size_t n = 0;
   for (const auto& e : fs::directory_iterator(fs::path(TILEVIS_SOURCE_DIR) / "traces/scenes"))
     n += e.path().extension() == ".json";
-  EXPECT_EQ(n, 12u);
+  EXPECT_EQ(n, 15u);
 }

@@ -5,7 +5,7 @@ gtest_discover_tests(hybrid_tests DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT 900)
 
 # The failure scenes (traces/scenes): hybrid equals the truth through the CLI at 16, 32 and 128.
 if(TARGET tilevis)
-  foreach(scene interpenetrating decals glass)
+  foreach(scene interpenetrating decals glass broken_mesh slivers hot_tile)
     add_test(NAME hybrid_scene_${scene}
              COMMAND ${CMAKE_CURRENT_LIST_DIR}/hybrid_scene.sh $<TARGET_FILE:tilevis>
                      ${PROJECT_SOURCE_DIR}/traces/scenes/${scene}.json ${CMAKE_CURRENT_BINARY_DIR}/hybrid_scenes 16 32 128)

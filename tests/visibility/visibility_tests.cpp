@@ -90,6 +90,49 @@ TEST(Setup, SoupWeldsByPosition) {
   EXPECT_EQ(vis::primitive_setup(soup, {}).silhouettes.size(), 6u);
 }
 
+// An edge hides inside the visible surface only where two front faces share it from
+// opposite sides. A duplicated face shares all three of its edges with its copy from the same
+// side: they bound both copies, so they are silhouettes (and hybrid then equals the truth).
+TEST(Setup, EdgesSharedFromTheSameSideAreSilhouettes) {
+  auto f = frame_of("grid_dup", R"({"viewport": [200, 200], "camera": {"eye": [0.3, 3, 1], "target": [0, 0, 0]},
+      "objects": [{"primitive": {"type": "plane", "size": [2, 2], "subdivisions": 4}}]})");
+  const size_t outline = vis::primitive_setup(f, {}).silhouettes.size();
+  ASSERT_EQ(outline, 16u);  // the grid's border
+  auto& d = f.draws[0];
+  const auto s0 = vis::primitive_setup(f, {});
+  // Duplicate a front-facing triangle whose edges are all interior to the grid.
+  size_t dup = SIZE_MAX;
+  for (size_t t = 0; t < s0.triangles.size() && dup == SIZE_MAX; ++t) {
+    if (!s0.triangles[t].front) continue;
+    bool interior = true;
+    for (const auto& e : s0.silhouettes)
+      for (int k = 0; k < 3; ++k) {
+        const auto &a = s0.triangles[t].v[k], &b = s0.triangles[t].v[(k + 1) % 3];
+        interior = interior && !((e.a == a && e.b == b) || (e.a == b && e.b == a));
+      }
+    if (interior) dup = t;
+  }
+  ASSERT_NE(dup, SIZE_MAX);
+  // A smaller copy of it, nearer the eye, added twice: the two copies share every edge.
+  const uint32_t id = s0.triangles[dup].id, base = uint32_t(d.vertices.size());
+  trace::Vec4 c{0, 0, 0, 0};
+  for (int k = 0; k < 3; ++k) {
+    const trace::Vec4& v = d.vertices[d.indices[3 * id + uint32_t(k)]];
+    c = {c.x + v.x / 3, c.y + v.y / 3, c.z + v.z / 3, c.w + v.w / 3};
+  }
+  for (int k = 0; k < 3; ++k) {
+    const trace::Vec4& v = d.vertices[d.indices[3 * id + uint32_t(k)]];
+    d.vertices.push_back({(v.x + c.x) / 2, (v.y + c.y) / 2, (v.z + c.z) / 2 - 0.05f * (v.w + c.w) / 2, (v.w + c.w) / 2});
+  }
+  for (int copy = 0; copy < 2; ++copy) d.indices.insert(d.indices.end(), {base, base + 1, base + 2});
+  const auto s1 = vis::primitive_setup(f, {});
+  // Their three edges, each shared by two faces on the same side, are silhouettes.
+  EXPECT_EQ(s1.silhouettes.size(), outline + 3);
+  // Golden equals the truth (the copy ties with the original, the earlier wins).
+  vis::GoldenConfig cfg;
+  EXPECT_EQ(vis::golden_visibility(s1, cfg).ids, vis::zbuffer_truth(s1, {}).ids);
+}
+
 class GoldenVsTruth : public ::testing::TestWithParam<std::tuple<uint32_t, uint32_t>> {};
 
 TEST_P(GoldenVsTruth, SmallSceneAgreesSampleForSample) {
