@@ -123,7 +123,9 @@ int run_golden(const GoldenArgs& a, const trace::Frame& frame, uint32_t tw, uint
                                     {"tiles_interpenetration", r.fallback_interpenetration},
                                     {"tiles_non_opaque", r.fallback_non_opaque},
                                     {"tiles_budget", r.fallback_budget},
-                                    {"samples", r.fallback_samples}};
+                                    {"samples", r.fallback_samples},
+                                    {"triangles", r.fallback_triangles},
+                                    {"triangles_crossing", r.fallback_crossing_triangles}};
   nlohmann::json config = visibility_config(tw, th, cfg.occlusion_bin_w, cfg.occlusion_bin_h, r.samples, a.depth_bits);
   config["mode"] = a.mode;
   if (hybrid) config["pair_budget"] = a.pair_budget;
@@ -141,9 +143,10 @@ int run_golden(const GoldenArgs& a, const trace::Frame& frame, uint32_t tw, uint
              a.trace, a.frame, tw, th, s.stats.triangles_in, s.stats.silhouette_edges, r.candidate_pairs,
              r.clip_polygons, r.pieces_total, r.visible_pieces, setup_s + tiles_s, a.out);
   if (hybrid)
-    fmt::print("  hybrid: {} of {} tiles per pixel ({} interpenetration, {} non-opaque, {} over budget), {} samples\n",
+    fmt::print("  hybrid: {} of {} tiles per pixel ({} interpenetration, {} non-opaque, {} over budget), {} samples, "
+               "{} triangles ({} of them crossing another)\n",
                r.fallback_tiles, out.tiles.rows.size(), r.fallback_interpenetration, r.fallback_non_opaque,
-               r.fallback_budget, r.fallback_samples);
+               r.fallback_budget, r.fallback_samples, r.fallback_triangles, r.fallback_crossing_triangles);
   return 0;
 }
 

@@ -60,6 +60,8 @@ TileVerdict GoldenTiler::process_tile(uint32_t tile, std::vector<TileTriangleWor
        : v.per_pixel_cause == kPerPixelNonOpaque      ? m_r.fallback_non_opaque
                                                       : m_r.fallback_budget) += 1;
       m_r.fallback_samples += uint64_t(c.samples_covered);
+      m_r.fallback_triangles += uint64_t(c.triangles);
+      m_r.fallback_crossing_triangles += v.crossing_triangles;
     }
   }
   if (m_report_progress) m_cfg.progress(m_work_done += 1, m_work_total);

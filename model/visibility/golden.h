@@ -50,6 +50,9 @@ struct GoldenResult : FrameOutput {
   // Tiles resolved per pixel by a mode that can fall back (hybrid), by cause, and the samples they cover.
   uint64_t fallback_tiles = 0, fallback_interpenetration = 0, fallback_non_opaque = 0, fallback_budget = 0,
            fallback_samples = 0;
+  // Triangles binned to per-pixel tiles, and, in tiles that went for interpenetration, those
+  // that cross another (what a fallback of triangle granularity would resolve per pixel).
+  uint64_t fallback_triangles = 0, fallback_crossing_triangles = 0;
 };
 
 GoldenResult golden_visibility(const Setup& setup, const GoldenConfig& config);

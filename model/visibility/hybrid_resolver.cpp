@@ -22,7 +22,12 @@ class HybridResolver final : public TileResolver {
                       std::vector<TileTriangleWork>* per_triangle) override {
     if (const int cause = fallback_cause(f, tile)) {
       m_per_pixel->resolve(f, tile, out, c, per_triangle);
-      return {cause};
+      TileVerdict v{cause};
+      if (cause == kPerPixelInterpenetration) {  // measured for the choice of granularity
+        const geom::Rect rect = f.grid().rect(tile);
+        for (uint32_t i : f.tile_triangles(tile)) v.crossing_triangles += crosses_an_occluder(f, f.triangles()[i], rect);
+      }
+      return v;
     }
     return m_analytic->resolve(f, tile, out, c, per_triangle);
   }
@@ -48,7 +53,8 @@ class HybridResolver final : public TileResolver {
   }
 
   // Is there an opaque triangle u of the tile (another trace triangle) whose plane crosses
-  // t's strictly inside their overlap within the tile? (svgpu::planes_cross, exact.)
+  // t's strictly inside their overlap within the tile? (svgpu::planes_cross, exact; the depth
+  // ranges of a crossing pair overlap, so the pair is found from either member.)
   bool crosses_an_occluder(const TileFrame& f, const FrontTriangle& t, const geom::Rect& rect) const {
     const geom::ConvexPolygon poly = geom::clip_to_rect(geom::ConvexPolygon::from_triangle(t.tri), rect);
     if (poly.empty()) return false;

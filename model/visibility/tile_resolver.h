@@ -78,8 +78,11 @@ struct FrameOutput {
 
 // What a resolver reports about a tile besides its counters.
 struct TileVerdict {
-  // 0: resolved analytically; else why the tile went per pixel: kPerPixelCause* below.
+  // 0: resolved analytically; else why the tile went per pixel: kPerPixel* below.
   int per_pixel_cause = 0;
+  // Interpenetration: how many of the tile's triangles cross another (the ones a fallback of
+  // triangle granularity would send per pixel).
+  uint32_t crossing_triangles = 0;
 };
 inline constexpr int kPerPixelInterpenetration = 1;  // two opaque triangles' planes cross inside their overlap
 inline constexpr int kPerPixelNonOpaque = 2;         // a non-opaque triangle (it never occludes)

@@ -77,6 +77,19 @@ TEST(Hybrid, NonOpaqueTilesGoPerPixel) {
   cfg.mode = "hybrid";
   const vis::GoldenResult h = vis::golden_visibility(vis::primitive_setup(f, {}), cfg);
   EXPECT_EQ(h.fallback_tiles, h.fallback_non_opaque);
+  EXPECT_EQ(h.fallback_crossing_triangles, 0u);  // counted in interpenetration tiles only
+}
+
+// The measure behind tile granularity: in tiles that go per pixel for interpenetration, how
+// many triangles cross another (both members of every crossing pair, nothing else).
+TEST(Hybrid, CountsTheTrianglesThatCross) {
+  const trace::Frame f = frame_of("interpenetrating", kInterpenetrating);
+  vis::GoldenConfig cfg;
+  cfg.mode = "hybrid";
+  const vis::GoldenResult h = vis::golden_visibility(vis::primitive_setup(f, {}), cfg);
+  ASSERT_GT(h.fallback_interpenetration, 0u);
+  EXPECT_GE(h.fallback_crossing_triangles, 2 * h.fallback_interpenetration);  // a pair per such tile at least
+  EXPECT_LT(h.fallback_crossing_triangles, h.fallback_triangles);
 }
 
 TEST(Hybrid, WorkOverTheBudgetGoesPerPixel) {
