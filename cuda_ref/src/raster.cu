@@ -1,10 +1,10 @@
 // Raster and outputs, in the two passes of pieces.cuh: the samples of every piece (a warp
 // takes 32 pieces, each lane finding one and staging its lines in shared memory, then the
 // warp rasters them one at a time, its lanes over each piece's pixel box inside the tile; a
-// sample is covered under the tie rule), the id buffer (per sample, the last visible piece
-// in canonical order: within a tile, the highest triangle in setup order, which has the
+// sample is covered under the tie rule), the id buffer (per sample, the last visible opaque
+// piece in canonical order: within a tile, the highest triangle in setup order, which has the
 // largest original id since front triangles are in setup order, kept by atomicMax on the id
-// buffer itself, -1 before),
+// buffer itself, -1 before; non-opaque pieces never own a sample, as in golden and the truth),
 // the per-tile sample counters, and the visible area per original triangle folded in
 // canonical order (items sorted by id).
 #include "pieces.cuh"
@@ -41,7 +41,7 @@ inline constexpr uint32_t kRun = 8;
 
 template <int N, class P, class Team>
 TV_HD uint64_t raster_box(const RasterArgs<P>& a, const typename P::Line* lines, const PEdge<P>* poly, uint32_t n,
-                          const PixelBox& b, uint32_t tri, bool vis, Team team) {
+                          const PixelBox& b, uint32_t tri, bool owns, Team team) {
   [[maybe_unused]] typename P::Line l[N > 0 ? N : 1];
   [[maybe_unused]] int64_t step[N > 0 ? N : 1], floor[N > 0 ? N : 1];
   const uint32_t S = a.n_samples, sb = a.src.grid.sb;
@@ -56,7 +56,7 @@ TV_HD uint64_t raster_box(const RasterArgs<P>& a, const typename P::Line* lines,
   uint64_t covered = 0;
   auto hit = [&](int64_t px, int64_t py, uint32_t k) {
     ++covered;
-    if (vis) atomic_max(&a.ids[(uint64_t(py) * a.width + uint64_t(px)) * S + k], int32_t(tri));
+    if (owns) atomic_max(&a.ids[(uint64_t(py) * a.width + uint64_t(px)) * S + k], int32_t(tri));
   };
   if constexpr (P::kExact && N > 0) {
     const uint32_t runs = (b.w + kRun - 1) / kRun;
@@ -124,7 +124,8 @@ struct RasterMeta {
   const PEdge<P>* poly;
   PixelBox box;
   uint32_t n, tri, tile;  // n = 0: nothing to raster; tri: the original triangle
-  bool vis;
+  bool vis;   // visible piece: its samples are covered (shaded)
+  bool owns;  // visible and opaque: it writes the id buffer
 };
 
 // A team's group of kSize consecutive pieces of the pass, [first, first + kSize) cut at
@@ -147,6 +148,7 @@ TV_HD void raster_group(const RasterArgs<P>& a, uint64_t first, uint64_t count,
       mine.tri = a.src.tris[v.tri].id;
       mine.tile = v.tile;
       mine.vis = a.visible[p] != 0;
+      mine.owns = mine.vis && a.src.tris[v.tri].opaque != 0;
       if (v.n <= kStageEdges)
         for (uint32_t i = 0; i < v.n; ++i) lines[lane][i] = v.e[i].line;
     }
@@ -172,13 +174,13 @@ TV_HD void raster_group(const RasterArgs<P>& a, uint64_t first, uint64_t count,
     }
     uint64_t c = 0;
     switch (m.n) {
-      case 3: c = raster_box<3, P>(a, lines[q], m.poly, m.n, m.box, m.tri, m.vis, team); break;
-      case 4: c = raster_box<4, P>(a, lines[q], m.poly, m.n, m.box, m.tri, m.vis, team); break;
-      case 5: c = raster_box<5, P>(a, lines[q], m.poly, m.n, m.box, m.tri, m.vis, team); break;
-      case 6: c = raster_box<6, P>(a, lines[q], m.poly, m.n, m.box, m.tri, m.vis, team); break;
-      case 7: c = raster_box<7, P>(a, lines[q], m.poly, m.n, m.box, m.tri, m.vis, team); break;
-      case 8: c = raster_box<8, P>(a, lines[q], m.poly, m.n, m.box, m.tri, m.vis, team); break;
-      default: c = raster_box<0, P>(a, nullptr, m.poly, m.n, m.box, m.tri, m.vis, team); break;
+      case 3: c = raster_box<3, P>(a, lines[q], m.poly, m.n, m.box, m.tri, m.owns, team); break;
+      case 4: c = raster_box<4, P>(a, lines[q], m.poly, m.n, m.box, m.tri, m.owns, team); break;
+      case 5: c = raster_box<5, P>(a, lines[q], m.poly, m.n, m.box, m.tri, m.owns, team); break;
+      case 6: c = raster_box<6, P>(a, lines[q], m.poly, m.n, m.box, m.tri, m.owns, team); break;
+      case 7: c = raster_box<7, P>(a, lines[q], m.poly, m.n, m.box, m.tri, m.owns, team); break;
+      case 8: c = raster_box<8, P>(a, lines[q], m.poly, m.n, m.box, m.tri, m.owns, team); break;
+      default: c = raster_box<0, P>(a, nullptr, m.poly, m.n, m.box, m.tri, m.owns, team); break;
     }
     frags += c;
     if (m.vis) vis_frags += c;

@@ -1,7 +1,7 @@
 // The analytic mode: SVGPU §3.2-3.3 on one tile. Per triangle (ascending index): candidate
 // silhouette edges by tests 1-6 against its tile polygon, clipping with both sides kept and
 // every piece re-checked against every candidate, then each piece's occlusion test at its
-// interior point against the tile's opaque triangles; visible pieces take their samples.
+// interior point against the tile's opaque triangles; visible opaque pieces take their samples.
 #include <algorithm>
 #include <cmath>
 
@@ -90,6 +90,9 @@ class AnalyticResolver final : public TileResolver {
     for (const ConvexPolygon& piece : m_pieces) {
       if (piece.empty()) continue;
       const bool visible = !occluded(f, piece, tt, c);
+      // A visible piece is shaded; only an opaque one owns its samples (ids: the nearest opaque
+      // surface, the truth's definition; non-opaque content is blended over it).
+      const bool owns = visible && tt.t->opaque;
       // Samples of the piece: a pixel's samples lie in [px·2^sb, (px+1)·2^sb).
       const Rect b = geom::bounding_box(piece);
       const int64_t px0 = std::max<int64_t>(tx * g.tile_w, (int64_t(b.x0) >> sb));
@@ -103,7 +106,7 @@ class AnalyticResolver final : public TileResolver {
             const Point p{int32_t((px << sb) + s.samples[k].x), int32_t((py << sb) + s.samples[k].y)};
             if (!geom::covers(piece, p)) continue;
             ++covered;
-            if (visible) out.ids[(size_t(py) * s.width + size_t(px)) * n_samples + k] = int32_t(tt.t->id);
+            if (owns) out.ids[(size_t(py) * s.width + size_t(px)) * n_samples + k] = int32_t(tt.t->id);
           }
       c.fragments_generated += covered;
       if (!visible) continue;

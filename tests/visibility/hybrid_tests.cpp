@@ -80,6 +80,16 @@ TEST(Hybrid, NonOpaqueTilesGoPerPixel) {
   EXPECT_EQ(h.fallback_crossing_triangles, 0u);  // counted in interpenetration tiles only
 }
 
+// ids hold the nearest opaque surface in every mode: a visible blended piece is shaded (its
+// samples count as covered) but owns no sample, so analytic equals the truth here too.
+TEST(Hybrid, NonOpaquePiecesOwnNoSample) {
+  const vis::Setup s = vis::primitive_setup(frame_of("blended", kBlended), {});
+  const vis::GoldenResult a = vis::golden_visibility(s, {});
+  const vis::TruthResult t = vis::zbuffer_truth(s, {});
+  EXPECT_EQ(a.ids, t.ids);
+  EXPECT_GT(a.samples_covered, t.samples_covered);  // the card's visible samples are shaded on top
+}
+
 // The measure behind tile granularity: in tiles that go per pixel for interpenetration, how
 // many triangles cross another (both members of every crossing pair, nothing else).
 TEST(Hybrid, CountsTheTrianglesThatCross) {
