@@ -6,6 +6,8 @@
 //   3 budget: triangles x edges over ResolverOptions::pair_budget (the overloaded tile).
 // Where no pair of a tile's triangles crosses, silhouette splitting makes the analytic
 // answer exact (SVGPU §4.3's assumption), so the result equals the z-buffer truth.
+#include <vector>
+
 #include "geom/clip.h"
 #include "geom/polygon.h"
 #include "visibility/tile_resolver.h"
@@ -23,10 +25,8 @@ class HybridResolver final : public TileResolver {
     if (const int cause = fallback_cause(f, tile)) {
       m_per_pixel->resolve(f, tile, out, c, per_triangle);
       TileVerdict v{cause};
-      if (cause == kPerPixelInterpenetration) {  // measured for the choice of granularity
-        const geom::Rect rect = f.grid().rect(tile);
-        for (uint32_t i : f.tile_triangles(tile)) v.crossing_triangles += crosses_an_occluder(f, f.triangles()[i], rect);
-      }
+      // Measured for the choice of granularity: the triangles a per-triangle fallback would take.
+      if (cause == kPerPixelInterpenetration) v.crossing_triangles = crossing_pairs(f, tile, true);
       return v;
     }
     return m_analytic->resolve(f, tile, out, c, per_triangle);
@@ -45,30 +45,45 @@ class HybridResolver final : public TileResolver {
       if (!f.triangles()[i].t->opaque) return kPerPixelNonOpaque;
     if (m_opt.pair_budget && uint64_t(tris.size()) * f.tile_edges(tile).size() > m_opt.pair_budget)
       return kPerPixelBudget;
-    f.occluders(tile, m_occluders);
-    const geom::Rect rect = f.grid().rect(tile);
-    for (uint32_t i : tris)
-      if (crosses_an_occluder(f, f.triangles()[i], rect)) return kPerPixelInterpenetration;
-    return 0;
+    return crossing_pairs(f, tile, false) ? kPerPixelInterpenetration : 0;
   }
 
-  // Is there an opaque triangle u of the tile (another trace triangle) whose plane crosses
-  // t's strictly inside their overlap within the tile? (svgpu::planes_cross, exact; the depth
-  // ranges of a crossing pair overlap, so the pair is found from either member.)
-  bool crosses_an_occluder(const TileFrame& f, const FrontTriangle& t, const geom::Rect& rect) const {
-    const geom::ConvexPolygon poly = geom::clip_to_rect(geom::ConvexPolygon::from_triangle(t.tri), rect);
-    if (poly.empty()) return false;
-    for (uint32_t oi : m_occluders) {
-      const FrontTriangle& u = f.triangles()[oi];
-      if (u.z_min >= t.z_max) break;  // u at or behind t everywhere: so are all later occluders
-      if (u.t->id != t.t->id && svgpu::planes_cross(poly, t, u)) return true;
+  // Pairs of the tile's opaque triangles (other trace triangles) whose planes cross strictly
+  // inside their overlap within the tile (svgpu::planes_cross, exact, symmetric in the pair).
+  // Only pairs whose depth ranges overlap can cross: a sweep in order of nearest depth keeps
+  // the triangles whose range reaches the current one's nearest depth, so each such pair is
+  // tested once and a stack of disjoint depth ranges costs n log n, not n^2. Returns 1 at the
+  // first crossing pair, or with `count_all` the number of triangles in some crossing pair.
+  uint32_t crossing_pairs(const TileFrame& f, uint32_t tile, bool count_all) {
+    f.occluders(tile, m_occluders);  // nearest z_min first
+    const geom::Rect rect = f.grid().rect(tile);
+    m_active.clear();
+    m_crossing.assign(m_occluders.size(), 0);
+    m_polys.resize(m_occluders.size());
+    uint32_t found = 0;
+    for (uint32_t k = 0; k < m_occluders.size(); ++k) {
+      const FrontTriangle& t = f.triangles()[m_occluders[k]];
+      m_polys[k] = geom::clip_to_rect(geom::ConvexPolygon::from_triangle(t.tri), rect);
+      std::erase_if(m_active, [&](uint32_t a) { return f.triangles()[m_occluders[a]].z_max <= t.z_min; });
+      if (!m_polys[k].empty()) {
+        for (uint32_t a : m_active) {
+          const FrontTriangle& u = f.triangles()[m_occluders[a]];
+          if (u.t->id == t.t->id || !svgpu::planes_cross(m_polys[k], t, u)) continue;
+          if (!count_all) return 1;
+          found += !m_crossing[k] + !m_crossing[a];
+          m_crossing[k] = m_crossing[a] = 1;
+        }
+        m_active.push_back(k);
+      }
     }
-    return false;
+    return found;
   }
 
   ResolverOptions m_opt;
   std::unique_ptr<TileResolver> m_analytic, m_per_pixel;
-  std::vector<uint32_t> m_occluders;
+  std::vector<uint32_t> m_occluders, m_active;  // m_active: positions in m_occluders
+  std::vector<uint8_t> m_crossing;
+  std::vector<geom::ConvexPolygon> m_polys;
 };
 
 }  // namespace
