@@ -3,7 +3,7 @@
 each at its own viewport): 1 and 4 samples, tiles 8, 32 and 128, and analytic beside it at 32x32.
 Writes reports/hybrid/builtin_scenes.md. One run at a time, so that the times are comparable.
 
-usage: reports/hybrid/run_builtin.py [--traces DIR] [--work DIR] [--scenes a,b,...]
+usage: reports/hybrid/run_builtin.py [--traces DIR] [--work DIR] [--scenes a,b,...] [--tilevis BIN]
 """
 import argparse
 import json
@@ -14,7 +14,7 @@ import sys
 import time
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
-TILEVIS = ROOT / "build/model/app/tilevis"
+TILEVIS = ROOT / "build/model/app/tilevis"  # --tilevis: a copy, so that rebuilding meanwhile changes nothing
 BUDGETS = {"hot_tile": [0, 20000], "teapot_stadium": [0, 20000]}  # scenes also run with a pair budget
 
 
@@ -38,7 +38,10 @@ def main():
     ap.add_argument("--traces", default="/tmp/tilevis_hybrid/traces")
     ap.add_argument("--work", default="/tmp/tilevis_hybrid/runs")
     ap.add_argument("--scenes", default="")
+    ap.add_argument("--tilevis", default=str(TILEVIS))
     a = ap.parse_args()
+    global TILEVIS
+    TILEVIS = pathlib.Path(a.tilevis)
     traces, work = pathlib.Path(a.traces), pathlib.Path(a.work)
     traces.mkdir(parents=True, exist_ok=True)
     scenes = a.scenes.split(",") if a.scenes else sorted(p.stem for p in (ROOT / "traces/scenes").glob("*.json"))
