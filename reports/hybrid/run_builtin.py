@@ -46,6 +46,10 @@ def main():
     traces.mkdir(parents=True, exist_ok=True)
     scenes = a.scenes.split(",") if a.scenes else sorted(p.stem for p in (ROOT / "traces/scenes").glob("*.json"))
     rows, bad, runs = [], 0, 0
+    commit = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"], capture_output=True,
+                            text=True).stdout.strip()
+    dirty = subprocess.run(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no"], capture_output=True,
+                           text=True).stdout.strip()
     for sc in scenes:
         tvt = traces / f"{sc}.tvt"
         if not tvt.exists():
@@ -74,10 +78,6 @@ def main():
                              fb.get("triangles", "–"), fb.get("triangles_crossing", "–"),
                              tot["triangles_front"], f"{secs:.2f}"])
                 print(" | ".join(map(str, rows[-1])), flush=True)
-    commit = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"], capture_output=True,
-                            text=True).stdout.strip()
-    dirty = subprocess.run(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no"], capture_output=True,
-                           text=True).stdout.strip()
     cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")), "?")
     md = ["# Hybrid visibility against the exact z-buffer truth, built-in scenes", "",
           "`tilevis golden T --mode hybrid` against `tilevis golden T --truth` (`tilevis compare`), every scene of "
