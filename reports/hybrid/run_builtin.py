@@ -34,13 +34,13 @@ def agreement(a, b):
 
 
 def main():
+    global TILEVIS
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--traces", default="/tmp/tilevis_hybrid/traces")
     ap.add_argument("--work", default="/tmp/tilevis_hybrid/runs")
     ap.add_argument("--scenes", default="")
     ap.add_argument("--tilevis", default=str(TILEVIS))
     a = ap.parse_args()
-    global TILEVIS
     TILEVIS = pathlib.Path(a.tilevis)
     traces, work = pathlib.Path(a.traces), pathlib.Path(a.work)
     traces.mkdir(parents=True, exist_ok=True)
