@@ -125,7 +125,8 @@ int run_golden(const GoldenArgs& a, const trace::Frame& frame, uint32_t tw, uint
                                     {"tiles_budget", r.fallback_budget},
                                     {"samples", r.fallback_samples},
                                     {"triangles", r.fallback_triangles},
-                                    {"triangles_crossing", r.fallback_crossing_triangles}};
+                                    {"triangles_crossing", r.fallback_crossing_triangles},
+                                    {"detection_tests", r.detection_tests}};
   nlohmann::json config = visibility_config(tw, th, cfg.occlusion_bin_w, cfg.occlusion_bin_h, r.samples, a.depth_bits);
   config["mode"] = a.mode;
   if (hybrid) config["pair_budget"] = a.pair_budget;

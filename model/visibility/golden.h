@@ -53,6 +53,7 @@ struct GoldenResult : FrameOutput {
   // Triangles binned to per-pixel tiles, and, in tiles that went for interpenetration, those
   // that cross another (what a fallback of triangle granularity would resolve per pixel).
   uint64_t fallback_triangles = 0, fallback_crossing_triangles = 0;
+  uint64_t detection_tests = 0;  // hybrid's detector: plane comparisons over pair overlaps, every tile
 };
 
 GoldenResult golden_visibility(const Setup& setup, const GoldenConfig& config);
@@ -73,6 +74,8 @@ class GoldenTiler {
   // Bins front-facing triangles and silhouette edges into tiles (exact overlap).
   void bin();
   const TileFrame& frame() const { return m_frame; }
+  // tiles.csv columns the mode adds after TileCounters::columns().
+  std::vector<std::string> extra_columns() const { return m_resolver->extra_columns(); }
   uint32_t tile_count() const { return m_frame.grid().tile_count(); }
   // After bin(): the tile's triangles as Setup::triangles indices, ascending.
   std::vector<uint32_t> tile_triangles(uint32_t tile) const;

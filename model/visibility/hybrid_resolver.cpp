@@ -22,20 +22,26 @@ class HybridResolver final : public TileResolver {
 
   TileVerdict resolve(const TileFrame& f, uint32_t tile, FrameOutput& out, TileCounters& c,
                       std::vector<TileTriangleWork>* per_triangle) override {
-    if (const int cause = fallback_cause(f, tile)) {
+    m_tests = 0;
+    TileVerdict v{fallback_cause(f, tile)};
+    v.detection_tests = m_tests;
+    if (v.per_pixel_cause) {
       m_per_pixel->resolve(f, tile, out, c, per_triangle);
-      TileVerdict v{cause};
       // Measured for the choice of granularity: the triangles a per-triangle fallback would take.
-      if (cause == kPerPixelInterpenetration) v.crossing_triangles = crossing_pairs(f, tile, true);
+      if (v.per_pixel_cause == kPerPixelInterpenetration) v.crossing_triangles = crossing_pairs(f, tile, true);
       return v;
     }
-    return m_analytic->resolve(f, tile, out, c, per_triangle);
+    m_analytic->resolve(f, tile, out, c, per_triangle);
+    return v;
   }
 
-  std::vector<std::string> extra_columns() const override { return {"per_pixel", "per_pixel_cause"}; }
+  std::vector<std::string> extra_columns() const override {
+    return {"per_pixel", "per_pixel_cause", "detection_tests"};
+  }
   void write_extra(const TileVerdict& v, int64_t* row) const override {
     row[0] = v.per_pixel_cause != 0;
     row[1] = v.per_pixel_cause;
+    row[2] = int64_t(v.detection_tests);
   }
 
  private:
@@ -68,7 +74,9 @@ class HybridResolver final : public TileResolver {
       if (!m_polys[k].empty()) {
         for (uint32_t a : m_active) {
           const FrontTriangle& u = f.triangles()[m_occluders[a]];
-          if (u.t->id == t.t->id || !svgpu::planes_cross(m_polys[k], t, u)) continue;
+          if (u.t->id == t.t->id) continue;
+          m_tests += !count_all;
+          if (!svgpu::planes_cross(m_polys[k], t, u)) continue;
           if (!count_all) return 1;
           found += !m_crossing[k] + !m_crossing[a];
           m_crossing[k] = m_crossing[a] = 1;
@@ -83,6 +91,7 @@ class HybridResolver final : public TileResolver {
   std::unique_ptr<TileResolver> m_analytic, m_per_pixel;
   std::vector<uint32_t> m_occluders, m_active;  // m_active: positions in m_occluders
   std::vector<uint8_t> m_crossing;
+  uint64_t m_tests = 0;  // detection tests of the current tile
   std::vector<geom::ConvexPolygon> m_polys;
 };
 

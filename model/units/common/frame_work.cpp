@@ -98,8 +98,8 @@ FrameWork::FrameWork(const trace::Frame& frame, const FrameWorkConfig& config) :
   if (uses_evu(m_cfg.mode)) {
     m_columns = vis::TileCounters::columns();
     for (const char* c : {"fragments_shaded", "depth_tests", "passes", "segments"}) m_columns.push_back(c);
-    if (m_cfg.mode == Mode::hybrid)
-      for (const char* c : {"per_pixel", "per_pixel_cause"}) m_columns.push_back(c);
+    // The resolver's own columns (hybrid: per_pixel, per_pixel_cause, detection_tests).
+    for (const std::string& c : vis::make_tile_resolver(m_gcfg.mode, {})->extra_columns()) m_columns.push_back(c);
   } else {
     m_columns = {"triangles", "fragments_generated", "samples_covered", "fragments_shaded", "depth_tests", "segments"};
   }
@@ -352,7 +352,9 @@ void FrameWork::resolve_tile(TileWork& w) {
 void FrameWork::resolve_analytic(TileWork& w) {
   Segment& sg = *m_seg;
   m_per_tri.clear();
-  w.per_pixel = uint8_t(sg.golden->process_tile(w.tile, &m_per_tri).per_pixel_cause);
+  const vis::TileVerdict verdict = sg.golden->process_tile(w.tile, &m_per_tri);
+  w.per_pixel = uint8_t(verdict.per_pixel_cause);
+  w.detection_tests = verdict.detection_tests;
   w.tris.resize(m_per_tri.size());
   for (size_t i = 0; i < m_per_tri.size(); ++i) {
     const auto& rec = m_per_tri[i];
@@ -462,10 +464,14 @@ void FrameWork::close_tile(TileWork* w) {
     row[c + 1] += int64_t(tests);
     row[c + 2] += w->passes;
     m_passes_extra += w->passes - 1;
-    if (m_cfg.mode == Mode::hybrid && w->per_pixel) {
-      row[c + 4] = 1;  // per_pixel, per_pixel_cause
-      row[c + 5] = w->per_pixel;
-      ++m_per_pixel_tiles;
+    if (m_cfg.mode == Mode::hybrid) {  // per_pixel, per_pixel_cause, detection_tests
+      if (w->per_pixel) {
+        row[c + 4] = 1;
+        row[c + 5] = w->per_pixel;
+        ++m_per_pixel_tiles;
+      }
+      row[c + 6] += int64_t(w->detection_tests);
+      m_detection_tests += w->detection_tests;
     }
   } else {
     for (const TriangleWork& t : w->tris) row[1] += t.fragments_generated;
@@ -534,7 +540,10 @@ nlohmann::json FrameWork::totals() const {
                       {"triangles_frustum_culled", st.frustum_culled},
                       {"triangles_edge_on", st.edge_on},
                       {"silhouette_edges", uses_evu(m_cfg.mode) ? st.silhouette_edges : 0}};
-  if (m_cfg.mode == Mode::hybrid) j["per_pixel_tiles"] = m_per_pixel_tiles;
+  if (m_cfg.mode == Mode::hybrid) {
+    j["per_pixel_tiles"] = m_per_pixel_tiles;
+    j["hybrid_detection_tests"] = m_detection_tests;
+  }
   auto sum = [&](const std::string& name) {
     const auto it = std::find(m_columns.begin(), m_columns.end(), name);
     if (it == m_columns.end()) return uint64_t{0};

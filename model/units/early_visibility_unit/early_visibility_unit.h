@@ -32,6 +32,10 @@ struct EarlyVisibilityConfig {
   EvuStageConfig reject{8, 1, 6};
   EvuStageConfig clip{2, 4, 12};
   EvuStageConfig occlude{4, 1, 10};
+  // Hybrid's detector: a triangle pair's overlap clipped and its depth compared at the
+  // vertices, the clip datapath's kind of work (2 lanes, one every 4 clocks; its latency is
+  // hidden under the reject stage's, whose first item of a tile waits for it).
+  EvuStageConfig detect{2, 4, 0};
   uint32_t triangle_list_entries = 512;  // on-chip triangle list (assumption: 512 x ~64 B = 32 KiB)
   uint32_t edge_list_entries = 256;      // on-chip edge list (assumption: 256 x 24 B = 6 KiB)
   uint32_t pass_overhead_cycles = 32;    // refill of the three pipelines per extra pass (assumption)
@@ -92,6 +96,7 @@ class EarlyVisibilityUnit : public UnitBase {
   Stat& m_pieces;
   Stat& m_visible;
   Stat& m_occlusion_tests;
+  Stat& m_detection_tests;
   Stat& m_tiles;
   Stat& m_multi_pass;
 
