@@ -126,6 +126,7 @@ int run_golden(const GoldenArgs& a, const trace::Frame& frame, uint32_t tw, uint
                                     {"samples", r.fallback_samples},
                                     {"triangles", r.fallback_triangles},
                                     {"triangles_crossing", r.fallback_crossing_triangles},
+                                    {"detection_screens", r.detection_screens},
                                     {"detection_tests", r.detection_tests}};
   nlohmann::json config = visibility_config(tw, th, cfg.occlusion_bin_w, cfg.occlusion_bin_h, r.samples, a.depth_bits);
   config["mode"] = a.mode;

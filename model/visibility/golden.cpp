@@ -54,6 +54,7 @@ TileVerdict GoldenTiler::process_tile(uint32_t tile, std::vector<TileTriangleWor
   c.write(row.data());
   if (m_falls_back) {
     m_resolver->write_extra(v, row.data() + TileCounters::kCount);
+    m_r.detection_screens += v.detection_screens;
     m_r.detection_tests += v.detection_tests;
     if (v.per_pixel_cause) {
       ++m_r.fallback_tiles;

@@ -53,7 +53,7 @@ struct GoldenResult : FrameOutput {
   // Triangles binned to per-pixel tiles, and, in tiles that went for interpenetration, those
   // that cross another (what a fallback of triangle granularity would resolve per pixel).
   uint64_t fallback_triangles = 0, fallback_crossing_triangles = 0;
-  uint64_t detection_tests = 0;  // hybrid's detector: plane comparisons over pair overlaps, every tile
+  uint64_t detection_screens = 0, detection_tests = 0;  // hybrid's detector, every tile (TileVerdict)
 };
 
 GoldenResult golden_visibility(const Setup& setup, const GoldenConfig& config);

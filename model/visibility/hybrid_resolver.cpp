@@ -22,8 +22,9 @@ class HybridResolver final : public TileResolver {
 
   TileVerdict resolve(const TileFrame& f, uint32_t tile, FrameOutput& out, TileCounters& c,
                       std::vector<TileTriangleWork>* per_triangle) override {
-    m_tests = 0;
+    m_screens = m_tests = 0;
     TileVerdict v{fallback_cause(f, tile)};
+    v.detection_screens = m_screens;
     v.detection_tests = m_tests;
     if (v.per_pixel_cause) {
       m_per_pixel->resolve(f, tile, out, c, per_triangle);
@@ -36,12 +37,13 @@ class HybridResolver final : public TileResolver {
   }
 
   std::vector<std::string> extra_columns() const override {
-    return {"per_pixel", "per_pixel_cause", "detection_tests"};
+    return {"per_pixel", "per_pixel_cause", "detection_screens", "detection_tests"};
   }
   void write_extra(const TileVerdict& v, int64_t* row) const override {
     row[0] = v.per_pixel_cause != 0;
     row[1] = v.per_pixel_cause;
-    row[2] = int64_t(v.detection_tests);
+    row[2] = int64_t(v.detection_screens);
+    row[3] = int64_t(v.detection_tests);
   }
 
  private:
@@ -75,6 +77,8 @@ class HybridResolver final : public TileResolver {
         for (uint32_t a : m_active) {
           const FrontTriangle& u = f.triangles()[m_occluders[a]];
           if (u.t->id == t.t->id) continue;
+          m_screens += !count_all;
+          if (!svgpu::may_cross(t, u) || svgpu::opposite_neighbours(t.tri, u.tri)) continue;
           m_tests += !count_all;
           if (!svgpu::planes_cross(m_polys[k], t, u)) continue;
           if (!count_all) return 1;
@@ -91,7 +95,7 @@ class HybridResolver final : public TileResolver {
   std::unique_ptr<TileResolver> m_analytic, m_per_pixel;
   std::vector<uint32_t> m_occluders, m_active;  // m_active: positions in m_occluders
   std::vector<uint8_t> m_crossing;
-  uint64_t m_tests = 0;  // detection tests of the current tile
+  uint64_t m_screens = 0, m_tests = 0;  // the current tile's detection work
   std::vector<geom::ConvexPolygon> m_polys;
 };
 

@@ -63,10 +63,15 @@ bool occludes(const Triangle& u, uint32_t u_id, const Triangle& t, uint32_t t_id
   return order < 0 || (order == 0 && u_id < t_id);
 }
 
+bool opposite_neighbours(const geom::Triangle& t, const geom::Triangle& u) {
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (t.v[i] == u.v[(j + 1) % 3] && t.v[(i + 1) % 3] == u.v[j]) return true;
+  return false;
+}
+
 bool planes_cross(const geom::ConvexPolygon& region, const Triangle& t, const Triangle& u) {
-  if (u.z_min >= t.z_max || u.z_max <= t.z_min) return false;  // one side everywhere (or touching)
-  if (u.bbox.x1 <= t.bbox.x0 || u.bbox.x0 >= t.bbox.x1 || u.bbox.y1 <= t.bbox.y0 || u.bbox.y0 >= t.bbox.y1)
-    return false;
+  if (!may_cross(t, u)) return false;  // one side everywhere (or touching), or apart on screen
   geom::ConvexPolygon overlap = region;
   for (const geom::Line& l : u.edges.edge) {
     overlap = geom::clip(overlap, l);

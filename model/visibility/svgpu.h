@@ -68,4 +68,16 @@ bool occludes(const Triangle& u, uint32_t u_id, const Triangle& t, uint32_t t_id
 // pair of a tile's triangles crosses, silhouette splitting makes the analytic answer exact.
 bool planes_cross(const geom::ConvexPolygon& region, const Triangle& t, const Triangle& u);
 
+// planes_cross's cheap screen (integer compares): the depth ranges overlap strictly and the
+// bounding boxes overlap with area. Where it fails, the planes cannot cross in the overlap.
+inline bool may_cross(const Triangle& t, const Triangle& u) {
+  return u.z_min < t.z_max && u.z_max > t.z_min && u.bbox.x1 > t.bbox.x0 && u.bbox.x0 < t.bbox.x1 &&
+         u.bbox.y1 > t.bbox.y0 && u.bbox.y0 < t.bbox.y1;
+}
+
+// Do t and u (both front-facing) share an edge from opposite sides (t runs a -> b, u b -> a),
+// as mesh neighbours do? Then they lie on opposite sides of it on screen: their overlap has no
+// area and their planes cannot cross inside it (vertex compares only).
+bool opposite_neighbours(const geom::Triangle& t, const geom::Triangle& u);
+
 }  // namespace tilevis::vis::svgpu

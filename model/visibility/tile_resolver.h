@@ -83,8 +83,9 @@ struct TileVerdict {
   // Interpenetration: how many of the tile's triangles cross another (the ones a fallback of
   // triangle granularity would send per pixel).
   uint32_t crossing_triangles = 0;
-  // Hybrid's detector: pairs of triangles whose planes it compared over their overlap.
-  uint64_t detection_tests = 0;
+  // Hybrid's detector: triangle pairs screened (depth ranges and boxes compared), and those
+  // past the screen whose planes it compared over their overlap.
+  uint64_t detection_screens = 0, detection_tests = 0;
 };
 inline constexpr int kPerPixelInterpenetration = 1;  // two opaque triangles' planes cross inside their overlap
 inline constexpr int kPerPixelNonOpaque = 2;         // a non-opaque triangle (it never occludes)

@@ -354,6 +354,7 @@ void FrameWork::resolve_analytic(TileWork& w) {
   m_per_tri.clear();
   const vis::TileVerdict verdict = sg.golden->process_tile(w.tile, &m_per_tri);
   w.per_pixel = uint8_t(verdict.per_pixel_cause);
+  w.detection_screens = verdict.detection_screens;
   w.detection_tests = verdict.detection_tests;
   w.tris.resize(m_per_tri.size());
   for (size_t i = 0; i < m_per_tri.size(); ++i) {
@@ -464,13 +465,15 @@ void FrameWork::close_tile(TileWork* w) {
     row[c + 1] += int64_t(tests);
     row[c + 2] += w->passes;
     m_passes_extra += w->passes - 1;
-    if (m_cfg.mode == Mode::hybrid) {  // per_pixel, per_pixel_cause, detection_tests
+    if (m_cfg.mode == Mode::hybrid) {  // per_pixel, per_pixel_cause, detection_screens, detection_tests
       if (w->per_pixel) {
         row[c + 4] = 1;
         row[c + 5] = w->per_pixel;
         ++m_per_pixel_tiles;
       }
-      row[c + 6] += int64_t(w->detection_tests);
+      row[c + 6] += int64_t(w->detection_screens);
+      row[c + 7] += int64_t(w->detection_tests);
+      m_detection_screens += w->detection_screens;
       m_detection_tests += w->detection_tests;
     }
   } else {
@@ -542,6 +545,7 @@ nlohmann::json FrameWork::totals() const {
                       {"silhouette_edges", uses_evu(m_cfg.mode) ? st.silhouette_edges : 0}};
   if (m_cfg.mode == Mode::hybrid) {
     j["per_pixel_tiles"] = m_per_pixel_tiles;
+    j["hybrid_detection_screens"] = m_detection_screens;
     j["hybrid_detection_tests"] = m_detection_tests;
   }
   auto sum = [&](const std::string& name) {

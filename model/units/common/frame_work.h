@@ -143,7 +143,7 @@ class FrameWork {
   std::vector<int32_t> m_ids;
   std::vector<double> m_visible_area;
   uint64_t m_shaded = 0, m_depth_tests = 0, m_tiles_rendered = 0, m_passes_extra = 0, m_per_pixel_tiles = 0,
-           m_detection_tests = 0;
+           m_detection_screens = 0, m_detection_tests = 0;
   uint64_t m_tiles_resolved = 0, m_tiles_binned = 0;  // progress
   std::vector<uint64_t> m_seg_front;     // front-facing triangles per segment
   uint64_t m_visible_triangles = 0;

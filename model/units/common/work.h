@@ -63,7 +63,8 @@ struct TileWork {
   bool resolved = false;
   uint8_t per_pixel = 0;              // hybrid: 0 analytic, else why the tile went to the HSR unit
                                       // (1 interpenetration, 2 non-opaque content, 3 work budget)
-  uint64_t detection_tests = 0;       // hybrid: plane comparisons the EVU made to decide that
+  uint64_t detection_screens = 0;     // hybrid: triangle pairs the EVU screened to decide that
+  uint64_t detection_tests = 0;       // hybrid: pairs past the screen whose planes it compared
   uint64_t cycles[size_t(TileUnit::count)] = {};
   uint64_t start_cycle = 0, end_cycle = 0;  // first fetch to last write (event-driven levels)
 

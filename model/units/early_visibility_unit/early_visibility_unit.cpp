@@ -17,8 +17,10 @@ Cost EvuReject::cost(const Item& it) const {
   const TileWork& w = *it.tile;
   for (uint32_t i = it.first; i < it.first + it.count; ++i) c.cycles += issue_cycles(w.tris[i].pair_tests, m_cfg.reject);
   if (it.first_of_tile) c.cycles += uint64_t(w.passes - 1) * m_cfg.pass_overhead_cycles;
-  // Hybrid: the tile's triangle pairs compared over their overlaps before it is committed to
-  // the EVU or the HSR unit (polygon clipping and depth compares: the detect datapath).
+  // Hybrid: before a tile is committed to the EVU or the HSR unit, its triangle pairs are
+  // screened (depth ranges and boxes: the reject datapath's integer compares) and those past
+  // the screen compared over their overlaps (polygon clipping and depth compares: detect).
+  if (it.first_of_tile && w.detection_screens) c.cycles += issue_cycles(w.detection_screens, m_cfg.reject);
   if (it.first_of_tile && w.detection_tests) c.cycles += issue_cycles(w.detection_tests, m_cfg.detect);
   if (it.last) c.cycles += m_cfg.reject.latency_cycles;
   return c;
@@ -64,7 +66,8 @@ EarlyVisibilityUnit::EarlyVisibilityUnit(const sc_core::sc_module_name& name, co
       m_pieces(m_stats.add("pieces", "polygons", "pieces after clipping")),
       m_visible(m_stats.add("visible_pieces", "polygons", "pieces not occluded")),
       m_occlusion_tests(m_stats.add("occlusion_tests", "tests", "piece x occluder containment tests")),
-      m_detection_tests(m_stats.add("detection_tests", "tests", "hybrid: triangle pairs compared for interpenetration")),
+      m_detection_screens(m_stats.add("detection_screens", "pairs", "hybrid: triangle pairs screened (depth ranges, boxes)")),
+      m_detection_tests(m_stats.add("detection_tests", "tests", "hybrid: pairs past the screen compared over their overlap")),
       m_tiles(m_stats.add("tiles", "tiles", "tiles resolved")),
       m_multi_pass(m_stats.add("multi_pass_tiles", "tiles", "tiles over the on-chip list capacity")) {
   m_reject = std::make_unique<EvuReject>("reject", env, m_cfg);
@@ -93,6 +96,7 @@ void EarlyVisibilityUnit::count_tile(const TileWork& w) {
     m_visible.value += double(t.visible_pieces);
     m_occlusion_tests.value += double(t.occlusion_tests);
   }
+  m_detection_screens.value += double(w.detection_screens);
   m_detection_tests.value += double(w.detection_tests);
   m_tiles.value += 1;
   m_multi_pass.value += w.passes > 1;

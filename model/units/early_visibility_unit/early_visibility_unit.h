@@ -96,6 +96,7 @@ class EarlyVisibilityUnit : public UnitBase {
   Stat& m_pieces;
   Stat& m_visible;
   Stat& m_occlusion_tests;
+  Stat& m_detection_screens;
   Stat& m_detection_tests;
   Stat& m_tiles;
   Stat& m_multi_pass;
