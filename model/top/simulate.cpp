@@ -50,6 +50,8 @@ SimOutput simulate(const trace::Frame& frame, const TilerConfig& config, const S
   fc.depth_bits = config.sim.depth_bits;
   fc.evu_triangle_entries = config.evu.triangle_list_entries;
   fc.evu_edge_entries = config.evu.edge_list_entries;
+  fc.hybrid_pair_budget = config.evu.hybrid_pair_budget;
+  fc.detection_bin = config.evu.detection_bin;
   fc.progress = options.progress;
   FrameWork work(frame, fc);
   const bool event_driven = config.sim.fidelity != Fidelity::analytic;

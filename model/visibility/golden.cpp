@@ -9,6 +9,7 @@ GoldenTiler::GoldenTiler(const Setup& s, const GoldenConfig& cfg, GoldenResult& 
   o.occlusion_bin_h = cfg.occlusion_bin_h;
   o.keep_pieces = cfg.keep_pieces;
   o.pair_budget = cfg.pair_budget;
+  o.detection_bin = cfg.detection_bin;
   if (m_cfg.progress)
     o.work_done = [this](uint64_t w) {
       if (m_report_progress) m_cfg.progress(m_work_done += w, m_work_total);

@@ -99,6 +99,9 @@ struct ResolverOptions {
   bool keep_pieces = false;  // analytic: collect visible pieces (SVG)
   // hybrid: a tile whose triangles x edges exceed this goes per pixel (0: no budget).
   uint64_t pair_budget = 0;
+  // hybrid: the detector compares triangle pairs within square bins of this many pixels
+  // (0: the whole tile). Only its work changes, not its verdict.
+  uint32_t detection_bin = 8;
   // Called with units of work done as the tile proceeds (a triangle of an analytic tile
   // weighs edges + triangles of the tile), so one overloaded tile still shows progress.
   std::function<void(uint64_t)> work_done;

@@ -129,3 +129,23 @@ TEST(Hybrid, IsAnalyticWhereNothingCanGoWrong) {
   for (size_t t = 0; t < a.tiles.rows.size(); ++t)
     for (size_t c = 0; c < a.tiles.columns.size(); ++c) ASSERT_EQ(h.tiles.rows[t][c], a.tiles.rows[t][c]);
 }
+
+// The detector's bins change its work, never its verdict: the same tiles go per pixel with
+// every bin size (the work differs: a pair spanning bins is screened in each, and a tile's
+// search stops at its first crossing pair, found in another order).
+TEST(Hybrid, DetectionBinsChangeWorkNotVerdict) {
+  const vis::Setup s = vis::primitive_setup(frame_of("interpenetrating", kInterpenetrating), {});
+  vis::GoldenConfig cfg;
+  cfg.mode = "hybrid";
+  cfg.detection_bin = 0;  // the whole tile
+  const vis::GoldenResult whole = vis::golden_visibility(s, cfg);
+  ASSERT_GT(whole.fallback_interpenetration, 0u);
+  for (uint32_t bin : {1u, 4u, 8u, 16u}) {
+    cfg.detection_bin = bin;
+    const vis::GoldenResult r = vis::golden_visibility(s, cfg);
+    EXPECT_EQ(r.ids, whole.ids) << bin;
+    EXPECT_EQ(r.fallback_tiles, whole.fallback_tiles) << bin;
+    EXPECT_EQ(r.fallback_crossing_triangles, whole.fallback_crossing_triangles) << bin;
+    EXPECT_NE(r.detection_screens, whole.detection_screens) << bin;
+  }
+}

@@ -40,6 +40,7 @@ struct FrameWorkConfig {
   uint32_t evu_triangle_entries = 512, evu_edge_entries = 256;
   // Hybrid: a tile whose triangles x edges exceed this goes per pixel (0: no budget).
   uint64_t hybrid_pair_budget = 0;
+  uint32_t detection_bin = 8;  // hybrid: the detector's bins, pixels (0: the tile)
   // Called after each tile's visibility with (tiles resolved, tiles binned so far).
   std::function<void(uint64_t, uint64_t)> progress;
 };
