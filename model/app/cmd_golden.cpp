@@ -55,7 +55,8 @@ int run_truth(const GoldenArgs& a, const trace::Frame& frame, uint32_t tw, uint3
   nlohmann::json totals = setup_totals(s);
   totals["samples_covered"] = r.samples_covered;
   totals["fragments_generated"] = r.fragments_generated;
-  totals["fragments_shaded"] = r.modes.hsr;
+  totals["fragments_shaded"] = r.modes.hsr;  // shader invocations (MSAA: once per pixel and triangle)
+  totals["samples_tested"] = r.fragments_generated;
   out.stats = {{"tool", a.quantized_depth_bits ? "truth_quantized" : "truth"},
                {"trace", a.trace},
                {"frame", a.frame},
@@ -114,7 +115,8 @@ int run_golden(const GoldenArgs& a, const trace::Frame& frame, uint32_t tw, uint
   totals["occlusion_tests"] = r.occlusion_tests;
   totals["samples_covered"] = r.samples_covered;
   totals["fragments_generated"] = r.fragments_generated;
-  totals["fragments_shaded"] = r.samples_covered;
+  totals["fragments_shaded"] = r.shader_invocations;  // MSAA: once per pixel and triangle
+  totals["samples_tested"] = r.fragments_generated;
   totals["max_tile_triangles"] = r.max_tile_triangles;
   totals["max_tile_edges"] = r.max_tile_edges;
   totals["max_tile_pieces"] = r.max_tile_pieces;

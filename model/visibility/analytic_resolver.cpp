@@ -37,20 +37,26 @@ class AnalyticResolver final : public TileResolver {
     f.occluders(tile, m_occluders);
     bin_occluders(f, rect);
     const uint64_t step = edge_ids.size() + tris.size();
+    m_stamp.assign(size_t(g.tile_w) * g.tile_h, 0);
     for (uint32_t i : tris) {
       const TileCounters before = c;
-      process_triangle(f, f.triangles()[i], tile, rect, out, c);
-      if (per_triangle) per_triangle->push_back({f.triangles()[i].setup_index, c - before});
+      const uint64_t shaded = process_triangle(f, f.triangles()[i], tile, rect, out, c);
+      out.shader_invocations += shaded;
+      if (per_triangle) per_triangle->push_back({f.triangles()[i].setup_index, c - before, shaded});
       if (m_opt.work_done) m_opt.work_done(step);
     }
     return {};
   }
 
  private:
-  void process_triangle(const TileFrame& f, const FrontTriangle& tt, uint32_t tile, const Rect& rect, FrameOutput& out,
-                        TileCounters& c) {
+  // Returns the triangle's shader invocations in the tile: pixels where a visible piece covers
+  // a sample (pieces of one triangle may share a pixel: counted once, by a stamp per pixel).
+  uint64_t process_triangle(const TileFrame& f, const FrontTriangle& tt, uint32_t tile, const Rect& rect,
+                            FrameOutput& out, TileCounters& c) {
     ConvexPolygon poly = geom::clip_to_rect(ConvexPolygon::from_triangle(tt.tri), rect);
-    if (poly.empty()) return;
+    if (poly.empty()) return 0;
+    ++m_serial;
+    uint64_t shaded = 0;
     // Candidate edges (tests 1–6 against the triangle's tile polygon), in ascending id.
     m_candidates.clear();
     for (uint32_t ei : m_sorted_edges) {
@@ -107,6 +113,11 @@ class AnalyticResolver final : public TileResolver {
             if (!geom::covers(piece, p)) continue;
             ++covered;
             if (owns) out.ids[(size_t(py) * s.width + size_t(px)) * n_samples + k] = int32_t(tt.t->id);
+            if (visible) {
+              uint64_t& stamp = m_stamp[size_t(py - ty * g.tile_h) * g.tile_w + size_t(px - tx * g.tile_w)];
+              shaded += stamp != m_serial;
+              stamp = m_serial;
+            }
           }
       c.fragments_generated += covered;
       if (!visible) continue;
@@ -116,6 +127,7 @@ class AnalyticResolver final : public TileResolver {
       out.visible_area[tt.t->id] += geom::doubled_area(piece) / (2.0 * double(1 << sb) * double(1 << sb));
       if (m_opt.keep_pieces) keep(s, piece, tt, out);
     }
+    return shaded;
   }
 
   // SVGPU §3.3: the piece is hidden if an original opaque triangle nearer at its interior
@@ -211,6 +223,8 @@ class AnalyticResolver final : public TileResolver {
   ResolverOptions m_opt;
   std::vector<uint32_t> m_sorted_edges, m_occluders, m_candidates;
   std::vector<ConvexPolygon> m_pieces;
+  std::vector<uint64_t> m_stamp;  // per pixel of the tile: the last triangle serial that shaded it
+  uint64_t m_serial = 0;
   geom::TileGrid m_bins_for{};
   std::vector<std::vector<uint32_t>> m_bin_occ;  // finer occlusion bins of the current tile (one: off)
   uint32_t m_bins_x = 1, m_bins_y = 1;

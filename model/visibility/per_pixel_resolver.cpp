@@ -50,7 +50,7 @@ class PerPixelResolver final : public TileResolver {
     int64_t covered = 0;
     const double sample_area = 1.0 / double(ns);
     for (uint32_t py = region.y0; py < region.y1; ++py)
-      for (uint32_t px = region.x0; px < region.x1; ++px)
+      for (uint32_t px = region.x0; px < region.x1; ++px) {
         for (uint32_t k = 0; k < ns; ++k) {
           const int32_t o = m_owner[local(px, py, k)];
           if (o < 0) continue;
@@ -60,6 +60,12 @@ class PerPixelResolver final : public TileResolver {
           ++covered;
           if (per_triangle) ++(*per_triangle)[first_record + size_t(o)].counters.samples_covered;
         }
+        // Each owner of the pixel's samples shades it once.
+        zbuffer::for_distinct(&m_owner[local(px, py, 0)], ns, int32_t(-1), [&](int32_t o) {
+          ++out.shader_invocations;
+          if (per_triangle) ++(*per_triangle)[first_record + size_t(o)].shader_invocations;
+        });
+      }
     c.samples_covered += covered;
     c.fragments_generated += generated;
     return {kPerPixelMode};

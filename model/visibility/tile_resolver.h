@@ -65,6 +65,7 @@ class TileFrame {
 struct TileTriangleWork {
   uint32_t triangle = 0;  // index into Setup::triangles
   TileCounters counters;
+  uint64_t shader_invocations = 0;  // pixels where it shades a sample (zbuffer::PixelShades)
 };
 
 // Where a resolver writes: frame-sized outputs shared by all tiles.
@@ -73,6 +74,7 @@ struct FrameOutput {
   std::vector<double> visible_area;    // per original triangle id, pixels²
   std::vector<PlanarPiece> pieces;     // visible pieces as polygons (analytic tiles, ResolverOptions::keep_pieces)
   uint64_t visible_triangles = 0;      // visible pieces fan-triangulated (per-pixel tiles: none)
+  uint64_t shader_invocations = 0;     // per triangle, the pixels where it shades some sample (MSAA)
   uint64_t max_tile_pieces = 0;        // most pieces of one triangle in one tile
 };
 

@@ -26,12 +26,12 @@ class ZBuffer {
     return geom::quantized_depth(p, s, bits) < geom::quantized_depth(q, s, bits);
   }
 
-  // Calls visit(sample index, point) for each sample of the frame the triangle covers.
+  // Calls visit(sample index, px, py, point) for each sample of the frame the triangle covers.
   template <typename Visit>
   void raster(const svgpu::Triangle& t, Visit&& visit) const {
     zbuffer::for_covered_samples(m_s, t, zbuffer::whole_frame(m_s), [&](uint32_t px, uint32_t py, uint32_t k,
                                                                           geom::Point p) {
-      visit(zbuffer::sample_index(m_s, px, py, k), p);
+      visit(zbuffer::sample_index(m_s, px, py, k), px, py, p);
     });
   }
 
@@ -70,24 +70,28 @@ TruthResult zbuffer_truth(const Setup& s, const TruthConfig& cfg) {
     return grid.tile_at_pixel(uint32_t(pixel % s.width), uint32_t(pixel / s.width));
   };
 
-  // Pass 1, submission order: ids, generated fragments, early-Z.
+  // Pass 1, submission order: ids, generated fragments, early-Z (shader invocations: a
+  // triangle's pixels with any covered / passing sample).
   bool any_translucent = false;
   auto& owner = zb.owner();
   for (size_t i = 0; i < tris.size(); ++i) {
     const bool opaque = src[i]->opaque;
     any_translucent = any_translucent || !opaque;
     const auto t = int32_t(i);
-    zb.raster(tris[i], [&](size_t k, geom::Point p) {
+    zbuffer::PixelShades covered, passed;
+    zb.raster(tris[i], [&](size_t k, uint32_t px, uint32_t py, geom::Point p) {
       ++r.fragments_generated;
       r.overdraw[k / r.samples] += 1.0f;
       ++r.tiles.at(tile_of(k), 0);
+      covered.add(px, py, s.width);
       if (zb.passes(t, p, owner[k])) {
-        ++r.modes.early_z;
+        passed.add(px, py, s.width);
         if (opaque) owner[k] = t;
       }
     });
+    r.modes.none += covered.count;
+    r.modes.early_z += passed.count;
   }
-  r.modes.none = r.fragments_generated;
   r.modes.hsr_depth_tests = r.fragments_generated;
 
   r.ids.assign(n_samples, -1);
@@ -100,19 +104,22 @@ TruthResult zbuffer_truth(const Setup& s, const TruthConfig& cfg) {
     ++r.samples_covered;
     ++r.tiles.at(tile_of(k), 1);
   }
-  r.modes.prepass = r.modes.hsr = r.samples_covered;
+  // HSR and pre-pass shade each pixel once per triangle owning any of its samples.
+  for (size_t pixel = 0; pixel < size_t(s.width) * s.height; ++pixel)
+    zbuffer::for_distinct(owner.data() + pixel * r.samples, r.samples, int32_t(-1), [&](int32_t) { ++r.modes.hsr; });
+  r.modes.prepass = r.modes.hsr;
 
   // Translucent fragments after a pre-pass: shaded where in front of the final opaque depth.
   if (any_translucent) {
     std::vector<int32_t> final_owner = owner;
     for (size_t i = 0; i < tris.size(); ++i) {
       if (src[i]->opaque) continue;
-      zb.raster(tris[i], [&](size_t k, geom::Point p) {
-        if (zb.passes(int32_t(i), p, final_owner[k])) {
-          ++r.modes.prepass;
-          ++r.modes.hsr;
-        }
+      zbuffer::PixelShades shaded;
+      zb.raster(tris[i], [&](size_t k, uint32_t px, uint32_t py, geom::Point p) {
+        if (zb.passes(int32_t(i), p, final_owner[k])) shaded.add(px, py, s.width);
       });
+      r.modes.prepass += shaded.count;
+      r.modes.hsr += shaded.count;
     }
   }
 
@@ -129,12 +136,14 @@ TruthResult zbuffer_truth(const Setup& s, const TruthConfig& cfg) {
   zb.reset();
   for (size_t i : order) {
     const bool opaque = src[i]->opaque;
-    zb.raster(tris[i], [&](size_t k, geom::Point p) {
+    zbuffer::PixelShades passed;
+    zb.raster(tris[i], [&](size_t k, uint32_t px, uint32_t py, geom::Point p) {
       if (zb.passes(int32_t(i), p, owner[k])) {
-        ++r.modes.early_z_sorted;
+        passed.add(px, py, s.width);
         if (opaque) owner[k] = int32_t(i);
       }
     });
+    r.modes.early_z_sorted += passed.count;
   }
   return r;
 }

@@ -18,13 +18,15 @@ struct TruthConfig {
   uint32_t quantized_depth_bits = 0;   // 0: exact depth; N: compare depth rounded down to N bits
 };
 
-// Fragments shaded under each visibility mode (DESIGN.md "Visibility modes").
+// Fragments shaded under each visibility mode (DESIGN.md "Visibility modes"): shader
+// invocations, one per pixel and triangle that shades any of the pixel's samples (MSAA:
+// depth and visibility per sample, shading per pixel; at 1 sample the two are the same).
 struct ModeCounts {
-  uint64_t none = 0;            // every generated fragment
-  uint64_t early_z = 0;         // passes the depth test on arrival, submission order
+  uint64_t none = 0;            // every pixel a triangle covers
+  uint64_t early_z = 0;         // some sample passes the depth test on arrival, submission order
   uint64_t early_z_sorted = 0;  // same, draws sorted front to back by their nearest depth
-  uint64_t prepass = 0;         // visible fragments (after a depth pre-pass of opaque geometry)
-  uint64_t hsr = 0;             // visible fragments (per-pixel HSR in the tile)
+  uint64_t prepass = 0;         // some sample visible (after a depth pre-pass of opaque geometry)
+  uint64_t hsr = 0;             // some sample visible (per-pixel HSR in the tile)
   uint64_t hsr_depth_tests = 0; // HSR cost: depth tests, one per covered sample
 };
 

@@ -57,6 +57,31 @@ void for_covered_samples(const Setup& s, const svgpu::Triangle& t, PixelRect reg
       }
 }
 
+// Shader invocations under MSAA: a triangle's fragment shader runs once per pixel in which
+// it shades any sample (the coverage mask says which samples take the result), as MSAA
+// hardware does. Counts the distinct pixels of one triangle's samples visited pixel by pixel
+// (for_covered_samples' order); start a new count for every triangle.
+struct PixelShades {
+  uint64_t count = 0;
+  size_t last = SIZE_MAX;
+  void add(uint32_t px, uint32_t py, uint32_t width) {
+    const size_t pixel = size_t(py) * width + px;
+    if (pixel != last) ++count, last = pixel;
+  }
+};
+
+// Distinct values among the first n entries of a pixel's samples (n <= 16), skipping `none`:
+// the shader invocations a pixel's owners cost. Calls fn(value) once per distinct value.
+template <typename T, typename Fn>
+void for_distinct(const T* samples, uint32_t n, T none, Fn&& fn) {
+  for (uint32_t k = 0; k < n; ++k) {
+    if (samples[k] == none) continue;
+    bool seen = false;
+    for (uint32_t j = 0; j < k && !seen; ++j) seen = samples[j] == samples[k];
+    if (!seen) fn(samples[k]);
+  }
+}
+
 // The depth test: does a triangle with plane `t` pass against the sample's owner `owner`?
 inline bool passes(const geom::DepthPlane& t, const geom::DepthPlane& owner, geom::Point p) {
   return geom::depth_order(t, owner, p) < 0;

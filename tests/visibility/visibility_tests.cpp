@@ -269,3 +269,26 @@ TEST(GoldenVsTruthShipped, BunnyAtQuarterResolution) {
   EXPECT_GT(a.compared, 10000u);
   EXPECT_EQ(a.mismatched, 0u);
 }
+
+// MSAA: visibility per sample, shading once per pixel and triangle. On large triangles 4
+// samples cost hardly more shader invocations than 1 (only pixels on edges between triangles
+// add one); every producer of a mode counts the same invocations.
+TEST(Msaa, ShadesOncePerPixelAndTriangle) {
+  const auto one = vis::primitive_setup(frame_of("cubes1", kCubes, 1), {});
+  const auto four = vis::primitive_setup(frame_of("cubes4", kCubes, 4), {});
+  const vis::GoldenResult g1 = vis::golden_visibility(one, {}), g4 = vis::golden_visibility(four, {});
+  const vis::TruthResult t1 = vis::zbuffer_truth(one, {}), t4 = vis::zbuffer_truth(four, {});
+  EXPECT_EQ(g1.shader_invocations, g1.samples_covered);  // one sample per pixel: the same thing
+  EXPECT_EQ(g1.shader_invocations, t1.modes.hsr);
+  EXPECT_EQ(g4.shader_invocations, t4.modes.hsr);          // analytic and per-pixel HSR agree
+  EXPECT_LT(g4.shader_invocations, g4.samples_covered);    // far fewer invocations than samples
+  EXPECT_GE(g4.shader_invocations, g1.shader_invocations * 95 / 100);
+  EXPECT_LE(g4.shader_invocations, g1.shader_invocations * 11 / 10);
+  EXPECT_LE(t4.modes.hsr, t4.modes.early_z);
+  EXPECT_LE(t4.modes.early_z, t4.modes.none);
+  EXPECT_LT(t4.modes.none, t4.fragments_generated);
+  // Per-pixel tiles count the same invocations as the truth.
+  vis::GoldenConfig pp;
+  pp.mode = "per_pixel";
+  EXPECT_EQ(vis::golden_visibility(four, pp).shader_invocations, t4.modes.hsr);
+}

@@ -365,13 +365,14 @@ void FrameWork::resolve_analytic(TileWork& w) {
     static_cast<vis::TileCounters&>(tw) = rec.counters;
     tw.id = t.id;
     tw.draw = t.draw;
-    tw.fragments_shaded = uint32_t(tw.samples_covered);
+    tw.fragments_shaded = uint32_t(rec.shader_invocations);
     if (w.per_pixel) tw.depth_tests = uint32_t(tw.fragments_generated);  // the HSR unit: one test per covered sample
   }
   if (segment_count() == 1) return;
 
   // Merge into the stored depth of earlier partial renders: a visible sample of this
-  // segment is shaded, and takes the sample, where it is strictly nearer.
+  // segment takes the sample where it is strictly nearer; a triangle shades a pixel once
+  // when it takes any of the pixel's samples.
   std::unordered_map<uint32_t, size_t> first_of_id;
   for (size_t i = 0; i < w.tris.size(); ++i) {
     first_of_id.emplace(w.tris[i].id, i);
@@ -380,23 +381,27 @@ void FrameWork::resolve_analytic(TileWork& w) {
   const uint32_t ns = samples();
   const uint32_t x0 = w.tx * m_cfg.tile_w, y0 = w.ty * m_cfg.tile_h;
   const uint32_t x1 = std::min(m_frame.width, x0 + m_cfg.tile_w), y1 = std::min(m_frame.height, y0 + m_cfg.tile_h);
+  uint32_t taken[trace::kMaxSamples];  // per sample of the pixel: the TriangleWork that took it
   for (uint32_t py = y0; py < y1; ++py)
-    for (uint32_t px = x0; px < x1; ++px)
+    for (uint32_t px = x0; px < x1; ++px) {
       for (uint32_t k = 0; k < ns; ++k) {
+        taken[k] = kNone;
         const size_t idx = (size_t(py) * m_frame.width + px) * ns + k;
         const int32_t sid = sg.result->ids[idx];
         if (sid < 0) continue;
         const geom::Point p = vis::zbuffer::sample_point(m_setup, px, py, k);
         const uint32_t fan = covering_fan(uint32_t(sid), p);
-        TriangleWork& tw = w.tris[first_of_id.at(uint32_t(sid))];
+        const size_t ti = first_of_id.at(uint32_t(sid));
         const uint32_t old = m_owner[idx];
         if (old != kNone) {
-          ++tw.depth_tests;
+          ++w.tris[ti].depth_tests;
           if (!vis::zbuffer::passes(raster(fan).plane, raster(old).plane, p)) continue;
         }
         m_owner[idx] = fan;
-        ++tw.fragments_shaded;
+        taken[k] = uint32_t(ti);
       }
+      vis::zbuffer::for_distinct(taken, ns, kNone, [&](uint32_t ti) { ++w.tris[ti].fragments_shaded; });
+    }
 }
 
 void FrameWork::resolve_pixels(TileWork& w) {
@@ -414,38 +419,48 @@ void FrameWork::resolve_pixels(TileWork& w) {
   }
   // The exact z-buffer (vis::zbuffer) in submission order against the tile's depth, which
   // earlier partial renders may have stored.
+  // Shading counts shader invocations: once per pixel and triangle (vis::zbuffer::PixelShades).
   for (size_t i = 0; i < list.size(); ++i) {
     TriangleWork& tw = w.tris[i];
     const vis::FrontTriangle& t = raster(list[i]);
+    vis::zbuffer::PixelShades shaded;
     vis::zbuffer::for_covered_samples(m_setup, t, region, [&](uint32_t px, uint32_t py, uint32_t k, geom::Point p) {
       ++tw.fragments_generated;
       uint32_t& owner = m_owner[vis::zbuffer::sample_index(m_setup, px, py, k)];
       const bool pass = owner == kNone || vis::zbuffer::passes(t.plane, raster(owner).plane, p);
       if (m_cfg.mode != Mode::none) ++tw.depth_tests;  // one test per covered sample
-      if (m_cfg.mode == Mode::none || (m_cfg.mode == Mode::early_z && pass)) ++tw.fragments_shaded;
+      if (m_cfg.mode == Mode::none || (m_cfg.mode == Mode::early_z && pass)) shaded.add(px, py, m_frame.width);
       if (pass && t.t->opaque) owner = list[i];
     });
+    tw.fragments_shaded += uint32_t(shaded.count);
   }
-  // Samples the tile's triangles own now; HSR shades exactly those (the tag buffer), then
-  // translucent fragments in front of them.
+  // Samples the tile's triangles own now; HSR shades the pixels they own (the tag buffer),
+  // then translucent fragments in front of them.
+  uint32_t owned[trace::kMaxSamples];  // per sample of the pixel: the local triangle owning it
   for (uint32_t py = region.y0; py < region.y1; ++py)
-    for (uint32_t px = region.x0; px < region.x1; ++px)
+    for (uint32_t px = region.x0; px < region.x1; ++px) {
       for (uint32_t k = 0; k < ns; ++k) {
+        owned[k] = kNone;
         const uint32_t o = m_owner[vis::zbuffer::sample_index(m_setup, px, py, k)];
         if (o == kNone) continue;
         auto it = local.find(o);
         if (it == local.end()) continue;
         ++w.tris[it->second].samples_covered;
-        if (m_cfg.mode == Mode::hsr) ++w.tris[it->second].fragments_shaded;
+        owned[k] = uint32_t(it->second);
       }
+      if (m_cfg.mode == Mode::hsr)
+        vis::zbuffer::for_distinct(owned, ns, kNone, [&](uint32_t i) { ++w.tris[i].fragments_shaded; });
+    }
   if (m_cfg.mode == Mode::hsr)
     for (size_t i = 0; i < list.size(); ++i) {
       const vis::FrontTriangle& t = raster(list[i]);
       if (t.t->opaque) continue;
+      vis::zbuffer::PixelShades shaded;
       vis::zbuffer::for_covered_samples(m_setup, t, region, [&](uint32_t px, uint32_t py, uint32_t k, geom::Point p) {
         const uint32_t o = m_owner[vis::zbuffer::sample_index(m_setup, px, py, k)];
-        if (o == kNone || vis::zbuffer::passes(t.plane, raster(o).plane, p)) ++w.tris[i].fragments_shaded;
+        if (o == kNone || vis::zbuffer::passes(t.plane, raster(o).plane, p)) shaded.add(px, py, m_frame.width);
       });
+      w.tris[i].fragments_shaded += uint32_t(shaded.count);
     }
 }
 
@@ -570,7 +585,8 @@ nlohmann::json FrameWork::totals() const {
   }
   j["samples_covered"] = sum("samples_covered");
   j["fragments_generated"] = sum("fragments_generated");
-  j["fragments_shaded"] = m_shaded;
+  j["fragments_shaded"] = m_shaded;  // shader invocations: once per pixel and triangle (MSAA)
+  j["samples_tested"] = sum("fragments_generated");
   j["depth_tests"] = m_depth_tests;
   j["partial_renders"] = segment_count() - 1;
   j["tiles_rendered"] = m_tiles_rendered;

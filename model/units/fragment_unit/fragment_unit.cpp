@@ -5,13 +5,11 @@
 namespace tilevis::sim {
 namespace {
 
+// Samples the fragment unit rasterises: the visible ones after a visibility unit, every
+// covered one otherwise. Shading (fragments_shaded) is per pixel and triangle (MSAA).
 uint64_t rasterised(const TriangleWork& t, Mode m) {
-  switch (m) {
-    case Mode::analytic:
-    case Mode::hybrid: return t.samples_covered;
-    case Mode::hsr: return t.fragments_shaded;
-    default: return t.fragments_generated;
-  }
+  return m == Mode::analytic || m == Mode::hybrid || m == Mode::hsr ? uint64_t(t.samples_covered)
+                                                                    : uint64_t(t.fragments_generated);
 }
 
 // Early depth tests in the fragment path: early-Z's, or the partial-render merge's (the HSR
