@@ -157,6 +157,7 @@ Registry::Registry() {
   TV_UINT("evu.occlude.latency_cycles", evu.occlude.latency_cycles, "cycles", 0, 100000, "pipeline depth, per tile");
   TV_UINT("evu.detect.lanes", evu.detect.lanes, "lanes", 1, 1024, "hybrid: pair comparisons issued together");
   TV_UINT("evu.detect.ii", evu.detect.ii, "cycles", 1, 1024, "hybrid: initiation interval of the pair comparison");
+  TV_UINT("evu.detect.beside", evu.detect_beside, "-", 0, 1, "hybrid: 1 the detector has its own datapath and works while reject does; 0 it runs before reject on the reject lanes");
   TV_UINT("evu.detection_bin", evu.detection_bin, "pixels", 0, 256, "hybrid: the detector's bins (0: the tile); its work, not its verdict");
   TV_UINT("evu.hybrid_pair_budget", evu.hybrid_pair_budget, "pairs", 0, 0xffffffffu, "hybrid: a tile whose triangles x edges exceed this goes per pixel (0: no budget)");
   TV_UINT("evu.triangle_list_entries", evu.triangle_list_entries, "triangles", 1, 1u << 24, "on-chip triangle list; longer lists take passes");

@@ -18,10 +18,19 @@ Cost EvuReject::cost(const Item& it) const {
   for (uint32_t i = it.first; i < it.first + it.count; ++i) c.cycles += issue_cycles(w.tris[i].pair_tests, m_cfg.reject);
   if (it.first_of_tile) c.cycles += uint64_t(w.passes - 1) * m_cfg.pass_overhead_cycles;
   // Hybrid: before a tile is committed to the EVU or the HSR unit, its triangle pairs are
-  // screened (depth ranges and boxes: the reject datapath's integer compares) and those past
-  // the screen compared over their overlaps (polygon clipping and depth compares: detect).
-  if (it.first_of_tile && w.detection_screens) c.cycles += issue_cycles(w.detection_screens, m_cfg.reject);
-  if (it.first_of_tile && w.detection_tests) c.cycles += issue_cycles(w.detection_tests, m_cfg.detect);
+  // screened (depth ranges and boxes: integer compares at the reject rate) and those past the
+  // screen compared over their overlaps (polygon clipping and depth compares: evu.detect).
+  // With evu.detect.beside the detector has its own datapath and works while reject does
+  // (the tile commits when both are done): only its time beyond the tile's reject work shows.
+  if (it.first_of_tile && (w.detection_screens || w.detection_tests)) {
+    uint64_t detect = 0;
+    if (w.detection_screens) detect += issue_cycles(w.detection_screens, m_cfg.reject);
+    if (w.detection_tests) detect += issue_cycles(w.detection_tests, m_cfg.detect);
+    uint64_t reject = 0;
+    if (m_cfg.detect_beside)
+      for (const TriangleWork& t : w.tris) reject += issue_cycles(t.pair_tests, m_cfg.reject);
+    c.cycles += detect > reject ? detect - reject : 0;
+  }
   if (it.last) c.cycles += m_cfg.reject.latency_cycles;
   return c;
 }

@@ -37,6 +37,7 @@ struct EarlyVisibilityConfig {
   // hidden under the reject stage's, whose first item of a tile waits for it).
   EvuStageConfig detect{2, 4, 0};
   uint32_t detection_bin = 8;         // hybrid: pixels a side of the detector's bins (0: the tile)
+  uint32_t detect_beside = 1;         // hybrid: 1 the detector works beside reject (own datapath), 0 before it
   uint32_t hybrid_pair_budget = 0;    // hybrid: a tile with more triangles x edges goes per pixel (0: none)
   uint32_t triangle_list_entries = 512;  // on-chip triangle list (assumption: 512 x ~64 B = 32 KiB)
   uint32_t edge_list_entries = 256;      // on-chip edge list (assumption: 256 x 24 B = 6 KiB)
