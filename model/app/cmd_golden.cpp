@@ -1,6 +1,7 @@
 // tilevis golden T -o DIR: the untimed SVGPU visibility pipeline's canonical outputs;
 // with --truth, the z-buffer truth of the same snapped scene in the same layout.
 #include <chrono>
+#include <vector>
 
 #include <fmt/format.h>
 
@@ -22,6 +23,7 @@ struct GoldenArgs {
   bool truth = false;
   std::string mode = "analytic";
   uint64_t pair_budget = 0;
+  std::vector<uint32_t> list_capacity = {512, 256};
 };
 
 nlohmann::json setup_totals(const vis::Setup& s) {
@@ -90,6 +92,8 @@ int run_golden(const GoldenArgs& a, const trace::Frame& frame, uint32_t tw, uint
   cfg.keep_pieces = !a.svg.empty();
   cfg.mode = a.mode;
   cfg.pair_budget = a.pair_budget;
+  cfg.list_triangles = a.list_capacity.at(0);
+  cfg.list_edges = a.list_capacity.at(1);
   const bool hybrid = a.mode == "hybrid";
   parse_occlusion_bin(a.occlusion_bin, tw, th, cfg.occlusion_bin_w, cfg.occlusion_bin_h);
   Progress progress("golden: tiles");
@@ -132,7 +136,10 @@ int run_golden(const GoldenArgs& a, const trace::Frame& frame, uint32_t tw, uint
                                     {"detection_tests", r.detection_tests}};
   nlohmann::json config = visibility_config(tw, th, cfg.occlusion_bin_w, cfg.occlusion_bin_h, r.samples, a.depth_bits);
   config["mode"] = a.mode;
-  if (hybrid) config["pair_budget"] = a.pair_budget;
+  if (hybrid) {
+    config["pair_budget"] = a.pair_budget;
+    config["list_capacity"] = a.list_capacity;
+  }
   out.stats = {{"tool", "golden"},
                {"trace", a.trace},
                {"frame", a.frame},
@@ -177,6 +184,12 @@ Command add_golden_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--pair-budget", a->pair_budget,
                   "With --mode hybrid: a tile whose triangles x edges exceed this goes per pixel (0: no budget)")
+      ->capture_default_str();
+  cmd->add_option("--list-capacity", a->list_capacity,
+                  "With --mode hybrid: TRIANGLES EDGES the early-visibility unit's on-chip lists hold; a tile with "
+                  "more goes per pixel (0: no limit; the model's evu.triangle_list_entries, evu.edge_list_entries)")
+      ->expected(2)
+      ->delimiter(',')
       ->capture_default_str();
   cmd->add_option("--svg", a->svg, "Also write the visible planar map as SVG");
   cmd->add_option("--occlusion-bin", a->occlusion_bin,

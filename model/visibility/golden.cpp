@@ -10,6 +10,8 @@ GoldenTiler::GoldenTiler(const Setup& s, const GoldenConfig& cfg, GoldenResult& 
   o.keep_pieces = cfg.keep_pieces;
   o.pair_budget = cfg.pair_budget;
   o.detection_bin = cfg.detection_bin;
+  o.list_triangles = cfg.list_triangles;
+  o.list_edges = cfg.list_edges;
   if (m_cfg.progress)
     o.work_done = [this](uint64_t w) {
       if (m_report_progress) m_cfg.progress(m_work_done += w, m_work_total);

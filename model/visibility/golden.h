@@ -35,6 +35,8 @@ struct GoldenConfig {
   // Hybrid (hybrid_resolver.cpp): a tile whose triangles x edges exceed this goes per pixel (0: no budget).
   uint64_t pair_budget = 0;
   uint32_t detection_bin = 8;  // hybrid: the detector's bins, pixels (0: the tile); its work, not its verdict
+  // hybrid: the on-chip list capacities (tile_resolver.h ResolverOptions; 0: no limit).
+  uint32_t list_triangles = 512, list_edges = 256;
   // Called after binning with (0, total), then as tiles proceed with (done, total), in units
   // of estimated work: a tile weighs 1 + triangles x (edges + triangles), its pair tests and
   // occlusion tests, so a frame whose work sits in one overloaded tile still reports steady

@@ -3,7 +3,8 @@
 //   1 interpenetration: two opaque triangles of the tile (other trace triangles) whose
 //     planes cross strictly inside their overlap within the tile (exact predicates);
 //   2 non-opaque content: such a triangle never occludes; its samples are the z-buffer's;
-//   3 budget: triangles x edges over ResolverOptions::pair_budget (the overloaded tile).
+//   3 budget: triangles x edges over ResolverOptions::pair_budget, or more triangles or edges
+//     than the unit's on-chip lists hold (list_triangles, list_edges): the overloaded tile.
 // Where no pair of a tile's triangles crosses, silhouette splitting makes the analytic
 // answer exact (SVGPU §4.3's assumption), so the result equals the z-buffer truth.
 #include <algorithm>
@@ -52,7 +53,9 @@ class HybridResolver final : public TileResolver {
     const auto& tris = f.tile_triangles(tile);
     for (uint32_t i : tris)
       if (!f.triangles()[i].t->opaque) return kPerPixelNonOpaque;
-    if (m_opt.pair_budget && uint64_t(tris.size()) * f.tile_edges(tile).size() > m_opt.pair_budget)
+    const size_t edges = f.tile_edges(tile).size();
+    if ((m_opt.pair_budget && uint64_t(tris.size()) * edges > m_opt.pair_budget) ||
+        (m_opt.list_triangles && tris.size() > m_opt.list_triangles) || (m_opt.list_edges && edges > m_opt.list_edges))
       return kPerPixelBudget;
     return crossing_pairs(f, tile, false) ? kPerPixelInterpenetration : 0;
   }

@@ -101,6 +101,9 @@ struct ResolverOptions {
   bool keep_pieces = false;  // analytic: collect visible pieces (SVG)
   // hybrid: a tile whose triangles x edges exceed this goes per pixel (0: no budget).
   uint64_t pair_budget = 0;
+  // hybrid: a tile with more triangles or silhouette edges than the early-visibility unit's
+  // on-chip lists hold goes per pixel (0: no limit). Defaults: the model's evu.*_list_entries.
+  uint32_t list_triangles = 512, list_edges = 256;
   // hybrid: the detector compares triangle pairs within square bins of this many pixels
   // (0: the whole tile). Only its work changes, not its verdict.
   uint32_t detection_bin = 8;
