@@ -287,8 +287,14 @@ TEST(Msaa, ShadesOncePerPixelAndTriangle) {
   EXPECT_LE(t4.modes.hsr, t4.modes.early_z);
   EXPECT_LE(t4.modes.early_z, t4.modes.none);
   EXPECT_LT(t4.modes.none, t4.fragments_generated);
-  // Per-pixel tiles count the same invocations as the truth.
+  // Per-pixel tiles count the same invocations as the truth, translucent fragments included.
   vis::GoldenConfig pp;
   pp.mode = "per_pixel";
   EXPECT_EQ(vis::golden_visibility(four, pp).shader_invocations, t4.modes.hsr);
+  auto glass = frame_of("cubes_glass", kCubes, 4);
+  glass.draws.back().flags |= trace::kBlended;  // the cards
+  const auto sg = vis::primitive_setup(glass, {});
+  const vis::TruthResult tg = vis::zbuffer_truth(sg, {});
+  EXPECT_GT(tg.modes.hsr, vis::golden_visibility(sg, pp).samples_covered / 4);  // the cards are shaded
+  EXPECT_EQ(vis::golden_visibility(sg, pp).shader_invocations, tg.modes.hsr);
 }
