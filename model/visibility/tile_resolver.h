@@ -74,7 +74,7 @@ struct FrameOutput {
   std::vector<double> visible_area;    // per original triangle id, pixels²
   std::vector<PlanarPiece> pieces;     // visible pieces as polygons (analytic tiles, ResolverOptions::keep_pieces)
   uint64_t visible_triangles = 0;      // visible pieces fan-triangulated (per-pixel tiles: none)
-  uint64_t shader_invocations = 0;     // per triangle, the pixels where it shades some sample (MSAA)
+  uint64_t shader_invocations = 0;     // summed over triangles: the pixels where each shades some sample (MSAA)
   uint64_t max_tile_pieces = 0;        // most pieces of one triangle in one tile
 };
 
@@ -91,7 +91,7 @@ struct TileVerdict {
 };
 inline constexpr int kPerPixelInterpenetration = 1;  // two opaque triangles' planes cross inside their overlap
 inline constexpr int kPerPixelNonOpaque = 2;         // a non-opaque triangle (it never occludes)
-inline constexpr int kPerPixelBudget = 3;            // estimated pair tests over the budget
+inline constexpr int kPerPixelBudget = 3;            // over the on-chip lists or the pair budget
 inline constexpr int kPerPixelMode = 4;              // the per_pixel mode: every tile
 
 struct ResolverOptions {
