@@ -89,13 +89,13 @@ int run_golden(const GoldenArgs& a, const trace::Frame& frame, uint32_t tw, uint
   vis::GoldenConfig cfg;
   cfg.tile_w = tw;
   cfg.tile_h = th;
-  cfg.keep_pieces = !a.svg.empty();
+  cfg.options.keep_pieces = !a.svg.empty();
   cfg.mode = a.mode;
-  cfg.pair_budget = a.pair_budget;
-  cfg.list_triangles = a.list_capacity.at(0);
-  cfg.list_edges = a.list_capacity.at(1);
+  cfg.options.pair_budget = a.pair_budget;
+  cfg.options.list_triangles = a.list_capacity.at(0);
+  cfg.options.list_edges = a.list_capacity.at(1);
   const bool hybrid = a.mode == "hybrid";
-  parse_occlusion_bin(a.occlusion_bin, tw, th, cfg.occlusion_bin_w, cfg.occlusion_bin_h);
+  parse_occlusion_bin(a.occlusion_bin, tw, th, cfg.options.occlusion_bin_w, cfg.options.occlusion_bin_h);
   Progress progress("golden: tiles");
   if (progress.enabled()) cfg.progress = [&](uint64_t done, uint64_t total) { progress.update(done, total); };
   vis::GoldenResult r = vis::golden_visibility(s, cfg);
@@ -134,7 +134,7 @@ int run_golden(const GoldenArgs& a, const trace::Frame& frame, uint32_t tw, uint
                                     {"triangles_crossing", r.fallback_crossing_triangles},
                                     {"detection_screens", r.detection_screens},
                                     {"detection_tests", r.detection_tests}};
-  nlohmann::json config = visibility_config(tw, th, cfg.occlusion_bin_w, cfg.occlusion_bin_h, r.samples, a.depth_bits);
+  nlohmann::json config = visibility_config(tw, th, cfg.options.occlusion_bin_w, cfg.options.occlusion_bin_h, r.samples, a.depth_bits);
   config["mode"] = a.mode;
   if (hybrid) {
     config["pair_budget"] = a.pair_budget;

@@ -4,14 +4,7 @@ namespace tilevis::vis {
 
 GoldenTiler::GoldenTiler(const Setup& s, const GoldenConfig& cfg, GoldenResult& r)
     : m_cfg(cfg), m_r(r), m_frame(s, geom::TileGrid::make(s.width, s.height, cfg.tile_w, cfg.tile_h, s.subpixel_bits)) {
-  ResolverOptions o;
-  o.occlusion_bin_w = cfg.occlusion_bin_w;
-  o.occlusion_bin_h = cfg.occlusion_bin_h;
-  o.keep_pieces = cfg.keep_pieces;
-  o.pair_budget = cfg.pair_budget;
-  o.detection_bin = cfg.detection_bin;
-  o.list_triangles = cfg.list_triangles;
-  o.list_edges = cfg.list_edges;
+  ResolverOptions o = cfg.options;
   if (m_cfg.progress)
     o.work_done = [this](uint64_t w) {
       if (m_report_progress) m_cfg.progress(m_work_done += w, m_work_total);

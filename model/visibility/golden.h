@@ -26,17 +26,9 @@ struct GoldenConfig {
   uint32_t tile_w = 32, tile_h = 32;
   // The tile resolver (tile_resolver.h): analytic, hybrid or per_pixel.
   std::string mode = "analytic";
-  // Finer occlusion bins (SVGPU §4.1): each tile's occluder list split over bins of this many
-  // pixels (0: one bin per tile). A piece scans only the bin of its interior point, whose
-  // list holds every occluder whose bounding-box test could pass there, in the same order:
-  // results and counters are those of one bin per tile; only the scanning shrinks.
-  uint32_t occlusion_bin_w = 0, occlusion_bin_h = 0;
-  bool keep_pieces = false;  // collect visible pieces as polygons (for SVG)
-  // Hybrid (hybrid_resolver.cpp): a tile whose triangles x edges exceed this goes per pixel (0: no budget).
-  uint64_t pair_budget = 0;
-  uint32_t detection_bin = 8;  // hybrid: the detector's bins, pixels (0: the tile); its work, not its verdict
-  // hybrid: the on-chip list capacities (tile_resolver.h ResolverOptions; 0: no limit).
-  uint32_t list_triangles = 512, list_edges = 256;
+  // The resolver's own options (occlusion bins, kept pieces, hybrid's budgets and detection
+  // bins); their work_done is set by the tiler from `progress`.
+  ResolverOptions options;
   // Called after binning with (0, total), then as tiles proceed with (done, total), in units
   // of estimated work: a tile weighs 1 + triangles x (edges + triangles), its pair tests and
   // occlusion tests, so a frame whose work sits in one overloaded tile still reports steady

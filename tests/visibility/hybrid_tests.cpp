@@ -49,7 +49,7 @@ void expect_hybrid_is_truth(const trace::Frame& f, const std::string& what, uint
     vis::GoldenConfig cfg;
     cfg.tile_w = cfg.tile_h = tile;
     cfg.mode = "hybrid";
-    cfg.pair_budget = budget;
+    cfg.options.pair_budget = budget;
     const vis::GoldenResult h = vis::golden_visibility(s, cfg);
     EXPECT_EQ(mismatches(h.ids, truth.ids), 0u) << what << " at " << tile << "x" << tile << " tiles";
     EXPECT_GT(h.fallback_tiles, 0u) << what << ": nothing went per pixel";
@@ -107,7 +107,7 @@ TEST(Hybrid, WorkOverTheBudgetGoesPerPixel) {
   vis::GoldenConfig cfg;
   cfg.tile_w = cfg.tile_h = 32;
   cfg.mode = "hybrid";
-  cfg.pair_budget = 50;
+  cfg.options.pair_budget = 50;
   const vis::GoldenResult h = vis::golden_visibility(vis::primitive_setup(f, {}), cfg);
   EXPECT_GT(h.fallback_budget, 0u);
   expect_hybrid_is_truth(f, "budget 50", 50);
@@ -137,11 +137,11 @@ TEST(Hybrid, DetectionBinsChangeWorkNotVerdict) {
   const vis::Setup s = vis::primitive_setup(frame_of("interpenetrating", kInterpenetrating), {});
   vis::GoldenConfig cfg;
   cfg.mode = "hybrid";
-  cfg.detection_bin = 0;  // the whole tile
+  cfg.options.detection_bin = 0;  // the whole tile
   const vis::GoldenResult whole = vis::golden_visibility(s, cfg);
   ASSERT_GT(whole.fallback_interpenetration, 0u);
   for (uint32_t bin : {1u, 4u, 8u, 16u}) {
-    cfg.detection_bin = bin;
+    cfg.options.detection_bin = bin;
     const vis::GoldenResult r = vis::golden_visibility(s, cfg);
     EXPECT_EQ(r.ids, whole.ids) << bin;
     EXPECT_EQ(r.fallback_tiles, whole.fallback_tiles) << bin;

@@ -194,8 +194,8 @@ TEST(Golden, FinerOcclusionBinsChangeNothingButTheScan) {
     ASSERT_GT(ref.occlusion_tests, 0u);
     for (auto [bw, bh] : {std::pair{1u, 1u}, {4u, 4u}, {5u, 7u}, {8u, 32u}, {31u, 31u}, {32u, 32u}}) {
       vis::GoldenConfig gc = base;
-      gc.occlusion_bin_w = bw;
-      gc.occlusion_bin_h = bh;
+      gc.options.occlusion_bin_w = bw;
+      gc.options.occlusion_bin_h = bh;
       const auto g = vis::golden_visibility(s, gc);
       EXPECT_EQ(g.ids, ref.ids) << bw << "x" << bh;
       EXPECT_EQ(g.visible_area, ref.visible_area) << bw << "x" << bh;

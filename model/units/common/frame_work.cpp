@@ -93,10 +93,10 @@ FrameWork::FrameWork(const trace::Frame& frame, const FrameWorkConfig& config) :
   m_gcfg.tile_w = config.tile_w;
   m_gcfg.tile_h = config.tile_h;
   m_gcfg.mode = uses_evu(config.mode) ? to_string(config.mode) : "per_pixel";
-  m_gcfg.pair_budget = config.hybrid_pair_budget;
-  m_gcfg.detection_bin = config.detection_bin;
-  m_gcfg.list_triangles = config.evu_triangle_entries;
-  m_gcfg.list_edges = config.evu_edge_entries;
+  m_gcfg.options.pair_budget = config.hybrid_pair_budget;
+  m_gcfg.options.detection_bin = config.detection_bin;
+  m_gcfg.options.list_triangles = config.evu_triangle_entries;
+  m_gcfg.options.list_edges = config.evu_edge_entries;
   m_grid = geom::TileGrid::make(frame.width, frame.height, config.tile_w, config.tile_h, frame.subpixel_bits);
   if (uses_evu(m_cfg.mode)) {
     m_columns = vis::TileCounters::columns();
