@@ -52,13 +52,18 @@ def main():
     cmd = [a.tilevis, "sweep", str(sweep), "-o", str(out), "-j", "2"]
     env = dict(os.environ)
     parent = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
+    # One look at /proc decides: a second look could miss a job that finished in between.
     deadline = time.time() + 60
-    while time.time() < deadline and not [p for p in jobs_of(out) if p[0] != parent.pid]:
+    children = []
+    while time.time() < deadline and parent.poll() is None:
+        children = [p for p in jobs_of(out) if p[0] != parent.pid]
+        if children:
+            break
         time.sleep(0.02)
-    children = [p for p in jobs_of(out) if p[0] != parent.pid]
     if not children:
         parent.kill()
-        sys.exit("sweep_kill: no job of the sweep started within 60 s")
+        sys.exit("sweep_kill: no job of the sweep seen running within 60 s (sweep exit status "
+                 f"{parent.poll()})")
     os.kill(parent.pid, signal.SIGKILL)
     parent.wait()
     time.sleep(0.3)  # the kernel delivers the death signal at once; a job takes seconds
