@@ -58,14 +58,26 @@ phase_build() {
     if [ -e "$z" ]; then zlib="$z"; break; fi
   done
   [ -n "$zlib" ] || die "no libz.so.1 found"
-  say "configure (TILEVIS_MINIMAL, OpenEXR from $SYSROOT, zlib $zlib)"
+  say "configure (TILEVIS_MINIMAL; OpenEXR, nlohmann-json, fmt, CLI11, GoogleTest from $SYSROOT; zlib $zlib)"
+  # The carried packages only: no system-wide package registry, and $SYSROOT first.
   cmake -S "$ROOT" -B "$BUILD" -G Ninja -DCMAKE_BUILD_TYPE=Release -DTILEVIS_MINIMAL=ON \
         -DCMAKE_PREFIX_PATH="$SYSROOT/usr" -DZLIB_INCLUDE_DIR="$zinc" -DZLIB_LIBRARY="$zlib" \
+        -DCMAKE_FIND_USE_PACKAGE_REGISTRY=OFF -DCMAKE_FIND_USE_SYSTEM_PACKAGE_REGISTRY=OFF \
         -DCMAKE_CUDA_COMPILER=/usr/local/cuda/bin/nvcc >"$LOGS/configure.log" 2>&1 ||
     { tail -n 30 "$LOGS/configure.log" >&2; die "configure failed"; }
+  # Where each dependency came from (the report shows it: carried, or the machine's own).
+  grep -E '^(nlohmann_json|fmt|CLI11|GTest|OpenEXR|Imath)_DIR:' "$BUILD/CMakeCache.txt" >"$WORK/meta/deps.txt" || true
+  say "dependencies: $(tr '\n' ' ' <"$WORK/meta/deps.txt")"
   say "build ($JOBS jobs)"
   cmake --build "$BUILD" -j "$JOBS" >"$LOGS/build.log" 2>&1 || { grep -E "error|FAILED" "$LOGS/build.log" | head -n 30 >&2; die "build failed"; }
   [ -x "$BIN" ] || die "no $BIN after the build"
+  # cuda_ref on its own (its CMakeLists.txt as a project): CUDA, CMake and the trace reader only.
+  cmake -S "$ROOT/cuda_ref" -B "$BUILD-standalone" -G Ninja -DCMAKE_BUILD_TYPE=Release \
+        -DCMAKE_CUDA_COMPILER=/usr/local/cuda/bin/nvcc >"$LOGS/standalone.log" 2>&1 &&
+    cmake --build "$BUILD-standalone" -j "$JOBS" >>"$LOGS/standalone.log" 2>&1 &&
+    echo "standalone cuda_ref build: ok" >"$WORK/meta/standalone.txt" ||
+    echo "standalone cuda_ref build: FAILED (see logs/standalone.log)" >"$WORK/meta/standalone.txt"
+  say "$(cat "$WORK/meta/standalone.txt")"
   "$BIN" cuda --help | grep -q precision || die "tilevis has no cuda command"
   if [ ! -f "$TRACES/bunny.tvt" ]; then
     say "unpack traces"

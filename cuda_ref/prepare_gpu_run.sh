@@ -3,8 +3,9 @@
 # what cuda_ref/gpu_run.sh needs on a GPU machine that has CUDA, CMake and a compiler but no
 # OpenEXR/Imath and none of the scene generator's dependencies:
 #
-#   .gpu/debs/*.deb       OpenEXR 3.1 and Imath 3.1 (runtime + dev) and zlib (Ubuntu 24.04 ships
-#                         none of them by default; these are unpacked, not installed, there)
+#   .gpu/debs/*.deb       OpenEXR 3.1 and Imath 3.1 (runtime + dev), zlib, nlohmann-json, fmt,
+#                         CLI11, GoogleTest (Ubuntu 24.04 ships none of them by default; these are
+#                         unpacked, not installed, there)
 #   .gpu/traces.tar.xz    every traces/scenes/*.json as a trace (`tilevis trace`), plus
 #                         small/dragon_320x240.tvt for compute-sanitizer
 #   .gpu/commit.txt       the commit the traces were made at
@@ -29,8 +30,12 @@ fi
 [ -n "$BIN" ] && [ -x "$BIN" ] || die "no tilevis binary with the scene generator (build one: ./tilevis info, or set TILEVIS_BIN)"
 LIMIT_MIB=40
 
-# Debian 12 packages: OpenEXR, Imath and zlib headers (OpenEXRConfig.cmake asks for ZLIB).
-DEBS=(libopenexr-3-1-30 libopenexr-dev libimath-3-1-29 libimath-dev zlib1g zlib1g-dev)
+# Debian 12 packages: OpenEXR, Imath and zlib headers (OpenEXRConfig.cmake asks for ZLIB), and
+# the rest of what the TILEVIS_MINIMAL build finds (TileVisDeps.cmake): nlohmann-json, fmt,
+# CLI11 and GoogleTest/GMock (static libraries), so the GPU machine needs nothing installed
+# beyond CUDA, CMake, Ninja and a C++ compiler.
+DEBS=(libopenexr-3-1-30 libopenexr-dev libimath-3-1-29 libimath-dev zlib1g zlib1g-dev
+      nlohmann-json3-dev libfmt9 libfmt-dev libcli11-dev libgtest-dev libgmock-dev)
 rm -rf .gpu/debs && mkdir -p .gpu/debs
 say "downloading ${DEBS[*]}"
 (cd .gpu/debs && apt-get download -q "${DEBS[@]}" >/dev/null) || die "apt-get download failed (network? apt-get update?)"

@@ -16,11 +16,54 @@ namespace tilevis::app {
 namespace {
 
 struct CudaArgs {
-  std::string trace, out, tile = "32", precision = "exact", device = "gpu", occlusion_bin;
+  std::string trace, out, tile = "32", precision = "exact", device = "gpu", occlusion_bin, zbuffer, baselines = "on";
   uint32_t samples = 0, frame = 0, depth_bits = 24, runs = 20, warmup = 2;
+  double hw_raster_ms = 0;  // the GPU's own rasteriser on this frame (cuda_ref/tools/gl_raster), when measured
 };
 
 #if TILEVIS_HAVE_CUDA_REF
+nlohmann::json zbuffer_json(const cuda::ZBufferResult& z) {
+  nlohmann::json st = nlohmann::json::object();
+  for (const auto& s : z.stage_ms) st[s.name] = s.ms;
+  return {{"total_ms", z.total_ms}, {"stage_ms", st}, {"runs", z.runs}, {"host_syncs", z.host_syncs},
+          {"triangles_drawn", z.triangles_drawn}, {"bin_entries", z.bin_entries}, {"skipped", z.skipped},
+          {"bin", std::to_string(z.bin_w) + "x" + std::to_string(z.bin_h)}};
+}
+
+// --zbuffer tiled|naive: a z-buffer of the frame instead of the analytic pipeline (the
+// baselines of cuda_ref.h), in the canonical layout (ids and the covered samples).
+int run_zbuffer(const CudaArgs& a, const trace::Frame& frame, const cuda::CudaConfig& cfg) {
+  const auto t0 = std::chrono::steady_clock::now();
+  cuda::ZBufferResult z = cuda::run_cuda_zbuffer(frame, cfg, a.zbuffer == "naive" ? cuda::ZBufferKind::naive
+                                                                                   : cuda::ZBufferKind::tiled);
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  outputs::Result out;
+  out.width = z.width;
+  out.height = z.height;
+  out.samples = z.samples;
+  uint64_t covered = 0;
+  for (int32_t id : z.ids) covered += id >= 0 ? 1 : 0;
+  out.ids = std::move(z.ids);
+  nlohmann::json config = {{"zbuffer", a.zbuffer}, {"samples", z.samples}, {"depth_bits", a.depth_bits},
+                           {"device", a.device}};
+  out.stats = {{"tool", "cuda_zbuffer"},
+               {"trace", a.trace},
+               {"frame", a.frame},
+               {"config", config},
+               {"totals", {{"samples_covered", covered}}},
+               {"device", z.device_name},
+               {"total_ms", z.total_ms},
+               {"zbuffer", zbuffer_json(z)},
+               {"timing", a.device == "gpu" ? "CUDA events on the stream, median of runs after warm-up; every run a "
+                                              "frame the rasteriser sizes anew (host reads included)"
+                                            : "host clock (emulation)"},
+               {"host_seconds", secs}};
+  outputs::write_result(out, a.out);
+  fmt::print("cuda zbuffer ({}) {} frame {} on {}: {} triangles drawn, {} skipped; {:.3f} ms (median of {}) -> {}\n",
+             a.zbuffer, a.trace, a.frame, z.device_name, z.triangles_drawn, z.skipped, z.total_ms, z.runs, a.out);
+  return 0;
+}
+
 int run(const CudaArgs& a, const trace::Frame& frame, uint32_t tw, uint32_t th) {
   cuda::CudaConfig cfg;
   cfg.tile_w = tw;
@@ -42,6 +85,7 @@ int run(const CudaArgs& a, const trace::Frame& frame, uint32_t tw, uint32_t th) 
     cfg.runs = std::min<uint32_t>(cfg.runs, 1);
     cfg.warmup = 1;
   }
+  if (!a.zbuffer.empty()) return run_zbuffer(a, frame, cfg);
   const auto t0 = std::chrono::steady_clock::now();
   cuda::CudaResult r = cuda::run_cuda(frame, cfg);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -119,6 +163,31 @@ int run(const CudaArgs& a, const trace::Frame& frame, uint32_t tw, uint32_t th) 
                {"launch_us", r.launch_us},
                {"round_trip_us", r.round_trip_us},
                {"host_seconds", secs}};
+  // The z-buffers of the same frame on the same GPU, and the ratios to each (> 1: slower).
+  if (a.baselines == "on" && cfg.device == cuda::Device::gpu) {
+    cuda::CudaConfig zc = cfg;
+    const cuda::ZBufferResult tiled = cuda::run_cuda_zbuffer(frame, zc, cuda::ZBufferKind::tiled);
+    const cuda::ZBufferResult naive = cuda::run_cuda_zbuffer(frame, zc, cuda::ZBufferKind::naive);
+    uint64_t naive_diff = 0, exact_diff = 0;
+    for (size_t k = 0; k < tiled.ids.size(); ++k) naive_diff += tiled.ids[k] != naive.ids[k] ? 1 : 0;
+    // The analytic ids against the exact z-buffer's (exact analytic equals them where no
+    // planes cross; the truth comparison is tilevis compare's).
+    for (size_t k = 0; k < tiled.ids.size() && k < out.ids.size(); ++k) exact_diff += tiled.ids[k] != out.ids[k] ? 1 : 0;
+    out.stats["cuda_zbuffer"] = zbuffer_json(tiled);
+    out.stats["cuda_zbuffer"]["differs_from_this_run"] = exact_diff;
+    out.stats["naive_zbuffer"] = zbuffer_json(naive);
+    out.stats["naive_zbuffer"]["differs_from_cuda_zbuffer"] = naive_diff;
+    out.stats["cuda_zbuffer_ms"] = tiled.total_ms;
+    out.stats["naive_zbuffer_ms"] = naive.total_ms;
+    out.stats["cuda_zbuffer_ratio"] = tiled.total_ms > 0 ? r.total_ms / tiled.total_ms : 0.0;
+    out.stats["naive_zbuffer_ratio"] = naive.total_ms > 0 ? r.total_ms / naive.total_ms : 0.0;
+    fmt::print("  z-buffers: tiled exact {:.3f} ms (ratio {:.2f}), naive {:.3f} ms (ratio {:.2f}, {} samples differ)\n",
+               tiled.total_ms, r.total_ms / tiled.total_ms, naive.total_ms, r.total_ms / naive.total_ms, naive_diff);
+  }
+  if (a.hw_raster_ms > 0) {
+    out.stats["hw_raster_ms"] = a.hw_raster_ms;
+    out.stats["hw_raster_ratio"] = r.total_ms / a.hw_raster_ms;
+  }
   outputs::write_result(out, a.out);
   fmt::print("cuda {} frame {} at {}x{} tiles, {} on {}: {} triangles, {} silhouette edges, {} candidate pairs, "
              "{} clips, {} pieces ({} visible); {:.3f} ms (median of {}), peak {:.1f} MiB -> {}\n",
@@ -159,6 +228,17 @@ Command add_cuda_command(CLI::App& app) {
   cmd->add_option("--device", a->device, "gpu, or cpu: the kernels' logic on the host, one element at a time")
       ->check(CLI::IsMember({"gpu", "cpu"}))
       ->capture_default_str();
+  cmd->add_option("--zbuffer", a->zbuffer,
+                  "Run a z-buffer of the frame instead: tiled (exact, equal to the truth's ids) or naive (a thread "
+                  "per triangle, float depth, 64-bit atomicMin)")
+      ->check(CLI::IsMember({"tiled", "naive"}));
+  cmd->add_option("--baselines", a->baselines,
+                  "on: also time both z-buffers on the same GPU and write cuda_zbuffer_ratio, naive_zbuffer_ratio")
+      ->check(CLI::IsMember({"on", "off"}))
+      ->capture_default_str();
+  cmd->add_option("--hw-raster-ms", a->hw_raster_ms,
+                  "The GPU's own rasteriser's time for this frame (cuda_ref/tools/gl_raster): writes hw_raster_ratio")
+      ->check(CLI::PositiveNumber);
   return {cmd, [a]() {
             uint32_t tw = 0, th = 0;
             parse_tile(a->tile, tw, th);

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "tilevis/cuda_ref.h"
+#include "visibility/truth.h"
 #include "visibility/golden.h"
 #include "visibility/setup.h"
 
@@ -18,6 +19,12 @@ struct Diff {
   std::string totals;
   double agreement() const { return samples_compared ? 1.0 - double(id_mismatches) / double(samples_compared) : 1.0; }
 };
+
+// The z-buffer truth's ids (exact depth), for the CUDA z-buffer rasterisers.
+inline std::vector<int32_t> truth_ids_of(const trace::Frame& f) {
+  const vis::Setup s = vis::primitive_setup(f, {});
+  return vis::zbuffer_truth(s, {}).ids;
+}
 
 inline vis::GoldenResult golden_of(const trace::Frame& f, uint32_t tile_w, uint32_t tile_h) {
   vis::Setup s = vis::primitive_setup(f, {});

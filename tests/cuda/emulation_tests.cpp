@@ -143,6 +143,36 @@ TEST(Emulation, RejectsBadConfig) {
   EXPECT_THROW(cuda::run_cuda(f, cfg), std::runtime_error);
 }
 
+// The tiled z-buffer (cuda_ref.h ZBufferKind::tiled), its kernels' logic on the host in a
+// scrambled bin order: the z-buffer truth's ids, sample for sample, at 1 and 4 samples (bins of
+// 16x16 and 8x8 pixels), near the eye too. The naive one only runs: its ids are measured.
+class ZBufferEmulation : public ::testing::TestWithParam<std::tuple<std::string, uint32_t>> {};
+
+TEST_P(ZBufferEmulation, TiledEqualsTruth) {
+  const auto& [name, samples] = GetParam();
+  const trace::Frame f = ct::scene(name, samples);
+  auto cfg = ct::config(cuda::Device::cpu, cuda::Precision::exact, 32, 32);
+  cfg.shuffle_cpu = true;
+  const auto z = cuda::run_cuda_zbuffer(f, cfg, cuda::ZBufferKind::tiled);
+  const std::vector<int32_t> truth = ct::truth_ids_of(f);
+  ASSERT_EQ(z.ids.size(), truth.size());
+  uint64_t covered = 0, differ = 0;
+  for (size_t k = 0; k < truth.size(); ++k) {
+    covered += truth[k] >= 0 ? 1 : 0;
+    differ += truth[k] != z.ids[k] ? 1 : 0;
+  }
+  EXPECT_GT(covered, 0u);
+  EXPECT_EQ(differ, 0u);
+  EXPECT_GT(z.bin_entries, 0u);
+  const auto n = cuda::run_cuda_zbuffer(f, cfg, cuda::ZBufferKind::naive);
+  ASSERT_EQ(n.ids.size(), truth.size());
+  EXPECT_GT(n.triangles_drawn, 0u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, ZBufferEmulation,
+                         ::testing::Combine(::testing::Values("cubes", "mixed", "coplanar", "near_eye", "near_eye_pair"),
+                                            ::testing::Values(1u, 4u)));
+
 #if TILEVIS_HAVE_SCENE
 // A shipped mesh scene (the Stanford bunny) at a small viewport, built by the scene generator.
 TEST(Emulation, ShippedBunnyAgrees) {
