@@ -3,11 +3,14 @@
 # SystemC, GLM, assimp, CGAL, Boost, no network). Run from the repository root with .gpu/ carried
 # along (made here-and-now by cuda_ref/prepare_gpu_run.sh on a full build machine):
 #
-#   bash cuda_ref/gpu_run.sh [all | build | test | cross | sanitize | report]...
+#   bash cuda_ref/gpu_run.sh [all | build | test | baselines | cross | sanitize | report]...
 #
 #   build     unpack .gpu/debs into /tmp/sysroot (dpkg -x), configure a TILEVIS_MINIMAL Release
 #             build with Ninja in build-gpu pointed at it, build, unpack .gpu/traces.tar.xz
 #   test      ctest: cuda_ref's GPU tests (label gpu; they must run, not skip) and its host tests
+#   baselines every scene's z-buffers: the exact truth (CPU), OpenGL through EGL (gl_raster; .gl
+#             carried: the loader .debs, unpacked into / as the device README says), the CUDA
+#             z-buffers tiled (exact) and naive, each compared with the truth
 #   cross     every scene at tiles 16, 32, 64: golden on the CPU (in parallel, first), then
 #             tilevis cuda exact and float on the GPU one at a time (--runs 20 after warm-up),
 #             tilevis compare of each against golden and of float against exact
@@ -125,7 +128,9 @@ phase_cross() {
       local d="$WORK/$s/t$t"
       for p in exact float; do
         if [ ! -f "$d/$p/stats.json" ]; then
+          local hw; hw="$(hw_ms "$s")"
           "$BIN" cuda "$TRACES/$s.tvt" --tile "$t" --precision "$p" --runs "$RUNS" --device "$DEVICE" -o "$d/$p" \
+            ${hw:+--hw-raster-ms "$hw"} \
             >"$LOGS/cuda_${s}_${t}_$p.log" 2>&1 || { say "cuda $s $t $p failed: $(tail -n 1 "$LOGS/cuda_${s}_${t}_$p.log")"; continue; }
         fi
         if [ -f "$d/golden/stats.json" ] && [ ! -f "$d/cmp_$p/compare.json" ]; then
@@ -144,6 +149,49 @@ phase_cross() {
       say "$s at $t done ($(elapsed))"
     done
   done
+}
+
+# The z-buffer baselines of every scene (1 sample, as traced): the exact truth (CPU, all at
+# once, before any timing), the GPU's own rasteriser through OpenGL/EGL (gl_raster, its ids
+# classified against the truth) when a GL driver loads, and the CUDA z-buffers (tiled exact,
+# naive) compared with the truth. The cross phase passes the GL time on (hw_raster_ratio).
+phase_baselines() {
+  [ -x "$BIN" ] || die "not built: run the build phase first"
+  local s jobs=()
+  if [ -d .gl ] && ! ldconfig -p | grep -q libEGL.so.1; then
+    for f in .gl/*.deb; do dpkg -x "$f" /; done
+    ldconfig
+  fi
+  local vendor=/usr/local/nvidia/share/glvnd/egl_vendor.d/10_nvidia.json
+  [ -f "$vendor" ] && export __EGL_VENDOR_LIBRARY_FILENAMES="$vendor"
+  for s in $(scenes); do [ -f "$WORK/$s/truth/stats.json" ] || jobs+=("$s"); done
+  if [ ${#jobs[@]} -gt 0 ]; then
+    say "truth: ${#jobs[@]} runs on $JOBS cores"
+    printf '%s\n' "${jobs[@]}" | xargs -P "$JOBS" -L 1 bash -c \
+      '"$0" golden "$1/$4.tvt" --truth -o "$2/$4/truth" >"$3/truth_$4.log" 2>&1 || echo "truth $4 failed" >&2' \
+      "$BIN" "$TRACES" "$WORK" "$LOGS" 2>&1 | tee -a "$LOGS/errors.log" >&2 || true
+  fi
+  for s in $(scenes); do
+    local d="$WORK/$s"
+    if [ ! -f "$d/gl/stats.json" ]; then
+      "$BUILD/cuda_ref/gl_raster" "$TRACES/$s.tvt" --runs "$RUNS" --truth "$d/truth" -o "$d/gl" >"$LOGS/gl_$s.log" 2>&1 ||
+        say "gl_raster $s: $(tail -n 1 "$LOGS/gl_$s.log")"
+    fi
+    for z in tiled naive; do
+      if [ ! -f "$d/zb_$z/stats.json" ]; then
+        "$BIN" cuda "$TRACES/$s.tvt" --zbuffer "$z" --runs "$RUNS" --device "$DEVICE" -o "$d/zb_$z" \
+          >"$LOGS/zb_${s}_$z.log" 2>&1 || say "zbuffer $z $s failed: $(tail -n 1 "$LOGS/zb_${s}_$z.log")"
+      fi
+      if [ -f "$d/zb_$z/stats.json" ] && [ -f "$d/truth/stats.json" ] && [ ! -f "$d/cmp_zb_$z/compare.json" ]; then
+        "$BIN" compare "$d/truth" "$d/zb_$z" -o "$d/cmp_zb_$z" >/dev/null 2>&1 || say "compare zbuffer $z $s failed"
+      fi
+    done
+    say "$s baselines: $(grep -ho '"hw_raster_ms": [0-9.e-]*' "$d/gl/stats.json" 2>/dev/null || echo 'no GL'); $(grep -ho '"mismatched_samples": [0-9]*' "$d/cmp_zb_tiled/compare.json" 2>/dev/null || echo 'no tiled compare') ($(elapsed))"
+  done
+}
+
+hw_ms() {  # the GL time of a scene, or nothing
+  { grep -ho '"hw_raster_ms": [0-9.e+-]*' "$WORK/$1/gl/stats.json" 2>/dev/null || true; } | head -n 1 | sed 's/.*: //'
 }
 
 phase_sanitize() {
@@ -186,12 +234,13 @@ phases=("$@")
 [ ${#phases[@]} -gt 0 ] || phases=(all)
 for ph in "${phases[@]}"; do
   case "$ph" in
-    all) phase_build; phase_test; phase_cross; phase_sanitize; phase_report ;;
+    all) phase_build; phase_test; phase_baselines; phase_cross; phase_sanitize; phase_report ;;
+    baselines) phase_baselines ;;
     build) phase_build ;;
     test) phase_test ;;
     cross) phase_cross ;;
     sanitize) phase_sanitize ;;
     report) phase_report ;;
-    *) die "unknown phase $ph (all, build, test, cross, sanitize, report)" ;;
+    *) die "unknown phase $ph (all, build, test, baselines, cross, sanitize, report)" ;;
   esac
 done

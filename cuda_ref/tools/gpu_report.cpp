@@ -117,6 +117,10 @@ int main(int argc, char** argv) {
         e["tile_counter_mismatches"] = cmp.is_null() ? json(nullptr) : cmp["tile_counter_mismatches"];
         e["area_mismatches"] = cmp.is_null() ? json(nullptr) : cmp["area_mismatches"];
         e["max_area_rel_error"] = cmp.is_null() ? json(nullptr) : cmp["max_area_rel_error"];
+        // Ratios to the z-buffers of the same frame on the same GPU (> 1: slower than they).
+        for (const char* k : {"cuda_zbuffer_ms", "cuda_zbuffer_ratio", "naive_zbuffer_ms", "naive_zbuffer_ratio",
+                              "hw_raster_ms", "hw_raster_ratio"})
+          e[k] = st.value(k, json(nullptr));
         e["peak_device_bytes"] = st["peak_device_bytes"];
         e["retries"] = st["retries"];
         e["upload_ms"] = st["upload_ms"];
@@ -144,6 +148,26 @@ int main(int argc, char** argv) {
         report["entries"].push_back(e);
       }
     }
+  }
+
+  // Per scene, the z-buffer baselines (gpu_run.sh baselines): the GL's and the CUDA z-buffers'
+  // times and their ids against the exact truth.
+  report["baselines"] = json::array();
+  for (const auto& sd : scenes) {
+    const json gl = load(sd / "gl/stats.json"), zt = load(sd / "zb_tiled/stats.json"), zn = load(sd / "zb_naive/stats.json");
+    const json ct = load(sd / "cmp_zb_tiled/compare.json"), cn = load(sd / "cmp_zb_naive/compare.json");
+    json b = {{"scene", sd.filename().string()}};
+    b["hw_raster_ms"] = gl.is_null() ? json(nullptr) : gl.value("hw_raster_ms", json(nullptr));
+    b["gl_renderer"] = gl.is_null() ? json(nullptr) : gl.value("renderer", json(nullptr));
+    b["gl_vs_truth"] = gl.is_null() ? json(nullptr) : gl.value("vs_truth", json(nullptr));
+    b["cuda_zbuffer_ms"] = zt.is_null() ? json(nullptr) : zt["total_ms"];
+    b["cuda_zbuffer_stage_ms"] = zt.is_null() ? json(nullptr) : zt["zbuffer"]["stage_ms"];
+    b["cuda_zbuffer_vs_truth_mismatched"] = ct.is_null() ? json(nullptr) : ct["mismatched_samples"];
+    b["cuda_zbuffer_vs_truth_compared"] = ct.is_null() ? json(nullptr) : ct["samples_compared"];
+    b["naive_zbuffer_ms"] = zn.is_null() ? json(nullptr) : zn["total_ms"];
+    b["naive_zbuffer_skipped"] = zn.is_null() ? json(nullptr) : zn["zbuffer"]["skipped"];
+    b["naive_zbuffer_vs_truth_mismatched"] = cn.is_null() ? json(nullptr) : cn["mismatched_samples"];
+    report["baselines"].push_back(b);
   }
 
   fs::create_directories(out);
@@ -174,6 +198,34 @@ int main(int argc, char** argv) {
        << (std::isnan(agree) ? "n/a" : fmt(100 * agree, 4) + " %") << " | " << e["tile_counter_mismatches"].dump()
        << " | " << fve << " | " << fmt(num(e, "peak_device_bytes", 0) / 1048576.0, 1) << " | "
        << fmt(num(e["floor"], "bandwidth_ms"), 4) << " / " << fmt(num(e["floor"], "launch_and_sync_ms"), 3) << " |\n";
+  }
+  md << "\n## Z-buffer baselines on the same GPU (1080p or the trace's viewport, 1 sample)\n\n"
+        "`gl`: the GPU's own rasteriser through OpenGL/EGL (GL_TIME_ELAPSED around clear + draws), ids against the "
+        "exact truth, differences classified (edge_tie: the sample lies on an edge, where GL's fill rule is not "
+        "top-left; edge_snap: within one sub-pixel unit of one, GL's own snap; depth_tie: exact depths within 2^-20; "
+        "other). `tiled`: the exact CUDA z-buffer (setup, bins, a thread per sample; every run a new frame, host "
+        "reads included). `naive`: a thread per triangle, float depth, 64-bit atomicMin. Mismatches are against "
+        "the truth.\n\n"
+        "| scene | gl ms | gl mismatches (edge_tie / edge_snap / depth_tie / other) | tiled ms | tiled mismatches | "
+        "naive ms | naive mismatches (skipped tris) |\n|---|---|---|---|---|---|---|\n";
+  for (const auto& b : report["baselines"]) {
+    const json& v = b["gl_vs_truth"];
+    md << "| " << b["scene"].get<std::string>() << " | " << fmt(num(b, "hw_raster_ms")) << " | "
+       << (v.is_object() ? v["mismatched_samples"].dump() + " of " + v["samples_compared"].dump() + " (" +
+                               v["edge_tie"].dump() + " / " + v["edge_snap"].dump() + " / " + v["depth_tie"].dump() +
+                               " / " + v["other"].dump() + ")"
+                         : std::string("n/a"))
+       << " | " << fmt(num(b, "cuda_zbuffer_ms")) << " | " << b["cuda_zbuffer_vs_truth_mismatched"].dump() << " of "
+       << b["cuda_zbuffer_vs_truth_compared"].dump() << " | " << fmt(num(b, "naive_zbuffer_ms")) << " | "
+       << b["naive_zbuffer_vs_truth_mismatched"].dump() << " (" << b["naive_zbuffer_skipped"].dump() << ") |\n";
+  }
+  md << "\n## Ratios at 32x32 tiles (analytic time / baseline time; > 1: slower)\n\n"
+        "| scene | precision | total ms | hw_raster_ratio | cuda_zbuffer_ratio | naive_zbuffer_ratio |\n|---|---|---|---|---|---|\n";
+  for (const auto& e : report["entries"]) {
+    if (e.contains("error") || e["tile"] != 32) continue;
+    md << "| " << e["scene"].get<std::string>() << " | " << e["precision"].get<std::string>() << " | "
+       << fmt(num(e, "total_ms")) << " | " << fmt(num(e, "hw_raster_ratio"), 2) << " | "
+       << fmt(num(e, "cuda_zbuffer_ratio"), 2) << " | " << fmt(num(e, "naive_zbuffer_ratio"), 2) << " |\n";
   }
   md << "\n## Per stage at 32x32 tiles (ms) beside SVGPU Table 1 (GTX 980, 1,024 bins)\n\n"
         "From the graph with an event at every stage boundary (its total: `probed`). The stages are the main "
