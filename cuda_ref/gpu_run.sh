@@ -3,7 +3,7 @@
 # SystemC, GLM, assimp, CGAL, Boost, no network). Run from the repository root with .gpu/ carried
 # along (made here-and-now by cuda_ref/prepare_gpu_run.sh on a full build machine):
 #
-#   bash cuda_ref/gpu_run.sh [all | build | test | baselines | cross | sanitize | report]...
+#   bash cuda_ref/gpu_run.sh [all | build | test | baselines | cross | orbit | sanitize | report]...
 #
 #   build     unpack .gpu/debs into /tmp/sysroot (dpkg -x), configure a TILEVIS_MINIMAL Release
 #             build with Ninja in build-gpu pointed at it, build, unpack .gpu/traces.tar.xz
@@ -14,6 +14,7 @@
 #   cross     every scene at tiles 16, 32, 64: golden on the CPU (in parallel, first), then
 #             tilevis cuda exact and float on the GPU one at a time (--runs 20 after warm-up),
 #             tilevis compare of each against golden and of float against exact
+#   orbit     the 8-frame bunny orbit: GL, z-buffers and analytic (32x32, both precisions) per frame
 #   sanitize  compute-sanitizer memcheck and racecheck on a small trace, both precisions
 #   report    $OUT/<device>.json and .md (reports/cuda/ without $OUT), the table printed last
 #
@@ -21,7 +22,8 @@
 # compare.json) and logs.tar.xz. Phases resume: results already in build-gpu/work are kept, so a run cut short by a time limit
 # continues where it stopped. Environment: OUT, TILEVIS_GPU_SCENES (names, default: all),
 # TILEVIS_GPU_TILES (default "16 32 64"), TILEVIS_GPU_RUNS (default 20), JOBS (default nproc),
-# TILEVIS_GPU_DEVICE=cpu (the host emulation: tries the script on a machine without a GPU).
+# TILEVIS_GPU_DEVICE=cpu (the host emulation: tries the script on a machine without a GPU),
+# TILEVIS_TEST_LABEL (ctest labels, default "gpu|cuda"; "gpu" leaves the host emulation to CI).
 set -euo pipefail
 
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -72,7 +74,9 @@ phase_build() {
   grep -E '^(nlohmann_json|fmt|CLI11|GTest|OpenEXR|Imath)_DIR:' "$BUILD/CMakeCache.txt" >"$WORK/meta/deps.txt" || true
   say "dependencies: $(tr '\n' ' ' <"$WORK/meta/deps.txt")"
   say "build ($JOBS jobs)"
-  cmake --build "$BUILD" -j "$JOBS" >"$LOGS/build.log" 2>&1 || { grep -E "error|FAILED" "$LOGS/build.log" | head -n 30 >&2; die "build failed"; }
+  # Only what the phases run: the tool, cuda_ref's tests (labels gpu, cuda) and tools.
+  cmake --build "$BUILD" -j "$JOBS" --target tilevis cuda_gpu_tests cuda_emulation_tests cuda_predicate_tests \
+        gl_raster cuda_gpu_report >"$LOGS/build.log" 2>&1 || { grep -E "error|FAILED" "$LOGS/build.log" | head -n 30 >&2; die "build failed"; }
   [ -x "$BIN" ] || die "no $BIN after the build"
   # cuda_ref on its own (its CMakeLists.txt as a project): CUDA, CMake and the trace reader only.
   cmake -S "$ROOT/cuda_ref" -B "$BUILD-standalone" -G Ninja -DCMAKE_BUILD_TYPE=Release \
@@ -92,7 +96,7 @@ phase_build() {
 phase_test() {
   say "ctest: cuda_ref GPU and host tests"
   local log="$LOGS/ctest.log" rc=0
-  ctest --test-dir "$BUILD" -L 'gpu|cuda' -j 4 --output-on-failure >"$log" 2>&1 || rc=$?
+  ctest --test-dir "$BUILD" -L "${TILEVIS_TEST_LABEL:-gpu|cuda}" -j 4 --output-on-failure >"$log" 2>&1 || rc=$?
   local summary skipped
   summary="$(grep -E "tests passed|tests failed" "$log" | tail -n 1 || true)"
   skipped="$(grep -c "Skipped" "$log" || true)"
@@ -190,6 +194,28 @@ phase_baselines() {
   done
 }
 
+# The 8-frame orbit (orbit/bunny_orbit.tvt): every frame through GL, the CUDA z-buffers and the
+# analytic pipeline at 32x32 in both precisions. Per frame, the graph replay of the known frame
+# and the stream run (a frame the pipeline sizes anew on the host) are both reported.
+phase_orbit() {
+  [ -x "$BIN" ] || die "not built: run the build phase first"
+  local t="$TRACES/orbit/bunny_orbit.tvt" k p
+  [ -f "$t" ] || { say "no orbit trace (prepare_gpu_run.sh makes it)"; return; }
+  local vendor=/usr/local/nvidia/share/glvnd/egl_vendor.d/10_nvidia.json
+  [ -f "$vendor" ] && export __EGL_VENDOR_LIBRARY_FILENAMES="$vendor"
+  for k in 0 1 2 3 4 5 6 7; do
+    local d="$WORK/orbit/bunny/f$k"
+    mkdir -p "$d"
+    [ -f "$d/gl/stats.json" ] || "$BUILD/cuda_ref/gl_raster" "$t" --frame "$k" --runs "$RUNS" -o "$d/gl" >"$LOGS/orbit_gl_$k.log" 2>&1 || true
+    local hw; hw="$({ grep -ho '"hw_raster_ms": [0-9.e+-]*' "$d/gl/stats.json" 2>/dev/null || true; } | sed 's/.*: //')"
+    for p in exact float; do
+      [ -f "$d/$p/stats.json" ] || "$BIN" cuda "$t" --frame "$k" --tile 32 --precision "$p" --runs "$RUNS" \
+        ${hw:+--hw-raster-ms "$hw"} -o "$d/$p" >"$LOGS/orbit_${p}_$k.log" 2>&1 || say "orbit frame $k $p failed"
+    done
+  done
+  say "orbit done ($(elapsed))"
+}
+
 hw_ms() {  # the GL time of a scene, or nothing
   { grep -ho '"hw_raster_ms": [0-9.e+-]*' "$WORK/$1/gl/stats.json" 2>/dev/null || true; } | head -n 1 | sed 's/.*: //'
 }
@@ -200,9 +226,11 @@ phase_sanitize() {
   command -v compute-sanitizer >/dev/null || { echo "compute-sanitizer not found" >"$WORK/meta/sanitizer.txt"; return; }
   : >"$WORK/meta/sanitizer.txt.tmp"
   for tool in memcheck racecheck; do
-    for p in exact float; do
+    for p in exact float zb_tiled zb_naive; do
       local log="$LOGS/sanitizer_${tool}_$p.log" rc=0
-      compute-sanitizer --tool "$tool" --error-exitcode 3 "$BIN" cuda "$small" --tile 32 --precision "$p" --runs 1 \
+      local args=(--tile 32 --precision "$p" --baselines off)
+      case "$p" in zb_*) args=(--zbuffer "${p#zb_}") ;; esac
+      compute-sanitizer --tool "$tool" --error-exitcode 3 "$BIN" cuda "$small" "${args[@]}" --runs 1 \
         -o "$WORK/sanitize/${tool}_$p" >"$log" 2>&1 || rc=$?
       local line
       line="$(grep -E "ERROR SUMMARY|RACECHECK SUMMARY" "$log" | tail -n 1 || true)"
@@ -234,13 +262,14 @@ phases=("$@")
 [ ${#phases[@]} -gt 0 ] || phases=(all)
 for ph in "${phases[@]}"; do
   case "$ph" in
-    all) phase_build; phase_test; phase_baselines; phase_cross; phase_sanitize; phase_report ;;
+    all) phase_build; phase_test; phase_baselines; phase_cross; phase_orbit; phase_sanitize; phase_report ;;
     baselines) phase_baselines ;;
+    orbit) phase_orbit ;;
     build) phase_build ;;
     test) phase_test ;;
     cross) phase_cross ;;
     sanitize) phase_sanitize ;;
     report) phase_report ;;
-    *) die "unknown phase $ph (all, build, test, baselines, cross, sanitize, report)" ;;
+    *) die "unknown phase $ph (all, build, test, baselines, cross, orbit, sanitize, report)" ;;
   esac
 done

@@ -49,6 +49,19 @@ done
 say "trace dragon at 320x240 (sanitizers)"
 "$BIN" trace traces/scenes/dragon.json --viewport 320x240 -q -o .gpu/traces/small/dragon_320x240.tvt
 
+# An 8-frame orbit of the bunny (the camera turning 360 degrees about y): per-frame times.
+say "trace bunny orbit (8 frames)"
+mkdir -p .gpu/traces/orbit
+python3 - traces/scenes/bunny.json .gpu/bunny_orbit.json <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1]))
+s["camera"]["orbit"] = {"frames": 8, "degrees": 360, "axis": [0, 1, 0]}
+s["description"] = "The bunny scene seen from 8 cameras orbiting it (a frame per 45 degrees)."
+json.dump(s, open(sys.argv[2], "w"), indent=1)
+PY
+"$BIN" trace .gpu/bunny_orbit.json -q -o .gpu/traces/orbit/bunny_orbit.tvt || die "tilevis trace (orbit) failed"
+rm -f .gpu/bunny_orbit.json
+
 commit="$(git rev-parse HEAD 2>/dev/null || echo unknown)"
 git diff --quiet HEAD -- cuda_ref model traces tests 2>/dev/null || commit="$commit+local-changes"
 echo "$commit" > .gpu/commit.txt
