@@ -394,6 +394,7 @@ bool run_once(Pipeline<P>& p, Timer& t) {
   p.ex.wait(cleared);
   stage_raster(p, Pass::clipped);
   p.ex.merge_all();
+  if (p.cfg.hybrid) stage_hybrid(p);
   t.mark(7);
   p.ex.queue_checks();
   p.ex.sync();
@@ -580,6 +581,16 @@ CudaResult run(const trace::Frame& frame, const CudaConfig& cfg) {
   ex.download(rows.data(), p.tile_rows.get(), rows.size() * 8);
   uint64_t c[kCounterCount];
   ex.download(c, p.counters.get(), sizeof(c));
+  if (cfg.hybrid) {
+    r.per_pixel_cause.resize(p.n_tiles);
+    r.crossing_triangles.resize(p.n_tiles);
+    r.detection_screens.resize(p.n_tiles);
+    r.detection_tests.resize(p.n_tiles);
+    ex.download(r.per_pixel_cause.data(), p.hyb_cause.get(), p.n_tiles * 4ull);
+    ex.download(r.crossing_triangles.data(), p.hyb_crossing.get(), p.n_tiles * 4ull);
+    ex.download(r.detection_screens.data(), p.hyb_screens.get(), p.n_tiles * 8ull);
+    ex.download(r.detection_tests.data(), p.hyb_tests.get(), p.n_tiles * 8ull);
+  }
   r.download_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 
   r.tiles_x = p.tiles_x;

@@ -184,6 +184,12 @@ struct Pipeline {
   Buf<uint64_t> occ_unit_off;
   Buf<double> piece_area;
 
+  // Hybrid (hybrid.cu): per tile its verdict and detection work; per occluder position the
+  // detector's scratch; per item its owned samples in a per-pixel tile.
+  Buf<uint32_t> hyb_cause, hyb_crossing, hyb_range, hyb_active, hyb_owned;
+  Buf<uint64_t> hyb_screens, hyb_tests;
+  Buf<uint8_t> hyb_flag;
+
   // Outputs.
   Buf<int32_t> ids;
   Buf<double> area;                // per trace triangle
@@ -216,6 +222,10 @@ struct Pipeline {
     piece_area.bind(&e);
     ids.bind(&e);
     area.bind(&e);
+    for (auto* b : {&hyb_cause, &hyb_crossing, &hyb_range, &hyb_active, &hyb_owned}) b->bind(&e);
+    hyb_screens.bind(&e);
+    hyb_tests.bind(&e);
+    hyb_flag.bind(&e);
   }
 };
 
@@ -264,6 +274,8 @@ void raster_begin(Pipeline<P>& p);  // clears the id buffer, before either raste
 template <class P>
 void stage_raster(Pipeline<P>& p, Pass pass);
 template <class P>
-void stage_fold(Pipeline<P>& p);  // after both occlusion passes: the visible area per triangle
+void stage_fold(Pipeline<P>& p);
+template <class P>
+void stage_hybrid(Pipeline<P>& p);  // hybrid mode, after every other stage: verdicts, per-pixel tiles, areas  // after both occlusion passes: the visible area per triangle
 
 }  // namespace tilevis::cuda

@@ -19,6 +19,9 @@ struct CudaArgs {
   std::string trace, out, tile = "32", precision = "exact", device = "gpu", occlusion_bin, zbuffer, baselines = "on";
   uint32_t samples = 0, frame = 0, depth_bits = 24, runs = 20, warmup = 2;
   double hw_raster_ms = 0;  // the GPU's own rasteriser on this frame (cuda_ref/tools/gl_raster), when measured
+  std::string mode = "analytic";
+  uint64_t pair_budget = 0;
+  std::vector<uint32_t> list_capacity = {512, 256};
 };
 
 #if TILEVIS_HAVE_CUDA_REF
@@ -74,6 +77,10 @@ int run(const CudaArgs& a, const trace::Frame& frame, uint32_t tw, uint32_t th) 
   cfg.device = a.device == "cpu" ? cuda::Device::cpu : cuda::Device::gpu;
   cfg.runs = a.runs;
   cfg.warmup = a.warmup;
+  cfg.hybrid = a.mode == "hybrid";
+  cfg.pair_budget = a.pair_budget;
+  cfg.list_triangles = a.list_capacity.at(0);
+  cfg.list_edges = a.list_capacity.at(1);
   if (cfg.device == cuda::Device::gpu) {
     std::string why;
     if (!cuda::cuda_available(&why)) {
@@ -99,6 +106,36 @@ int run(const CudaArgs& a, const trace::Frame& frame, uint32_t tw, uint32_t th) 
   out.tiles.resize(tw, th, r.width, r.height, vis::TileCounters::columns());
   if (out.tiles.rows.size() != r.tiles.size()) throw std::runtime_error("cuda: tile table size mismatch");
   for (size_t t = 0; t < r.tiles.size(); ++t) r.tiles[t].write(out.tiles.rows[t].data());
+  // Hybrid: golden's extra tiles.csv columns (hybrid_resolver.cpp) and its fallback totals.
+  nlohmann::json fallback;
+  if (cfg.hybrid) {
+    std::vector<std::string> cols = vis::TileCounters::columns();
+    for (const char* c : {"per_pixel", "per_pixel_cause", "detection_screens", "detection_tests"}) cols.push_back(c);
+    outputs::TileTable t;
+    t.resize(tw, th, r.width, r.height, cols);
+    uint64_t tiles = 0, by_cause[4] = {0, 0, 0, 0}, samples = 0, triangles = 0, crossing = 0, screens = 0, tests = 0;
+    for (size_t k = 0; k < r.tiles.size(); ++k) {
+      r.tiles[k].write(t.rows[k].data());
+      const uint32_t cause = r.per_pixel_cause.at(k);
+      const size_t n = vis::TileCounters::kCount;
+      t.rows[k][n] = cause != 0;
+      t.rows[k][n + 1] = cause;
+      t.rows[k][n + 2] = int64_t(r.detection_screens[k]);
+      t.rows[k][n + 3] = int64_t(r.detection_tests[k]);
+      screens += r.detection_screens[k];
+      tests += r.detection_tests[k];
+      if (cause == 0) continue;
+      ++tiles;
+      ++by_cause[cause & 3];
+      samples += uint64_t(r.tiles[k].samples_covered);
+      triangles += uint64_t(r.tiles[k].triangles);
+      crossing += r.crossing_triangles[k];
+    }
+    out.tiles = std::move(t);
+    fallback = {{"tiles", tiles},           {"tiles_interpenetration", by_cause[1]}, {"tiles_non_opaque", by_cause[2]},
+                {"tiles_budget", by_cause[3]}, {"samples", samples},             {"triangles", triangles},
+                {"triangles_crossing", crossing}, {"detection_screens", screens},  {"detection_tests", tests}};
+  }
   nlohmann::json totals = {{"triangles_in", r.triangles_in},
                            {"triangles_front", r.triangles_front},
                            {"triangles_back", r.triangles_back},
@@ -125,6 +162,7 @@ int run(const CudaArgs& a, const trace::Frame& frame, uint32_t tw, uint32_t th) 
   // Shader invocations (once per pixel and triangle) are the covered samples at 1 sample per
   // pixel; with more samples the CUDA reference does not count them (golden does).
   if (r.samples == 1) totals["fragments_shaded"] = r.samples_covered;
+  if (cfg.hybrid) totals["per_pixel_fallback"] = fallback;
   auto stage_json = [](const std::vector<tilevis::cuda::StageTime>& v) {
     nlohmann::json j = nlohmann::json::object();
     for (const auto& s : v) j[s.name] = s.ms;
@@ -133,6 +171,11 @@ int run(const CudaArgs& a, const trace::Frame& frame, uint32_t tw, uint32_t th) 
   nlohmann::json config = visibility_config(tw, th, cfg.occlusion_bin_w, cfg.occlusion_bin_h, r.samples, a.depth_bits);
   config["precision"] = a.precision;
   config["device"] = a.device;
+  config["mode"] = a.mode;
+  if (cfg.hybrid) {
+    config["pair_budget"] = a.pair_budget;
+    config["list_capacity"] = a.list_capacity;
+  }
   out.stats = {{"tool", "cuda"},
                {"trace", a.trace},
                {"frame", a.frame},
@@ -227,6 +270,19 @@ Command add_cuda_command(CLI::App& app) {
   cmd->add_option("--depth-bits", a->depth_bits, "Bits of snapped depth")->check(CLI::Range(1, 24))->capture_default_str();
   cmd->add_option("--device", a->device, "gpu, or cpu: the kernels' logic on the host, one element at a time")
       ->check(CLI::IsMember({"gpu", "cpu"}))
+      ->capture_default_str();
+  cmd->add_option("--mode", a->mode,
+                  "analytic: SVGPU in every tile; hybrid: golden --mode hybrid's tiles go per pixel (interpenetration, "
+                  "non-opaque content, work over --pair-budget or the lists)")
+      ->check(CLI::IsMember({"analytic", "hybrid"}))
+      ->capture_default_str();
+  cmd->add_option("--pair-budget", a->pair_budget,
+                  "With --mode hybrid: a tile whose triangles x edges exceed this goes per pixel (0: no budget)")
+      ->capture_default_str();
+  cmd->add_option("--list-capacity", a->list_capacity,
+                  "With --mode hybrid: TRIANGLES EDGES the on-chip lists hold; a tile with more goes per pixel (0: no limit)")
+      ->expected(2)
+      ->delimiter(',')
       ->capture_default_str();
   cmd->add_option("--zbuffer", a->zbuffer,
                   "Run a z-buffer of the frame instead: tiled (exact, equal to the truth's ids) or naive (a thread "

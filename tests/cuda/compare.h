@@ -26,11 +26,13 @@ inline std::vector<int32_t> truth_ids_of(const trace::Frame& f) {
   return vis::zbuffer_truth(s, {}).ids;
 }
 
-inline vis::GoldenResult golden_of(const trace::Frame& f, uint32_t tile_w, uint32_t tile_h) {
+inline vis::GoldenResult golden_of(const trace::Frame& f, uint32_t tile_w, uint32_t tile_h,
+                                   const std::string& mode = "analytic") {
   vis::Setup s = vis::primitive_setup(f, {});
   vis::GoldenConfig gc;
   gc.tile_w = tile_w;
   gc.tile_h = tile_h;
+  gc.mode = mode;
   return vis::golden_visibility(s, gc);
 }
 
@@ -45,8 +47,15 @@ inline Diff diff(const vis::GoldenResult& g, const cuda::CudaResult& c) {
   for (size_t t = 0; t < g.tiles.rows.size(); ++t)
     for (size_t k = 0; k < g.tiles.rows[t].size(); ++k) {
       ++d.tile_cells;
-      const int64_t cv =
-          t < c.tiles.size() && k < vis::TileCounters::kCount ? c.tiles[t].*vis::TileCounters::kFields[k].second : -1;
+      int64_t cv = t < c.tiles.size() && k < vis::TileCounters::kCount ? c.tiles[t].*vis::TileCounters::kFields[k].second : -1;
+      // Hybrid's columns (per_pixel, per_pixel_cause, detection_screens, detection_tests).
+      const std::string& col = g.tiles.columns[k];
+      if (k >= vis::TileCounters::kCount && t < c.per_pixel_cause.size()) {
+        if (col == "per_pixel") cv = c.per_pixel_cause[t] != 0;
+        if (col == "per_pixel_cause") cv = c.per_pixel_cause[t];
+        if (col == "detection_screens") cv = int64_t(c.detection_screens[t]);
+        if (col == "detection_tests") cv = int64_t(c.detection_tests[t]);
+      }
       if (g.tiles.rows[t][k] == cv) continue;
       if (!d.tile_cell_mismatches)
         d.first_tile_mismatch = "tile " + std::to_string(t) + " " + g.tiles.columns[k] + ": golden " +
@@ -70,13 +79,28 @@ inline Diff diff(const vis::GoldenResult& g, const cuda::CudaResult& c) {
   both("clip_polygons", g.clip_polygons, c.clip_polygons);
   both("pieces", g.pieces_total, c.pieces);
   both("visible_pieces", g.visible_pieces, c.visible_pieces);
-  both("visible_triangles", g.visible_triangles, c.visible_triangles);
+  if (c.per_pixel_cause.empty()) both("visible_triangles", g.visible_triangles, c.visible_triangles);
   both("occlusion_tests", g.occlusion_tests, c.occlusion_tests);
   both("samples_covered", g.samples_covered, c.samples_covered);
   both("fragments_generated", g.fragments_generated, c.fragments_generated);
   both("max_tile_triangles", g.max_tile_triangles, c.max_tile_triangles);
   both("max_tile_edges", g.max_tile_edges, c.max_tile_edges);
-  both("max_tile_pieces", g.max_tile_pieces, c.max_tile_pieces);
+  // Hybrid: CUDA's visible_triangles and max_tile_pieces still count the analytic work of the
+  // per-pixel tiles too (golden's leave those tiles out); every per-tile counter is compared.
+  if (c.per_pixel_cause.empty()) both("max_tile_pieces", g.max_tile_pieces, c.max_tile_pieces);
+  if (!c.per_pixel_cause.empty()) {
+    uint64_t tiles = 0, crossing = 0, screens = 0, tests = 0;
+    for (size_t t = 0; t < c.per_pixel_cause.size(); ++t) {
+      tiles += c.per_pixel_cause[t] != 0;
+      crossing += c.crossing_triangles[t];
+      screens += c.detection_screens[t];
+      tests += c.detection_tests[t];
+    }
+    both("fallback_tiles", g.fallback_tiles, tiles);
+    both("fallback_crossing_triangles", g.fallback_crossing_triangles, crossing);
+    both("detection_screens", g.detection_screens, screens);
+    both("detection_tests", g.detection_tests, tests);
+  }
   return d;
 }
 

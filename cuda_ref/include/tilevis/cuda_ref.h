@@ -36,6 +36,13 @@ struct CudaConfig {
   bool shuffle_cpu = false;  // cpu: visit elements in a scrambled order (order-independence check)
   uint32_t initial_pool = 0;  // 0: default; else the first size of every overflow-checked pool
                               // (tests use a tiny one to exercise grow-and-retry)
+  // Hybrid mode (golden --mode hybrid, vis::ResolverOptions): a tile goes per pixel where two
+  // opaque triangles' planes cross inside their overlap, where it holds non-opaque triangles,
+  // or where its work is over the budget or the on-chip lists (0: no limit).
+  bool hybrid = false;
+  uint64_t pair_budget = 0;
+  uint32_t list_triangles = 512, list_edges = 256;
+  uint32_t detection_bin = 8;  // pixels
 };
 
 // Per-stage times in milliseconds (median over runs), in pipeline order.
@@ -50,6 +57,10 @@ struct CudaResult {
   std::vector<double> visible_area;    // per original triangle, pixels²
   uint32_t tiles_x = 0, tiles_y = 0, tile_w = 0, tile_h = 0;
   std::vector<vis::TileCounters> tiles;  // row-major, the golden tiles.csv's counters
+  // Hybrid only, per tile (row-major): 0 analytic, else why per pixel (vis::kPerPixel*); the
+  // triangles in some crossing pair (interpenetration tiles); the detector's screens and tests.
+  std::vector<uint32_t> per_pixel_cause, crossing_triangles;
+  std::vector<uint64_t> detection_screens, detection_tests;
 
   // Totals (names as in the golden stats.json).
   uint64_t triangles_in = 0, triangles_front = 0, triangles_back = 0, triangles_degenerate = 0,

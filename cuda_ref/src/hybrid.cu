@@ -1,0 +1,482 @@
+// Hybrid mode on the GPU (model/visibility/hybrid_resolver.cpp): after the analytic stages,
+// every tile gets a verdict, and the tiles whose analytic answer can be wrong are redone per
+// pixel (the exact z-buffer over the tile's triangles):
+//   1 interpenetration: two opaque triangles of the tile (other trace triangles) whose planes
+//     cross strictly inside their overlap within the tile;
+//   2 non-opaque content in the tile;
+//   3 budget: triangles x edges over pair_budget, or more triangles or edges than the lists.
+// The detector is golden's, step for step, so its work counts (screens, tests) agree: the
+// tile's opaque triangles nearest z_min first (the occluder list), detection bins of
+// `detection_bin` pixels in row-major order, in each a sweep keeping the triangles whose depth
+// range reaches the current one's nearest depth, a pair screened (may_cross, opposite mesh
+// neighbours) and tested (planes_cross) in the first bin it shares; the first crossing ends
+// the tile's search. A thread per tile: the verdict is a sequential walk by definition.
+//
+// Per-pixel tiles: ids and the tile's samples_covered / fragments_generated from the tile's
+// z-buffer (the other per-tile counters are 0, as golden's per_pixel resolver leaves them);
+// their triangles' visible areas are the owned samples times a sample's share of a pixel,
+// added one sample at a time in the fold (golden's order of additions).
+#include "pieces.cuh"
+
+namespace tilevis::cuda {
+namespace {
+
+using XTri = TileTri<ExactP>;
+
+template <class P>
+struct HybArgs {
+  const TileTri<P>* tris;
+  const OccRec* occ;
+  const uint32_t* item_begin;
+  const uint32_t* occ_count;
+  const uint32_t* item_tri;
+  int64_t* rows;
+  TileGrid grid;
+  uint64_t pair_budget;
+  uint32_t list_triangles, list_edges, detection_bin;
+  uint32_t* cause;
+  uint64_t* screens;
+  uint64_t* tests;
+  uint32_t* crossing;
+  uint32_t* range;   // per occluder position: bins x0, y0, x1, y1 (8 bits each); ~0: empty in the tile
+  uint32_t* active;  // per occluder position: scratch of the sweep
+  uint8_t* flag;     // per occluder position: in some crossing pair (count_all)
+  // Per-pixel tiles.
+  const uint32_t* sample_xy;
+  uint32_t n_samples, width, height;
+  int32_t* ids;
+  uint32_t* owned;  // per item: samples it owns in a per-pixel tile
+};
+
+template <class P>
+TV_HD inline XTri exact_of(const TileTri<P>& t) {
+  return make_tile_tri<ExactP>(t.v[0], t.v[1], t.v[2], t.id, t.opaque != 0);
+}
+
+// sign(z_p - z_q) at an implicit point (w > 0): M = alpha x + beta y + gamma w < 2^(100+D),
+// M_p area_q - M_q area_p < 2^(150+D) (W256).
+TV_HD inline int depth_at(const exact::Plane& p, const exact::Plane& q, const exact::IPoint& s) {
+  const W256 mp = exact::plane_numerator<4>(p, s.x, s.y, I128{s.w});
+  const W256 mq = exact::plane_numerator<4>(q, s.x, s.y, I128{s.w});
+  return (mp * wide<4>(q.area) - mq * wide<4>(p.area)).sign();
+}
+
+template <class P>
+TV_HD inline bool may_cross(const TileTri<P>& t, const TileTri<P>& u) {
+  return u.z_min < t.z_max && u.z_max > t.z_min && u.bbox.x1 > t.bbox.x0 && u.bbox.x0 < t.bbox.x1 &&
+         u.bbox.y1 > t.bbox.y0 && u.bbox.y0 < t.bbox.y1;
+}
+
+template <class P>
+TV_HD inline bool opposite_neighbours(const TileTri<P>& t, const TileTri<P>& u) {
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (t.v[i] == u.v[(j + 1) % 3] && t.v[(i + 1) % 3] == u.v[j]) return true;
+  return false;
+}
+
+// svgpu::planes_cross: region = t clipped to the tile; the overlap is region clipped by u's
+// edges (geom::clip: keep the positive side; nothing strictly positive: empty).
+TV_HD inline bool planes_cross(const PEdge<ExactP>* region, uint32_t n, const XTri& t, const XTri& u) {
+  if (!may_cross(t, u) || n == 0) return false;
+  PEdge<ExactP> a[kTileCap + 4], b[kTileCap + 4];
+  for (uint32_t i = 0; i < n; ++i) a[i] = region[i];
+  PEdge<ExactP>* cur = a;
+  PEdge<ExactP>* next = b;
+  for (int k = 0; k < 3; ++k) {
+    bool pos, neg;
+    line_sides<ExactP>(cur, n, u.edge[k], pos, neg);
+    if (!neg) continue;
+    if (!pos) return false;
+    PolyOut<ExactP> in{next, 0, kTileCap + 4, false}, out{nullptr, 0, 0, false};
+    split<ExactP>(cur, n, u.edge[k], in, out);
+    n = in.n;
+    PEdge<ExactP>* s = cur;
+    cur = next;
+    next = s;
+    if (n == 0) return false;
+  }
+  bool nearer = false, farther = false;
+  for (uint32_t i = 0; i < n; ++i) {
+    const int o = depth_at(u.plane, t.plane, cur[i].start);
+    nearer = nearer || o < 0;
+    farther = farther || o > 0;
+  }
+  return nearer && farther;
+}
+
+struct Bins {
+  uint32_t x, y;
+  int64_t step, x0, y0;
+  TV_HD uint32_t of(int64_t v, int64_t origin, uint32_t bins) const {
+    const int64_t b = v < origin ? 0 : (v - origin) / step;
+    return uint32_t(b < 0 ? 0 : b > int64_t(bins) - 1 ? int64_t(bins) - 1 : b);
+  }
+};
+
+// hybrid_resolver.cpp crossing_pairs: 1 at the first crossing pair (counting screens and
+// tests), or with count_all the triangles in some crossing pair.
+template <class P>
+TV_HD uint32_t crossing_pairs(const HybArgs<P>& a, uint32_t tile, bool count_all, uint64_t& screens, uint64_t& tests) {
+  const uint32_t base = a.item_begin[tile], n = a.occ_count[tile];
+  const OccRec* occ = a.occ + base;
+  uint32_t* range = a.range + base;
+  uint32_t* active = a.active + base;
+  uint8_t* flag = a.flag + base;
+  const Rect rect = a.grid.rect(tile);
+  Bins g;
+  const uint32_t tw = a.grid.tile_w, th = a.grid.tile_h;
+  g.step = int64_t(a.detection_bin ? a.detection_bin : (tw > th ? tw : th)) << a.grid.sb;
+  g.x = uint32_t((int64_t(rect.x1) - rect.x0 + g.step - 1) / g.step);
+  g.y = uint32_t((int64_t(rect.y1) - rect.y0 + g.step - 1) / g.step);
+  PEdge<ExactP> poly[kTileCap];
+  for (uint32_t k = 0; k < n; ++k) {
+    const TileTri<P>& t = a.tris[occ[k].tri];
+    bool overflow = false;
+    const XTri x = exact_of(t);
+    if (tile_polygon<ExactP>(x, rect, poly, overflow) == 0) {
+      range[k] = ~0u;
+    } else {
+      range[k] = g.of(t.bbox.x0, rect.x0, g.x) | g.of(t.bbox.y0, rect.y0, g.y) << 8 | g.of(t.bbox.x1, rect.x0, g.x) << 16 |
+                 g.of(t.bbox.y1, rect.y0, g.y) << 24;
+    }
+    flag[k] = 0;
+  }
+  uint32_t found = 0;
+  for (uint32_t by = 0; by < g.y; ++by)
+    for (uint32_t bx = 0; bx < g.x; ++bx) {
+      uint32_t n_active = 0;
+      for (uint32_t k = 0; k < n; ++k) {
+        const uint32_t rk = range[k];
+        if (rk == ~0u || bx < (rk & 0xff) || by < (rk >> 8 & 0xff) || bx > (rk >> 16 & 0xff) || by > (rk >> 24)) continue;
+        const TileTri<P>& t = a.tris[occ[k].tri];
+        uint32_t m = 0;
+        for (uint32_t i = 0; i < n_active; ++i)
+          if (!(a.tris[occ[active[i]].tri].z_max <= t.z_min)) active[m++] = active[i];
+        n_active = m;
+        bool have_poly = false;
+        uint32_t np = 0;
+        XTri xt;
+        for (uint32_t i = 0; i < n_active; ++i) {
+          const uint32_t q = active[i];
+          const TileTri<P>& u = a.tris[occ[q].tri];
+          if (u.id == t.id) continue;
+          screens += count_all ? 0 : 1;
+          const uint32_t rq = range[q];
+          const uint32_t x0 = tmax(rk & 0xff, rq & 0xff), y0 = tmax(rk >> 8 & 0xff, rq >> 8 & 0xff);
+          if (x0 != bx || y0 != by) continue;
+          if (!may_cross(t, u) || opposite_neighbours(t, u)) continue;
+          tests += count_all ? 0 : 1;
+          if (!have_poly) {
+            xt = exact_of(t);
+            bool overflow = false;
+            np = tile_polygon<ExactP>(xt, rect, poly, overflow);
+            have_poly = true;
+          }
+          if (!planes_cross(poly, np, xt, exact_of(u))) continue;
+          if (!count_all) return 1;
+          found += (flag[k] ? 0u : 1u) + (flag[q] ? 0u : 1u);
+          flag[k] = flag[q] = 1;
+        }
+        active[n_active++] = k;
+      }
+    }
+  return found;
+}
+
+template <class P>
+TV_HD void verdict(const HybArgs<P>& a, uint64_t tile) {
+  const int64_t* row = a.rows + tile * kTileColumns;
+  const uint64_t tris = uint64_t(row[kColTriangles]), edges = uint64_t(row[kColEdges]);
+  uint64_t screens = 0, tests = 0;
+  uint32_t cause = 0, crossing = 0;
+  if (tris > a.occ_count[tile]) cause = 2;  // a non-opaque triangle
+  else if ((a.pair_budget && tris * edges > a.pair_budget) || (a.list_triangles && tris > a.list_triangles) ||
+           (a.list_edges && edges > a.list_edges))
+    cause = 3;
+  else if (crossing_pairs(a, uint32_t(tile), false, screens, tests)) {
+    cause = 1;
+    uint64_t s2 = 0, t2 = 0;
+    crossing = crossing_pairs(a, uint32_t(tile), true, s2, t2);
+  }
+  a.cause[tile] = cause;
+  a.screens[tile] = screens;
+  a.tests[tile] = tests;
+  a.crossing[tile] = crossing;
+}
+
+template <class P>
+__global__ void k_verdict(HybArgs<P> a, uint64_t n) {
+  TV_GRID_LOOP(i, n) verdict<P>(a, i);
+}
+
+// ---- per-pixel tiles ------------------------------------------------------------------------
+
+// One binned triangle at one sample: coverage (top-left), the depth test of zbuffer.h.
+struct PTri {
+  exact::Line e[3];
+  exact::Plane plane;
+  uint32_t opaque, item;
+};
+
+struct POwner {
+  const exact::Plane* plane = nullptr;
+  int64_t item = -1;
+};
+
+TV_HD inline bool covers(const PTri& t, Pt s) {
+  for (int k = 0; k < 3; ++k) {
+    const int64_t e = t.e[k].eval(s);
+    if (e < 0 || (e == 0 && !t.e[k].owns_boundary())) return false;
+  }
+  return true;
+}
+
+template <class P>
+TV_HD inline PTri ptri_of(const HybArgs<P>& a, uint32_t item) {
+  const XTri x = exact_of(a.tris[a.item_tri[item]]);
+  PTri t;
+  for (int k = 0; k < 3; ++k) t.e[k] = x.edge[k];
+  t.plane = x.plane;
+  t.opaque = x.opaque;
+  t.item = item;
+  return t;
+}
+
+// Sample u of the tile (row-major pixels, samples within a pixel); false past its end.
+template <class P>
+TV_HD inline bool tile_sample(const HybArgs<P>& a, uint32_t tile, uint32_t u, int64_t& px, int64_t& py, uint32_t& k) {
+  const uint32_t tx = tile % a.grid.tiles_x, ty = tile / a.grid.tiles_x;
+  const uint32_t x0 = tx * a.grid.tile_w, y0 = ty * a.grid.tile_h;
+  const uint32_t x1 = tmin(x0 + a.grid.tile_w, a.width), y1 = tmin(y0 + a.grid.tile_h, a.height);
+  const uint32_t w = x1 - x0, S = a.n_samples;
+  if (u >= w * (y1 - y0) * S) return false;
+  k = u % S;
+  px = x0 + (u / S) % w;
+  py = y0 + (u / S) / w;
+  return true;
+}
+
+// sign(z_p(s) - z_q(s)) at a sample (zbuffer::passes): |N| < 2^(51+D), |N area| < 2^(100+D) (W192).
+TV_HD inline int sample_depth_order(const exact::Plane& p, const exact::Plane& q, Pt s) {
+  const I128 np = I128{p.alpha} * s.x + I128{p.beta} * s.y + p.gamma;
+  const I128 nq = I128{q.alpha} * s.x + I128{q.beta} * s.y + q.gamma;
+  return (wide<3>(np) * wide<3>(q.area) - wide<3>(nq) * wide<3>(p.area)).sign();
+}
+
+TV_HD inline void test(const PTri& t, Pt s, POwner& o, uint32_t& generated) {
+  if (!covers(t, s)) return;
+  ++generated;
+  if (!t.opaque) return;
+  if (o.item < 0 || sample_depth_order(t.plane, *o.plane, s) < 0) {
+    o.item = t.item;
+    o.plane = &t.plane;
+  }
+}
+
+
+template <class P>
+TV_HD void finish_sample(const HybArgs<P>& a, int64_t px, int64_t py, uint32_t k, const POwner& o) {
+  const uint64_t at = (uint64_t(py) * a.width + uint64_t(px)) * a.n_samples + k;
+  a.ids[at] = o.item < 0 ? -1 : int32_t(a.tris[a.item_tri[o.item]].id);
+  if (o.item >= 0) atomic_add(&a.owned[o.item], 1u);
+}
+
+// Host emulation of a per-pixel tile.
+template <class P>
+TV_HD void per_pixel_tile(const HybArgs<P>& a, uint64_t tile) {
+  if (a.cause[tile] == 0) return;
+  int64_t* row = a.rows + tile * kTileColumns;
+  const uint32_t begin = a.item_begin[tile], n = uint32_t(row[kColTriangles]);
+  uint64_t covered = 0, generated = 0;
+  int64_t px, py;
+  uint32_t k;
+  for (uint32_t u = 0; tile_sample(a, uint32_t(tile), u, px, py, k); ++u) {
+    const uint32_t sxy = a.sample_xy[k];
+    const Pt s{int32_t((px << a.grid.sb) + (sxy & 0xffffu)), int32_t((py << a.grid.sb) + (sxy >> 16))};
+    POwner o;
+    PTri held;  // the owner's record (o.plane points into it)
+    uint32_t g = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+      const PTri t = ptri_of(a, begin + i);
+      const int64_t before = o.item;
+      test(t, s, o, g);
+      if (o.item != before) {
+        held = t;
+        o.plane = &held.plane;
+      }
+    }
+    generated += g;
+    covered += o.item >= 0 ? 1 : 0;
+    finish_sample(a, px, py, k, o);
+  }
+  for (int c : {kColPairTests, kColCandidates, kColClips, kColPieces, kColVisiblePieces, kColOcclusionTests}) row[c] = 0;
+  row[kColSamplesCovered] = int64_t(covered);
+  row[kColFragments] = int64_t(generated);
+}
+
+constexpr uint32_t kPixBlock = 256, kPixChunk = 32;
+
+template <class P>
+__global__ void __launch_bounds__(kPixBlock) k_per_pixel(HybArgs<P> a, uint64_t n_tiles) {
+  __shared__ PTri staged[kPixChunk];
+  __shared__ unsigned long long sums[2];
+  for (uint64_t tile = blockIdx.x; tile < n_tiles; tile += gridDim.x) {
+    if (a.cause[tile] == 0) continue;  // uniform over the block
+    int64_t* row = a.rows + tile * kTileColumns;
+    const uint32_t begin = a.item_begin[tile], n = uint32_t(row[kColTriangles]);
+    if (threadIdx.x == 0) sums[0] = sums[1] = 0;
+    uint32_t covered = 0, generated = 0;
+    const uint32_t tw = a.grid.tile_w, th = a.grid.tile_h;
+    const uint32_t total = tw * th * a.n_samples;
+    for (uint32_t r = 0; r < total; r += kPixBlock) {
+      int64_t px = 0, py = 0;
+      uint32_t k = 0;
+      const bool mine = tile_sample(a, uint32_t(tile), r + threadIdx.x, px, py, k);
+      Pt s{0, 0};
+      if (mine) {
+        const uint32_t sxy = a.sample_xy[k];
+        s = {int32_t((px << a.grid.sb) + (sxy & 0xffffu)), int32_t((py << a.grid.sb) + (sxy >> 16))};
+      }
+      POwner o;
+      exact::Plane owner_plane{};
+      for (uint32_t c = 0; c < n; c += kPixChunk) {
+        const uint32_t m = tmin(kPixChunk, n - c);
+        __syncthreads();
+        if (threadIdx.x < m) staged[threadIdx.x] = ptri_of(a, begin + c + threadIdx.x);
+        __syncthreads();
+        if (mine)
+          for (uint32_t j = 0; j < m; ++j) {
+            const int64_t before = o.item;
+            test(staged[j], s, o, generated);
+            if (o.item != before) {
+              owner_plane = staged[j].plane;
+              o.plane = &owner_plane;
+            }
+          }
+      }
+      if (mine) {
+        covered += o.item >= 0 ? 1 : 0;
+        finish_sample(a, px, py, k, o);
+      }
+    }
+    atomicAdd(&sums[0], static_cast<unsigned long long>(covered));
+    atomicAdd(&sums[1], static_cast<unsigned long long>(generated));
+    __syncthreads();
+    if (threadIdx.x == 0) {
+      for (int c : {kColPairTests, kColCandidates, kColClips, kColPieces, kColVisiblePieces, kColOcclusionTests}) row[c] = 0;
+      row[kColSamplesCovered] = int64_t(sums[0]);
+      row[kColFragments] = int64_t(sums[1]);
+    }
+    __syncthreads();
+  }
+}
+
+// The visible areas again, per original id over its items in canonical order: an analytic
+// tile's item adds its visible pieces (fold_area), a per-pixel tile's item its owned samples,
+// one sample's share at a time.
+template <class P>
+struct HFoldArgs {
+  const uint64_t* area_key;
+  const uint32_t* area_item;
+  const uint64_t* item_key;
+  const uint32_t* cause;
+  const uint32_t* owned;
+  const uint32_t* cand_count;
+  const uint32_t* piece_count;
+  const uint32_t* item_slot;
+  uint64_t n_items;
+  const uint8_t* visible;
+  const double* piece_area;
+  double sample_area;
+  double* area;
+};
+
+template <class P>
+TV_HD void hybrid_fold(const HFoldArgs<P>& a, uint64_t q) {
+  const uint64_t id = a.area_key[q];
+  if (q > 0 && a.area_key[q - 1] == id) return;
+  double sum = 0;
+  for (uint64_t r = q; a.area_key[r] == id; ++r) {
+    const uint32_t j = a.area_item[r];
+    if (a.cause[a.item_key[j]] != 0) {
+      for (uint32_t s = 0; s < a.owned[j]; ++s) sum = dadd(sum, a.sample_area);
+      continue;
+    }
+    const uint32_t n = a.piece_count[j];
+    const bool clipped = a.cand_count[j] != 0;
+    for (uint32_t k = 0; k < n; ++k) {
+      const uint64_t p = clipped ? a.n_items + a.item_slot[j] + k : j;
+      if (a.visible[p]) sum = dadd(sum, a.piece_area[p]);
+    }
+  }
+  a.area[id] = sum;
+}
+
+template <class P>
+__global__ void k_hybrid_fold(HFoldArgs<P> a, uint64_t n) {
+  TV_GRID_LOOP(i, n) hybrid_fold<P>(a, i);
+}
+
+}  // namespace
+
+template <class P>
+void stage_hybrid(Pipeline<P>& p) {
+  Exec& ex = p.ex;
+  const uint64_t ni = p.n_items, nt = p.n_tiles;
+  HybArgs<P> a{};
+  a.tris = p.tris.get();
+  a.occ = p.occ_rec.get();
+  a.item_begin = p.tile_item_begin.get();
+  a.occ_count = p.tile_occ_count.get();
+  a.item_tri = p.item_tri_sorted.get();
+  a.rows = p.tile_rows.get();
+  a.grid = p.grid;
+  a.pair_budget = p.cfg.pair_budget;
+  a.list_triangles = p.cfg.list_triangles;
+  a.list_edges = p.cfg.list_edges;
+  a.detection_bin = p.cfg.detection_bin;
+  a.cause = p.hyb_cause.need(nt + 1);
+  a.screens = p.hyb_screens.need(nt + 1);
+  a.tests = p.hyb_tests.need(nt + 1);
+  a.crossing = p.hyb_crossing.need(nt + 1);
+  a.range = p.hyb_range.need(ni + 1);
+  a.active = p.hyb_active.need(ni + 1);
+  a.flag = p.hyb_flag.need(ni + 1);
+  a.sample_xy = p.sample_xy.get();
+  a.n_samples = p.f.n_samples;
+  a.width = p.f.width;
+  a.height = p.f.height;
+  a.ids = p.ids.get();
+  a.owned = p.hyb_owned.need(ni + 1);
+  ex.zero(a.owned, (ni + 1) * 4);
+  ex.launch(k_verdict<P>, verdict<P>, nt, a, 64);
+  if (ex.where == Where::cpu) {
+    for (uint64_t t = 0; t < nt; ++t) per_pixel_tile<P>(a, ex.host_index(t, nt));
+  } else {
+    const uint32_t blocks = uint32_t(tmin<uint64_t>(nt, uint64_t(ex.grid_blocks) * 8));
+    k_per_pixel<P><<<blocks, kPixBlock, 0, ex.stream>>>(a, nt);
+    TV_CUDA(cudaGetLastError());
+    ++ex.queued;
+  }
+  HFoldArgs<P> f{};
+  f.area_key = p.area_key_sorted.get();
+  f.area_item = p.area_item_sorted.get();
+  f.item_key = p.item_key_sorted.get();
+  f.cause = a.cause;
+  f.owned = a.owned;
+  f.cand_count = p.cand_count.get();
+  f.piece_count = p.piece_count.get();
+  f.item_slot = p.item_slot.get();
+  f.n_items = ni;
+  f.visible = p.piece_visible.get();
+  f.piece_area = p.piece_area.get();
+  f.sample_area = 1.0 / double(p.f.n_samples);
+  f.area = p.area.get();
+  ex.launch(k_hybrid_fold<P>, hybrid_fold<P>, ni, f);
+}
+
+template void stage_hybrid<ExactP>(Pipeline<ExactP>&);
+template void stage_hybrid<FloatP>(Pipeline<FloatP>&);
+
+}  // namespace tilevis::cuda
