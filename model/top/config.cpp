@@ -113,8 +113,27 @@ Registry::Registry() {
   TV_UINT("sim.fifo_tiles", sim.fifo_tiles, "tiles", 1, 1024, "queue depth between render units at fidelity tile");
   TV_UINT("sim.fifo_primitives", sim.fifo_primitives, "items", 1, 1u << 20, "queue depth between units at fidelity primitive");
 
-  TV_UINT("memory.bytes_per_cycle", memory.bytes_per_cycle, "bytes/cycle", 1, 4096, "DRAM data bus bandwidth");
-  TV_UINT("memory.latency_cycles", memory.latency_cycles, "cycles", 0, 100000, "DRAM read latency");
+  TV_UINT("sim.cores", scheduler.cores, "cores", 1, 64, "tile cores (fetch, visibility, fragment, writer), sharing the memory");
+  add_enum<Schedule>("sim.scheduler", "tile order and assignment: row_major or morton (tile i to core i mod N), dynamic (Morton order, to the first free core)",
+                     {Schedule::row_major, Schedule::morton, Schedule::dynamic},
+                     +[](TilerConfig& c) -> Schedule& { return c.scheduler.policy; });
+
+  // DRAM: JEDEC LPDDR4-4266 timings (units/memory/dram.h says where each comes from).
+  TV_UINT("memory.channels", memory.dram.channels, "channels", 1, 64, "x16 DRAM channels (4: a 64-bit interface; assumption)");
+  TV_UINT("memory.banks", memory.dram.banks, "banks", 1, 64, "banks per channel (JESD209-4: 8)");
+  TV_UINT("memory.row_bytes", memory.dram.row_bytes, "bytes", 32, 1u << 20, "row (page) per bank (JESD209-4 x16: 2048)");
+  TV_UINT("memory.burst_bytes", memory.dram.burst_bytes, "bytes", 1, 4096, "bytes per burst (BL16 x 16 bits: 32)");
+  TV_UINT("memory.interleave_bytes", memory.dram.interleave_bytes, "bytes", 1, 1u << 20, "consecutive bytes per channel (assumption)");
+  TV_UINT("memory.tck_ps", memory.dram.tck_ps, "ps", 1, 100000, "DRAM clock period (LPDDR4-4266: 469)");
+  TV_UINT("memory.ccd", memory.dram.ccd, "tCK", 1, 1000, "column to column (one burst on the bus)");
+  TV_UINT("memory.rcd", memory.dram.rcd, "tCK", 0, 10000, "activate to column command");
+  TV_UINT("memory.rp", memory.dram.rp, "tCK", 0, 10000, "precharge");
+  TV_UINT("memory.ras", memory.dram.ras, "tCK", 0, 10000, "activate to precharge");
+  TV_UINT("memory.rl", memory.dram.rl, "tCK", 0, 10000, "read latency");
+  TV_UINT("memory.wl", memory.dram.wl, "tCK", 0, 10000, "write latency");
+  TV_UINT("memory.refi", memory.dram.refi, "tCK", 1, 1u << 30, "all-bank refresh interval");
+  TV_UINT("memory.rfc", memory.dram.rfc, "tCK", 0, 1u << 30, "all-bank refresh cycle time");
+  TV_UINT("memory.controller_latency_ns", memory.controller_latency_ns, "ns", 0, 100000, "fabric and controller latency of a read (assumption)");
   TV_UINT("framebuffer.colour_bytes", framebuffer.colour_bytes, "bytes", 1, 16, "colour per sample");
   TV_UINT("framebuffer.depth_bytes", framebuffer.depth_bytes, "bytes", 1, 8, "depth/stencil per sample");
 
@@ -145,6 +164,9 @@ Registry::Registry() {
   TV_UINT("fetch.primitives_per_clock", fetch.primitives_per_clock, "primitives/cycle", 1, 64, "records parsed per clock");
   TV_UINT("fetch.edges_per_clock", fetch.edges_per_clock, "edges/cycle", 1, 64, "edge records per clock");
   TV_UINT("fetch.latency_cycles", fetch.latency_cycles, "cycles", 0, 100000, "per tile");
+  TV_UINT("fetch.cache_bytes", fetch.cache.bytes, "bytes", 1, 1u << 30, "parameter cache for primitive records (per core; assumption)");
+  TV_UINT("fetch.cache_line_bytes", fetch.cache.line_bytes, "bytes", 1, 4096, "its line");
+  TV_UINT("fetch.cache_ways", fetch.cache.ways, "ways", 1, 1024, "its associativity (LRU)");
 
   TV_UINT("evu.reject.lanes", evu.reject.lanes, "lanes", 1, 1024, "pair tests issued together");
   TV_UINT("evu.reject.ii", evu.reject.ii, "cycles", 1, 1024, "initiation interval");
@@ -171,11 +193,19 @@ Registry::Registry() {
   TV_UINT("fragment.raster_samples_per_clock", fragment.raster_samples_per_clock, "samples/cycle", 1, 4096, "rasteriser output");
   TV_UINT("fragment.depth_tests_per_clock", fragment.depth_tests_per_clock, "samples/cycle", 1, 4096, "early depth tests");
   TV_UINT("fragment.shader_lanes", fragment.shader_lanes, "lanes", 1, 65536, "shader ALU lanes (trace cycles per fragment are per lane)");
-  TV_REAL("fragment.texture_hit_rate", fragment.texture_hit_rate, "ratio", 0.0, 1.0, "texture bytes served by the texture cache");
+  TV_REAL("fragment.texels_per_pixel", fragment.texels_per_pixel, "texels", 0.0, 1024.0, "texture footprint per shaded pixel (mip-mapping: about 1)");
+  TV_UINT("fragment.texel_bytes", fragment.texel_bytes, "bytes", 1, 64, "bytes per texel (assumption: RGBA8)");
+  TV_UINT("fragment.texture_line_bytes", fragment.texture_line_bytes, "bytes", 1, 4096, "texture cache line (assumption)");
   TV_UINT("fragment.latency_cycles", fragment.latency_cycles, "cycles", 0, 100000, "per tile");
 
   TV_UINT("writer.pixels_per_clock", writer.pixels_per_clock, "pixels/cycle", 1, 4096, "tile write-out rate");
   TV_UINT("writer.latency_cycles", writer.latency_cycles, "cycles", 0, 100000, "per tile");
+  TV_REAL("writer.colour_compression", writer.colour_compression, "ratio", 0.01, 1.0, "colour bytes written / bytes of the tile (1: no compression)");
+
+  TV_REAL("energy.dram_pj_per_byte", energy.dram_pj_per_byte, "pJ", 0.0, 1e6, "DRAM energy per byte (Horowitz, ISSCC 2014)");
+  TV_REAL("energy.shader_pj_per_lane_cycle", energy.shader_pj_per_lane_cycle, "pJ", 0.0, 1e6, "shader lane-cycle (an fp32 multiply-add)");
+  TV_REAL("energy.evu_pj_per_test", energy.evu_pj_per_test, "pJ", 0.0, 1e6, "one EVU pair, clip or occlusion test");
+  TV_REAL("energy.depth_test_pj", energy.depth_test_pj, "pJ", 0.0, 1e6, "one per-sample depth test (HSR, early-Z)");
 }
 
 #undef TV_UINT
@@ -222,6 +252,18 @@ void apply(TilerConfig& c, const std::string& where, const std::string& key, con
   if (!expected.empty()) throw ConfigError(where + ": " + key + ": expected " + expected + ", got " + v.dump());
 }
 
+// Rules between parameters (each alone is in range).
+void check(const TilerConfig& c, const std::string& where) {
+  auto fail = [&](const std::string& m) { throw ConfigError(where + ": " + m); };
+  const DramConfig& d = c.memory.dram;
+  if (d.row_bytes % d.burst_bytes) fail("memory.row_bytes must be a multiple of memory.burst_bytes");
+  if (d.interleave_bytes % d.burst_bytes) fail("memory.interleave_bytes must be a multiple of memory.burst_bytes");
+  if (d.rfc >= d.refi) fail("memory.rfc must be below memory.refi");
+  const CacheConfig& k = c.fetch.cache;
+  if (k.bytes % (uint64_t(k.line_bytes) * k.ways))
+    fail("fetch.cache_bytes must be a multiple of fetch.cache_line_bytes x fetch.cache_ways");
+}
+
 }  // namespace
 
 TilerConfig load_config(const std::string& file, const std::vector<std::string>& overrides) {
@@ -248,6 +290,7 @@ TilerConfig load_config(const std::string& file, const std::vector<std::string>&
     if (v.is_discarded()) v = text;  // bare words: enum values
     apply(c, "-p " + o, key, v);
   }
+  check(c, file.empty() ? std::string("config") : file);
   return c;
 }
 

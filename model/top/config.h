@@ -24,6 +24,7 @@
 #include "units/primitive_setup/primitive_setup.h"
 #include "units/silhouette_unit/silhouette_unit.h"
 #include "units/tile_fetch/tile_fetch.h"
+#include "units/tile_scheduler/tile_scheduler.h"
 #include "units/tile_writer/tile_writer.h"
 #include "units/tiling_engine/tiling_engine.h"
 
@@ -43,8 +44,22 @@ struct SimulationConfig {
   uint32_t fifo_primitives = 16;     // queue between units at fidelity primitive (assumption)
 };
 
+// Energy proxy (stats.json totals.energy): events times per-event energies, to rank
+// configurations against each other, not to predict a chip's power. Per-operation figures
+// of a 45 nm process from M. Horowitz, "Computing's energy problem (and what we can do
+// about it)", ISSCC 2014: DRAM 1.3-2.6 nJ per 64-bit access; 32-bit float multiply
+// 3.7 pJ, add 0.9 pJ; 32-bit integer multiply 3.1 pJ, add 0.1 pJ; 64-bit read of an 8 KB
+// SRAM 10 pJ. How many of them one model event takes is an assumption, stated per field.
+struct EnergyConfig {
+  double dram_pj_per_byte = 244;          // 1.95 nJ (the range's middle) per 8 bytes
+  double shader_pj_per_lane_cycle = 4.6;  // one fp32 multiply-add per lane-cycle
+  double evu_pj_per_test = 12.5;          // an SVGPU test: ~4 integer multiply-adds on snapped coordinates
+  double depth_test_pj = 8.2;             // interpolate (integer multiply-add), compare, 32 bits of an 8 KB SRAM
+};
+
 struct TilerConfig {
   SimulationConfig sim;
+  TileSchedulerConfig scheduler;
   MemoryConfig memory;
   FramebufferConfig framebuffer;
   GeometryFrontEndConfig front_end;
@@ -57,6 +72,7 @@ struct TilerConfig {
   HsrUnitConfig hsr;
   FragmentUnitConfig fragment;
   TileWriterConfig writer;
+  EnergyConfig energy;
 };
 
 class ConfigError : public std::runtime_error {

@@ -34,6 +34,21 @@ nlohmann::json units_json(const Tiler& t) {
   return j;
 }
 
+// The energy proxy (config.h's EnergyConfig): microjoules per part and in all.
+nlohmann::json energy_json(const EnergyConfig& e, const nlohmann::json& totals, const Tiler& t) {
+  auto total = [&](const char* k) { return totals.contains(k) ? totals.at(k).get<double>() : 0.0; };
+  double lane_cycles = 0;
+  for (const StatsGroup* g : t.stats_groups()) lane_cycles += g->value("shader_lane_cycles");
+  const double evu_tests = total("pair_tests") + total("clip_polygons") + total("occlusion_tests") +
+                           total("detection_tests");
+  const double pj_dram = total("dram_bytes") * e.dram_pj_per_byte;
+  const double pj_shader = lane_cycles * e.shader_pj_per_lane_cycle;
+  const double pj_evu = evu_tests * e.evu_pj_per_test;
+  const double pj_depth = total("depth_tests") * e.depth_test_pj;
+  return {{"dram_uj", pj_dram * 1e-6}, {"shader_uj", pj_shader * 1e-6}, {"evu_uj", pj_evu * 1e-6},
+          {"depth_test_uj", pj_depth * 1e-6}, {"total_uj", (pj_dram + pj_shader + pj_evu + pj_depth) * 1e-6}};
+}
+
 }  // namespace
 
 SimOutput simulate(const trace::Frame& frame, const TilerConfig& config, const SimOptions& options) {
@@ -75,6 +90,7 @@ SimOutput simulate(const trace::Frame& frame, const TilerConfig& config, const S
   } else {
     out.cycles = tiler.run_analytic();
   }
+  tiler.memory().finish(out.cycles);
   work.finish();
   g_reports = nullptr;
   out.host_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -92,6 +108,9 @@ SimOutput simulate(const trace::Frame& frame, const TilerConfig& config, const S
   totals["param_buffer_peak_bytes"] = tiler.param_buffer_peak();
   totals["dram_bytes"] = tiler.dram_bytes();
   totals["evu_busy_cycles"] = tiler.evu_busy_cycles();
+  totals["memory_bound_share"] = tiler.memory_bound_share(out.cycles);
+  totals["dram_utilisation"] = tiler.memory().stats().value("utilisation");
+  totals["energy"] = energy_json(config.energy, totals, tiler);
   const double seconds = double(out.cycles) / (config.sim.clock_mhz * 1e6);
   r.stats = {{"tool", "sim"},
              {"trace", options.trace_name},
@@ -102,6 +121,7 @@ SimOutput simulate(const trace::Frame& frame, const TilerConfig& config, const S
              {"totals", totals},
              {"frame_seconds_at_clock", seconds},
              {"units", units_json(tiler)},
+             {"cores", tiler.cores_json()},
              {"triangles", work.triangle_accounts()},
              {"systemc_reports", out.systemc_reports},
              {"host_seconds", out.host_seconds}};

@@ -4,13 +4,22 @@
 
 namespace tilevis::sim {
 
+std::vector<const UnitBase*> Tiler::Core::units() const {
+  std::vector<const UnitBase*> u = {fetch.get()};
+  if (evu) u.push_back(evu.get());
+  if (hsr) u.push_back(hsr.get());
+  u.push_back(fragment.get());
+  u.push_back(writer.get());
+  return u;
+}
+
 Tiler::Tiler(const sc_core::sc_module_name& name, const TilerConfig& config, FrameWork& work, bool trace_signals)
     : sc_core::sc_module(name), m_cfg(config), m_work(work) {
   m_env.work = &work;
   // One cycle of the GPU clock, rounded to the 1 ps time resolution.
   m_env.period = sc_core::sc_time(1e6 / config.sim.clock_mhz, sc_core::SC_PS);
   m_env.trace = trace_signals;
-  m_env.memory_latency = sc_core::sc_time::from_value(m_env.period.value() * config.memory.latency_cycles);
+  m_env.waits = &m_waits;
   const bool per_primitive = config.sim.fidelity == Fidelity::primitive;
   const int geometry_depth = per_primitive ? int(config.sim.fifo_primitives) : 2;
   const int render_depth = per_primitive ? int(config.sim.fifo_primitives) : int(config.sim.fifo_tiles);
@@ -22,12 +31,7 @@ Tiler::Tiler(const sc_core::sc_module_name& name, const TilerConfig& config, Fra
   m_silhouette = std::make_unique<SilhouetteUnit>("silhouette", m_env, config.silhouette);
   m_pb = std::make_unique<ParameterBuffer>("pb", m_env, config.pb);
   m_tiling = std::make_unique<TilingEngine>("tiling", m_env, config.tiling, *m_pb);
-  m_fetch = std::make_unique<TileFetch>("fetch", m_env, config.fetch, *m_pb, config.framebuffer, per_primitive);
-  if (uses_evu(config.sim.mode))
-    m_evu = std::make_unique<EarlyVisibilityUnit>("evu", m_env, config.evu, render_depth);
-  if (uses_hsr(config.sim.mode)) m_hsr = std::make_unique<HsrUnit>("hsr", m_env, config.hsr);
-  m_fragment = std::make_unique<FragmentUnit>("fragment", m_env, config.fragment, *m_pb);
-  m_writer = std::make_unique<TileWriter>("writer", m_env, config.writer, config.framebuffer);
+  m_scheduler = std::make_unique<TileScheduler>("scheduler", m_env, config.scheduler);
 
   auto fifo = [&](const char* n, int depth) {
     m_fifos.push_back(std::make_unique<OccupancyFifo<Item>>(n, depth));
@@ -45,33 +49,61 @@ Tiler::Tiler(const sc_core::sc_module_name& name, const TilerConfig& config, Fra
   m_ready = std::make_unique<sc_core::sc_fifo<uint32_t>>("pb_ready", 4);
   m_released = std::make_unique<sc_core::sc_fifo<uint32_t>>("pb_released", 4);
   m_pb->ready(*m_ready);
-  m_fetch->ready(*m_ready);
-  m_writer->released(*m_released);
+  m_scheduler->ready(*m_ready);
+  m_scheduler->released(*m_released);
   m_pb->released(*m_released);
 
-  m_fetch->out(*fifo("fetch_to_visibility", render_depth));
-  // Hybrid: the EVU, then the HSR unit; each resolves its own tiles and passes the others on.
-  if (m_evu) {
-    m_evu->in(*m_fifos.back());
-    m_evu->out(*fifo(m_hsr ? "evu_to_hsr" : "visibility_to_fragment", render_depth));
-  }
-  if (m_hsr) {
-    m_hsr->in(*m_fifos.back());
-    m_hsr->out(*fifo("visibility_to_fragment", render_depth));
-  }
-  m_fragment->in(*m_fifos.back());
-  m_fragment->out(*fifo("fragment_to_writer", render_depth));
-  m_writer->in(*m_fifos.back());
-
-  m_front_end->mem.bind(m_memory->socket);
-  m_silhouette->mem.bind(m_memory->socket);
+  m_stream_vertex = m_memory->attach(m_front_end->mem, "vertices");
+  m_stream_spill = m_memory->attach(m_silhouette->mem, "silhouette_spill");
   m_tiling->pb.bind(m_pb->socket);
-  m_pb->mem.bind(m_memory->socket);
-  m_fetch->pb.bind(m_pb->socket);
-  m_fetch->mem.bind(m_memory->socket);
-  m_fragment->mem.bind(m_memory->socket);
-  m_fragment->pb.bind(m_pb->socket);
-  m_writer->mem.bind(m_memory->socket);
+  m_stream_pb = m_memory->attach(m_pb->mem, "parameter_buffer");
+  m_cores.resize(config.scheduler.cores);
+  for (uint32_t k = 0; k < config.scheduler.cores; ++k) build_core(k, render_depth, per_primitive);
+}
+
+void Tiler::build_core(uint32_t k, int render_depth, bool per_primitive) {
+  Core& c = m_cores[k];
+  const TilerConfig& config = m_cfg;
+  // Core 0's units keep the plain names (fetch, evu, ...); core k's are suffixed _k.
+  const std::string sfx = k ? "_" + std::to_string(k) : "";
+  auto n = [&](const char* base) { return std::string(base) + sfx; };
+  c.fetch = std::make_unique<TileFetch>(n("fetch").c_str(), m_env, config.fetch, *m_pb, config.framebuffer, per_primitive);
+  if (uses_evu(config.sim.mode))
+    c.evu = std::make_unique<EarlyVisibilityUnit>(n("evu").c_str(), m_env, config.evu, render_depth);
+  if (uses_hsr(config.sim.mode)) c.hsr = std::make_unique<HsrUnit>(n("hsr").c_str(), m_env, config.hsr);
+  c.fragment = std::make_unique<FragmentUnit>(n("fragment").c_str(), m_env, config.fragment, *m_pb);
+  c.writer = std::make_unique<TileWriter>(n("writer").c_str(), m_env, config.writer, config.framebuffer);
+
+  auto fifo = [&](const std::string& name, int depth) {
+    c.fifos.push_back(std::make_unique<OccupancyFifo<Item>>((name + sfx).c_str(), depth));
+    return c.fifos.back().get();
+  };
+  // The core's tile queue holds one tile beyond the one its fetch works on.
+  c.tiles = std::make_unique<sc_core::sc_fifo<Item>>(n("tiles").c_str(), 1);
+  m_scheduler->to_core[k](*c.tiles);
+  c.fetch->tiles(*c.tiles);
+  c.fetch->out(*fifo("fetch_to_visibility", render_depth));
+  // Hybrid: the EVU, then the HSR unit; each resolves its own tiles and passes the others on.
+  if (c.evu) {
+    c.evu->in(*c.fifos.back());
+    c.evu->out(*fifo(c.hsr ? "evu_to_hsr" : "visibility_to_fragment", render_depth));
+  }
+  if (c.hsr) {
+    c.hsr->in(*c.fifos.back());
+    c.hsr->out(*fifo("visibility_to_fragment", render_depth));
+  }
+  c.fragment->in(*c.fifos.back());
+  c.fragment->out(*fifo("fragment_to_writer", render_depth));
+  c.writer->in(*c.fifos.back());
+  c.done = std::make_unique<sc_core::sc_fifo<uint32_t>>(n("done").c_str(), 2);
+  c.writer->done(*c.done);
+  m_scheduler->done[k](*c.done);
+
+  c.fetch->pb.bind(m_pb->socket);
+  c.fragment->pb.bind(m_pb->socket);
+  m_stream_stored = m_memory->attach(c.fetch->mem, "stored_tiles");
+  m_stream_texture = m_memory->attach(c.fragment->mem, "texture");
+  m_stream_colour = m_memory->attach(c.writer->mem, "colour");
 }
 
 Tiler::~Tiler() = default;
@@ -84,16 +116,62 @@ void Tiler::prepare() {
   m_pb->prepare(*m_front_end);
 }
 
+Tiler::Step Tiler::analytic_tile(Core& core, TileWork* w, uint64_t at, uint64_t& pb_read) {
+  std::vector<Stage*> visibility;
+  if (core.evu) visibility = {&core.evu->reject(), &core.evu->clip(), &core.evu->occlude()};
+  if (core.hsr) visibility = {core.hsr.get()};
+  Item it = core.fetch->items(w).front();
+  it.count = w->triangles();
+  it.last = true;
+  // A tile's DRAM traffic is issued when it starts; its time on the DRAM is the longest of
+  // its transfers, which the memory system serves with every other core's.
+  uint64_t bus = 0;
+  auto dram = [&](const Traffic& t, bool read, int stream) { bus = std::max(bus, m_memory->service(at, t, read, stream)); };
+  std::vector<uint64_t> unit_cycles;
+  const Cost fc = core.fetch->cost(it);
+  core.fetch->account(it, fc);
+  pb_read += fc.reads.bytes();
+  dram(fc.reads, true, m_stream_pb);
+  dram(core.fetch->reload(it), true, m_stream_stored);
+  unit_cycles.push_back(fc.cycles);
+  m_work.resolve_tile(*w);
+  uint64_t evu_max = 0;
+  for (Stage* s : visibility) {
+    const Cost c = s->cost(it);
+    s->account(it, c);
+    s->tile_done(*w);
+    unit_cycles.push_back(c.cycles);
+    evu_max = std::max(evu_max, c.cycles);
+  }
+  if (core.evu) core.evu->account_analytic(evu_max);
+  const Cost frc = core.fragment->cost(it);
+  core.fragment->account(it, frc);
+  core.fragment->tile_done(*w);
+  dram(frc.reads, true, m_stream_texture);
+  dram(frc.pb_reads, true, m_stream_pb);
+  pb_read += frc.pb_reads.bytes();
+  unit_cycles.push_back(frc.cycles);
+  const Cost wc = core.writer->cost(it);
+  core.writer->account(it, wc);
+  dram(wc.writes, false, m_stream_colour);
+  unit_cycles.push_back(wc.cycles);
+  uint64_t sum = 0, slowest = 0;
+  for (uint64_t c : unit_cycles) sum += c, slowest = std::max(slowest, c);
+  Step s;
+  s.step = std::max(slowest, bus);
+  s.drain = sum - slowest;
+  s.memory_bound = bus > slowest ? bus - slowest : 0;
+  return s;
+}
+
 uint64_t Tiler::run_analytic() {
-  const uint64_t latency = m_memory->latency_cycles();
+  const uint64_t latency = m_memory->read_latency_cycles();
   uint64_t frame = 0, pb_written = 0, pb_read = 0;
   std::vector<Stage*> geometry = {m_setup.get(), m_silhouette.get(), m_tiling.get()};
-  std::vector<Stage*> visibility;
-  if (m_evu) visibility = {&m_evu->reject(), &m_evu->clip(), &m_evu->occlude()};
-  if (m_hsr) visibility = {m_hsr.get()};
+  const uint32_t ncores = uint32_t(m_cores.size());
 
   for (uint32_t k = 0; k < m_work.segment_count(); ++k) {
-    // Geometry: the units stream the segment; the slowest unit (or the bus) sets the pace.
+    // Geometry: the units stream the segment; the slowest unit (or the DRAM) sets the pace.
     Item g;
     g.segment = k;
     g.first = m_work.segment_first(k);
@@ -101,58 +179,41 @@ uint64_t Tiler::run_analytic() {
     g.last = true;
     const Cost fe = m_front_end->cost(g);
     m_front_end->account(g, fe);
-    uint64_t slowest = fe.cycles, bus = m_memory->account(fe.read_bytes, true);
+    uint64_t slowest = fe.cycles, bus = m_memory->service(frame, fe.reads, true, m_stream_vertex);
     for (Stage* s : geometry) {
       const Cost c = s->cost(g);
       s->account(g, c);
       slowest = std::max(slowest, c.cycles);
-      bus += m_memory->account(c.read_bytes, true) + m_memory->account(c.write_bytes, false);
-      if (s == m_tiling.get()) pb_written += c.write_bytes;
+      const int stream = s == m_tiling.get() ? m_stream_pb : m_stream_spill;
+      bus = std::max({bus, m_memory->service(frame, c.reads, true, stream), m_memory->service(frame, c.writes, false, stream)});
+      if (s == m_tiling.get()) pb_written += c.writes.bytes();
     }
     frame += std::max(slowest, bus) + latency;
+    m_analytic_memory_bound += bus > slowest ? bus - slowest : 0;
 
-    // Render: tiles in order through a pipeline of units; a tile costs its slowest unit
-    // (or its memory traffic), and the last tile drains through the rest.
+    // Render: the scheduler's order; each core a pipeline of units in which a tile costs
+    // its slowest unit (or its DRAM time); a core's last tile drains through the rest.
     m_work.prepare_segment(k);
-    uint64_t drain = 0;
-    for (uint32_t tile : m_work.segment_tiles()) {
-      TileWork* w = m_work.open_tile(tile);
-      Item it = m_fetch->items(w).front();
-      it.count = w->triangles();
-      it.last = true;
-      std::vector<uint64_t> unit_cycles;
-      const Cost fc = m_fetch->cost(it);
-      m_fetch->account(it, fc);
-      pb_read += fc.read_bytes;
-      uint64_t tile_bus = m_memory->account(fc.read_bytes, true) + m_memory->account(m_fetch->reload_bytes(it), true);
-      unit_cycles.push_back(fc.cycles);
-      m_work.resolve_tile(*w);
-      uint64_t evu_max = 0;
-      for (Stage* s : visibility) {
-        const Cost c = s->cost(it);
-        s->account(it, c);
-        s->tile_done(*w);
-        unit_cycles.push_back(c.cycles);
-        evu_max = std::max(evu_max, c.cycles);
-      }
-      if (m_evu) m_evu->account_analytic(evu_max);
-      const Cost frc = m_fragment->cost(it);
-      m_fragment->account(it, frc);
-      m_fragment->tile_done(*w);
-      tile_bus += m_memory->account(frc.read_bytes, true) + m_memory->account(frc.pb_read_bytes, true);
-      pb_read += frc.pb_read_bytes;
-      unit_cycles.push_back(frc.cycles);
-      const Cost wc = m_writer->cost(it);
-      m_writer->account(it, wc);
-      tile_bus += m_memory->account(wc.write_bytes, false);
-      unit_cycles.push_back(wc.cycles);
-      uint64_t sum = 0, slowest_unit = 0;
-      for (uint64_t c : unit_cycles) sum += c, slowest_unit = std::max(slowest_unit, c);
-      frame += std::max(slowest_unit, tile_bus);
-      drain = sum - slowest_unit;
+    const std::vector<uint32_t> tiles = m_scheduler->order(m_work.segment_tiles());
+    std::vector<uint64_t> busy(ncores, 0), drain(ncores, 0), bound(ncores, 0);
+    for (size_t i = 0; i < tiles.size(); ++i) {
+      uint32_t c = m_scheduler->static_core(i);
+      if (m_scheduler->config().policy == Schedule::dynamic)
+        c = uint32_t(std::min_element(busy.begin(), busy.end()) - busy.begin());
+      m_scheduler->count(c);
+      TileWork* w = m_work.open_tile(tiles[i]);
+      const Step s = analytic_tile(m_cores[c], w, frame + busy[c], pb_read);
+      busy[c] += s.step;
+      drain[c] = s.drain;
+      bound[c] += s.memory_bound;
       m_work.close_tile(w);
     }
-    frame += drain + (m_work.segment_tiles().empty() ? 0 : latency);
+    uint64_t longest = 0;
+    uint32_t critical = 0;
+    for (uint32_t c = 0; c < ncores; ++c)
+      if (busy[c] + drain[c] > longest) longest = busy[c] + drain[c], critical = c;
+    frame += longest + (tiles.empty() ? 0 : latency);
+    m_analytic_memory_bound += bound[critical];
     m_work.finish_segment();
   }
   m_pb->account_analytic(pb_written, pb_read);
@@ -160,44 +221,83 @@ uint64_t Tiler::run_analytic() {
   return frame;
 }
 
-uint64_t Tiler::simulated_cycles() const { return m_writer->frame_end_cycle(); }
-bool Tiler::frame_done() const { return m_writer->frame_done(); }
+uint64_t Tiler::simulated_cycles() const { return m_scheduler->frame_end_cycle(); }
+bool Tiler::frame_done() const { return m_scheduler->frame_done(); }
+
+double Tiler::memory_bound_share(uint64_t frame_cycles) const {
+  if (!frame_cycles) return 0.0;
+  const double bound = m_cfg.sim.fidelity == Fidelity::analytic
+                           ? double(m_analytic_memory_bound)
+                           : double(m_waits.total.value()) / double(m_env.period.value());
+  return std::min(1.0, bound / double(frame_cycles));
+}
+
+nlohmann::json Tiler::cores_json() const {
+  nlohmann::json cores = nlohmann::json::array();
+  double most = 0, sum = 0;
+  for (size_t k = 0; k < m_cores.size(); ++k) {
+    uint64_t work = 0;  // the core's busiest unit: what its share of the frame costs it
+    for (const UnitBase* u : m_cores[k].units()) work = std::max(work, u->busy_cycles());
+    const double tiles = m_scheduler->stats().value("core" + std::to_string(k) + "_tiles");
+    cores.push_back({{"core", k}, {"tiles", uint64_t(tiles)}, {"work_cycles", work}});
+    most = std::max(most, double(work));
+    sum += double(work);
+  }
+  const double mean = sum / double(m_cores.size());
+  return {{"scheduler", to_string(m_cfg.scheduler.policy)},
+          {"per_core", cores},
+          {"load_imbalance", mean > 0 ? most / mean : 1.0}};
+}
 
 std::vector<const StatsGroup*> Tiler::stats_groups() const {
   std::vector<const StatsGroup*> g = {&m_memory->stats(), &m_front_end->stats(), &m_setup->stats(),
-                                      &m_silhouette->stats(), &m_tiling->stats(), &m_pb->stats(), &m_fetch->stats()};
-  if (m_evu) {
-    g.push_back(&m_evu->stats());
-    g.push_back(&m_evu->reject().stats());
-    g.push_back(&m_evu->clip().stats());
-    g.push_back(&m_evu->occlude().stats());
+                                      &m_silhouette->stats(), &m_tiling->stats(), &m_pb->stats(),
+                                      &m_scheduler->stats()};
+  for (const Core& c : m_cores) {
+    g.push_back(&c.fetch->stats());
+    if (c.evu) {
+      g.push_back(&c.evu->stats());
+      g.push_back(&c.evu->reject().stats());
+      g.push_back(&c.evu->clip().stats());
+      g.push_back(&c.evu->occlude().stats());
+    }
+    if (c.hsr) g.push_back(&c.hsr->stats());
+    g.push_back(&c.fragment->stats());
+    g.push_back(&c.writer->stats());
   }
-  if (m_hsr) g.push_back(&m_hsr->stats());
-  g.push_back(&m_fragment->stats());
-  g.push_back(&m_writer->stats());
   return g;
 }
 
 void Tiler::trace(sc_core::sc_trace_file* tf) const {
-  std::vector<const UnitBase*> units = {m_front_end.get(), m_setup.get(),  m_silhouette.get(), m_tiling.get(),
-                                        m_fetch.get(),     m_fragment.get(), m_writer.get()};
-  if (m_evu) {
-    units.push_back(&m_evu->reject());
-    units.push_back(&m_evu->clip());
-    units.push_back(&m_evu->occlude());
+  std::vector<const UnitBase*> units = {m_front_end.get(), m_setup.get(), m_silhouette.get(), m_tiling.get()};
+  for (const Core& c : m_cores) {
+    units.push_back(c.fetch.get());
+    if (c.evu) {
+      units.push_back(&c.evu->reject());
+      units.push_back(&c.evu->clip());
+      units.push_back(&c.evu->occlude());
+    }
+    if (c.hsr) units.push_back(c.hsr.get());
+    units.push_back(c.fragment.get());
+    units.push_back(c.writer.get());
+    for (const auto& f : c.fifos) sc_core::sc_trace(tf, f->occupancy, std::string(f->name()) + ".occupancy");
+    if (c.evu) {
+      sc_core::sc_trace(tf, c.evu->reject_to_clip().occupancy, std::string(c.evu->reject_to_clip().name()) + ".occupancy");
+      sc_core::sc_trace(tf, c.evu->clip_to_occlude().occupancy, std::string(c.evu->clip_to_occlude().name()) + ".occupancy");
+    }
   }
-  if (m_hsr) units.push_back(m_hsr.get());
   for (const UnitBase* u : units) sc_core::sc_trace(tf, u->busy, std::string(u->name()) + ".busy");
   for (const auto& f : m_fifos) sc_core::sc_trace(tf, f->occupancy, std::string(f->name()) + ".occupancy");
-  if (m_evu) {
-    sc_core::sc_trace(tf, m_evu->reject_to_clip().occupancy, std::string(m_evu->reject_to_clip().name()) + ".occupancy");
-    sc_core::sc_trace(tf, m_evu->clip_to_occlude().occupancy, std::string(m_evu->clip_to_occlude().name()) + ".occupancy");
-  }
 }
 
 uint64_t Tiler::dram_bytes() const { return m_memory->bytes(); }
 uint64_t Tiler::param_buffer_bytes() const { return uint64_t(m_pb->stats().value("bytes_written")); }
 uint64_t Tiler::param_buffer_peak() const { return uint64_t(m_pb->stats().value("peak_bytes")); }
-uint64_t Tiler::evu_busy_cycles() const { return m_evu ? m_evu->busy_cycles() : 0; }
+uint64_t Tiler::evu_busy_cycles() const {
+  uint64_t n = 0;
+  for (const Core& c : m_cores)
+    if (c.evu) n += c.evu->busy_cycles();
+  return n;
+}
 
 }  // namespace tilevis::sim

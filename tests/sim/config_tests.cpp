@@ -55,7 +55,7 @@ TEST(Config, UnknownKeyIsAOneLineErrorWithASuggestion) {
 TEST(Config, OutOfRangeAndWrongTypeNameTheExpectation) {
   EXPECT_NE(error_of("", {"evu.reject.lanes=0"}).find("expected an integer in [1, 1024], got 0"), std::string::npos);
   EXPECT_NE(error_of("", {"sim.mode=magic"}).find("expected one of analytic, hybrid, hsr, early_z, none"), std::string::npos);
-  EXPECT_NE(error_of("", {"fragment.texture_hit_rate=1.5"}).find("expected a number in [0, 1]"), std::string::npos);
+  EXPECT_NE(error_of("", {"writer.colour_compression=1.5"}).find("expected a number in [0.01, 1]"), std::string::npos);
   EXPECT_NE(error_of("", {"sim.tile_width"}).find("expected key=value"), std::string::npos);
   const fs::path f = write_temp("broken.json", R"({"sim": {"tile_width": 32,})");
   EXPECT_NE(error_of(f.string(), {}).find(f.string() + ": line 1, column"), std::string::npos);
@@ -80,6 +80,16 @@ TEST(Config, ListParamsNamesEveryParameterWithDefaultAndUnit) {
   const std::string list = list_params();
   for (const std::string& name : param_names()) EXPECT_NE(list.find(name + " "), std::string::npos) << name;
   EXPECT_NE(list.find("evu.reject.lanes"), std::string::npos);
-  EXPECT_NE(list.find("bytes/cycle"), std::string::npos);
+  EXPECT_NE(list.find("memory.rcd"), std::string::npos);
+  EXPECT_NE(list.find("tCK"), std::string::npos);
   EXPECT_GT(param_names().size(), 50u);
+}
+
+TEST(Config, RulesBetweenParametersAreCheckedWithTheirNames) {
+  EXPECT_NE(error_of("", {"fetch.cache_bytes=1000"}).find("fetch.cache_bytes must be a multiple"), std::string::npos);
+  EXPECT_NE(error_of("", {"memory.row_bytes=100"}).find("memory.row_bytes must be a multiple of memory.burst_bytes"),
+            std::string::npos);
+  EXPECT_NE(error_of("", {"memory.rfc=9000"}).find("memory.rfc must be below memory.refi"), std::string::npos);
+  EXPECT_EQ(error_of("", {"sim.cores=4", "sim.scheduler=dynamic", "memory.channels=8"}), "");
+  EXPECT_NE(error_of("", {"sim.scheduler=zigzag"}).find("expected one of row_major, morton, dynamic"), std::string::npos);
 }

@@ -109,7 +109,7 @@ nlohmann::json run_unit(uint64_t expected, Mode mode, std::vector<TriangleWork> 
     FrameWorkConfig fc;
     fc.mode = mode;
     FrameWork work(empty_frame(), fc);
-    UnitEnv env{&work, kPeriod, false, sc_time::from_value(kPeriod.value() * 80)};
+    UnitEnv env{&work, kPeriod, false, nullptr};
     Harness h("harness", expected);
     h.items = items_of(tile_of(std::move(tris)), per_triangle);
     auto unit = make(env);
@@ -196,7 +196,7 @@ nlohmann::json run_evu(uint64_t expected, bool per_triangle) {
   return simtest::in_child([&] {
     sc_core::sc_report_handler::set_handler(collect);
     FrameWork work(empty_frame(), {});
-    UnitEnv env{&work, kPeriod, false, sc_time::from_value(kPeriod.value() * 80)};
+    UnitEnv env{&work, kPeriod, false, nullptr};
     Harness h("harness", expected);
     h.items = items_of(tile_of(tris), per_triangle);
     EarlyVisibilityUnit evu("evu", env, EarlyVisibilityConfig{}, 16);
@@ -251,23 +251,30 @@ struct Initiator : sc_core::sc_module {
 
 }  // namespace
 
-TEST(UnitTiming, MemoryReadTakesTransferPlusLatencyAndQueuesBehindAnother) {
-  // 32 B/cycle, latency 80: 320 B take 10 + 80 = 90 cycles; a second 320-B read issued at
-  // the same time waits 10 cycles for the bus: 100.
+TEST(UnitTiming, MemoryReadOpensARowThenTheSecondHitsIt) {
+  // LPDDR4-4266 defaults (tCK 469 ps, RCD 39, RL 36, 8 tCK per 32-byte burst) and 60 ns of
+  // controller: a 64-byte read at address 0 on an idle DRAM activates the row (RCD), its
+  // two bursts leave the bus at 75..83 and 83..91 tCK: 91 x 469 + 60,000 = 102,679 ps. A
+  // second read of the same bytes issued at the same time hits the open row and follows on
+  // the bus: its bursts end at 99 and 107 tCK: 107 x 469 + 60,000 = 110,183 ps.
   const auto r = simtest::in_child([] {
     sc_core::sc_report_handler::set_handler(collect);
     Memory mem("memory", MemoryConfig{}, kPeriod);
-    Initiator a("a", 320), b("b", 320);
+    Initiator a("a", 64), b("b", 64);
     a.socket.bind(mem.socket);
     b.socket.bind(mem.socket);
     sc_core::sc_start();
-    const uint64_t ta = a.done_at.value() / kPeriod.value(), tb = b.done_at.value() / kPeriod.value();
+    mem.finish(1);
+    const uint64_t ps = sc_time(1, sc_core::SC_PS).value();
+    const uint64_t ta = a.done_at.value() / ps, tb = b.done_at.value() / ps;
     return nlohmann::json{{"first", std::min(ta, tb)}, {"second", std::max(ta, tb)},
-                          {"queue", mem.stats().value("queue_cycles")}, {"reports", g_reports}};
+                          {"misses", mem.stats().value("row_misses")}, {"hits", mem.stats().value("row_hits")},
+                          {"reports", g_reports}};
   });
   ASSERT_FALSE(r.contains("error")) << r.dump();
-  EXPECT_EQ(r["first"].get<uint64_t>(), 90u);
-  EXPECT_EQ(r["second"].get<uint64_t>(), 100u);
-  EXPECT_EQ(r["queue"].get<double>(), 10.0);
+  EXPECT_EQ(r["first"].get<uint64_t>(), 102679u);
+  EXPECT_EQ(r["second"].get<uint64_t>(), 110183u);
+  EXPECT_EQ(r["misses"].get<double>(), 1.0);
+  EXPECT_EQ(r["hits"].get<double>(), 3.0);
   EXPECT_TRUE(r["reports"].empty());
 }

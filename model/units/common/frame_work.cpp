@@ -314,9 +314,11 @@ TileWork* FrameWork::open_tile(uint32_t tile) {
   w->pixels = (std::min(m_frame.width, x0 + m_cfg.tile_w) - x0) * (std::min(m_frame.height, y0 + m_cfg.tile_h) - y0);
   std::vector<uint32_t> list = uses_evu(m_cfg.mode) ? sg.golden->tile_triangles(tile) : sg.lists[tile];
   w->draws.reserve(list.size());
+  w->ids.reserve(list.size());
   for (uint32_t s : list) {
     const vis::SetupTriangle& t = sg.s->triangles[s];
     w->draws.push_back(t.draw);
+    w->ids.push_back(t.id);
     w->opaque += t.opaque;
   }
   if (uses_evu(m_cfg.mode)) {

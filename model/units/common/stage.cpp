@@ -11,7 +11,7 @@ Stage::Stage(const sc_core::sc_module_name& name, const UnitEnv& env, const std:
 void Stage::account(const Item& item, const Cost& c) {
   m_busy.value += double(c.cycles);
   m_items.value += 1;
-  m_bytes.value += double(c.read_bytes + c.write_bytes + c.pb_read_bytes);
+  m_bytes.value += double(c.reads.bytes() + c.writes.bytes() + c.pb_reads.bytes());
   if (item.tile && m_column != TileUnit::count) item.tile->cycles[size_t(m_column)] += c.cycles;
 }
 
@@ -23,12 +23,12 @@ void Stage::run() {
       const Cost c = cost(item);
       sc_core::sc_time memory = sc_core::SC_ZERO_TIME;
       if (m_mem) {
-        memory = transfer(*m_mem, tlm::TLM_READ_COMMAND, c.read_bytes, m_latency_hidden);
-        const sc_core::sc_time w = transfer(*m_mem, tlm::TLM_WRITE_COMMAND, c.write_bytes);
+        memory = transfer(*m_mem, tlm::TLM_READ_COMMAND, c.reads, m_latency_hidden);
+        const sc_core::sc_time w = transfer(*m_mem, tlm::TLM_WRITE_COMMAND, c.writes);
         if (w > memory) memory = w;
       }
       if (m_pb) {
-        const sc_core::sc_time v = transfer(*m_pb, tlm::TLM_READ_COMMAND, c.pb_read_bytes, m_latency_hidden);
+        const sc_core::sc_time v = transfer(*m_pb, tlm::TLM_READ_COMMAND, c.pb_reads, m_latency_hidden);
         if (v > memory) memory = v;
       }
       spend(c.cycles, memory, item.tile, m_column);

@@ -6,13 +6,14 @@
 #include <functional>
 
 #include "units/common/unit_base.h"
+#include "units/memory/traffic.h"
 
 namespace tilevis::sim {
 
 struct Cost {
   uint64_t cycles = 0;
-  uint64_t read_bytes = 0, write_bytes = 0;  // through the unit's memory socket
-  uint64_t pb_read_bytes = 0;                // from the parameter buffer (varyings for shading)
+  Traffic reads, writes;  // through the unit's memory socket (after the unit's caches)
+  Traffic pb_reads;       // from the parameter buffer (varyings for shading)
 };
 
 class Stage : public UnitBase {

@@ -14,14 +14,28 @@
 #include "units/common/frame_work.h"
 #include "units/common/stats.h"
 #include "units/common/work.h"
+#include "units/memory/traffic.h"
 
 namespace tilevis::sim {
+
+// Cycles during which at least one unit waited on DRAM beyond its own work.
+struct MemoryWaits {
+  int waiting = 0;
+  sc_core::sc_time since;
+  sc_core::sc_time total;
+  void enter() {
+    if (waiting++ == 0) since = sc_core::sc_time_stamp();
+  }
+  void leave() {
+    if (--waiting == 0) total += sc_core::sc_time_stamp() - since;
+  }
+};
 
 struct UnitEnv {
   FrameWork* work = nullptr;
   sc_core::sc_time period;      // one cycle of the GPU clock
   bool trace = false;           // drive busy/occupancy signals (VCD)
-  sc_core::sc_time memory_latency;  // what a prefetched or latency-tolerant read does not wait for
+  MemoryWaits* waits = nullptr;     // time some unit waited on DRAM (the memory-bound share)
 };
 
 // An sc_fifo that counts its occupancy for the VCD (sc_fifo traces contents, not fill).
@@ -69,21 +83,23 @@ class UnitBase : public sc_core::sc_module {
   void spend(uint64_t cycles) { spend(cycles, sc_core::SC_ZERO_TIME, nullptr, TileUnit::count); }
   // Writes to an output FIFO; time blocked on a full FIFO is a stall.
   void push(sc_core::sc_fifo_out<Item>& out, const Item& item);
-  // One TLM-2.0 transaction of `bytes` (timing only: the model moves no data, the payload
-  // points at a one-byte dummy). Returns the delay the target annotated; time the target
+  // One TLM-2.0 transaction per span of `traffic`, all issued now (timing only: the model
+  // moves no data, the payload points at a one-byte dummy; its address and length say
+  // where and how much). Returns the longest delay the target annotated; time the target
   // held the call (a full parameter buffer) counts as a stall. A read whose address was
   // known ahead (prefetched from a control stream) or whose latency the unit hides (shader
-  // threads waiting on texture) waits for the bus only, not the DRAM latency.
+  // threads waiting on texture) carries LatencyHidden (memory.h): it waits only for other
+  // traffic ahead of it.
   sc_core::sc_time transfer(tlm_utils::simple_initiator_socket<UnitBase>& socket, tlm::tlm_command cmd,
-                            uint64_t bytes, bool latency_hidden = false);
+                            const Traffic& traffic, bool latency_hidden = false);
 
   void enter_busy();
   void leave_busy();
 
   FrameWork& m_work;
   const sc_core::sc_time m_period;
-  const sc_core::sc_time m_memory_latency;
   const bool m_trace;
+  MemoryWaits* m_waits;
   StatsGroup m_stats;
   Stat& m_busy;
   Stat& m_stall;

@@ -59,6 +59,7 @@ struct TileWork {
   bool reload = false;                // depth/colour stored by an earlier partial render are read back
   bool store = false;                 // partial render: depth and colour written for a later segment
   std::vector<uint32_t> draws;        // per binned triangle, its draw (what tile fetch needs before visibility)
+  std::vector<uint32_t> ids;          // per binned triangle, its trace triangle (where its record lies)
   std::vector<TriangleWork> tris;     // per binned triangle, after resolve (list order)
   bool resolved = false;
   uint8_t per_pixel = 0;              // hybrid: 0 analytic, else why the tile went to the HSR unit

@@ -1,6 +1,10 @@
 // Fragment unit: rasterises what the visibility stage lets through and shades it at the
 // trace's cycles per fragment, fetching texture bytes per shaded fragment and the
 // varyings of each triangle with a shaded fragment from the parameter buffer.
+// Texture traffic follows a footprint model per draw: a draw's shaded pixels in a tile
+// touch texels_per_pixel texels each, contiguous in its texture, and the texture cache
+// holds them for the tile: DRAM reads the footprint's lines, at most what the shader asks
+// for (the trace's texture bytes per fragment); reuse across tiles is not modelled.
 //   analytic: the visible pieces' samples (plus, after a partial render, a depth test of
 //             each against the stored depth); hsr: the visible samples the ISP passes on;
 //   early_z:  every covered sample, depth-tested on arrival, the passing ones shaded;
@@ -18,8 +22,12 @@ struct FragmentUnitConfig {
   // 32 shader lanes: an IMG BXS-4-64 does 64 FP32 operations per clock (TI SPRUJB3C,
   // "Performance"), i.e. 32 fused multiply-adds; the trace's cycles per fragment are per lane.
   uint32_t shader_lanes = 32;
-  // Share of texture bytes served by the texture cache (assumption).
-  double texture_hit_rate = 0.9;
+  // Texture footprint: mip-mapping selects the level with about one texel per pixel
+  // (Williams, "Pyramidal parametrics", SIGGRAPH 1983); 4-byte RGBA8 texels and 64-byte
+  // cache lines are assumptions.
+  double texels_per_pixel = 1.0;
+  uint32_t texel_bytes = 4;
+  uint32_t texture_line_bytes = 64;
   uint32_t latency_cycles = 32;            // raster to shaded output, per tile (assumption)
 };
 
@@ -39,6 +47,7 @@ class FragmentUnit : public Stage {
   Stat& m_tests;
   Stat& m_shaded;
   Stat& m_shader_cycles;
+  Stat& m_texture_requested;
 };
 
 }  // namespace tilevis::sim

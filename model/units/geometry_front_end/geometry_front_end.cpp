@@ -53,14 +53,15 @@ void GeometryFrontEnd::prepare() {
 Cost GeometryFrontEnd::cost(const Item& it) const {
   Cost c;
   c.cycles = m_cycles[it.first + it.count] - m_cycles[it.first] + (it.last ? m_cfg.latency_cycles : 0);
-  c.read_bytes = m_bytes_prefix[it.first + it.count] - m_bytes_prefix[it.first];
+  // Index and vertex streams, contiguous in the order the draws read them.
+  c.reads.add(region::vertices + m_bytes_prefix[it.first], m_bytes_prefix[it.first + it.count] - m_bytes_prefix[it.first]);
   return c;
 }
 
 void GeometryFrontEnd::account(const Item& it, const Cost& c) {
   m_busy.value += double(c.cycles);
   m_items.value += 1;
-  m_bytes.value += double(c.read_bytes);
+  m_bytes.value += double(c.reads.bytes());
   m_triangles.value += it.count;
   for (uint32_t i = it.first; i < it.first + it.count; ++i) m_vertex_misses.value += m_misses[i];
 }
@@ -87,7 +88,7 @@ void GeometryFrontEnd::run() {
   for (const Item& it : batches()) {
     const Cost c = cost(it);
     // Index and vertex streams are sequential: prefetched after a segment's first batch.
-    const sc_core::sc_time memory = transfer(mem, tlm::TLM_READ_COMMAND, c.read_bytes, it.first != m_work.segment_first(it.segment));
+    const sc_core::sc_time memory = transfer(mem, tlm::TLM_READ_COMMAND, c.reads, it.first != m_work.segment_first(it.segment));
     spend(c.cycles, memory, nullptr, TileUnit::count);
     m_items.value += 1;
     m_triangles.value += it.count;

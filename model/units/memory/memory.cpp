@@ -1,46 +1,96 @@
 #include "units/memory/memory.h"
 
+#include <algorithm>
+
+#include "units/common/unit_base.h"
+
 namespace tilevis::sim {
 
 Memory::Memory(const sc_core::sc_module_name& name, const MemoryConfig& config, const sc_core::sc_time& period)
     : sc_core::sc_module(name),
       socket("socket"),
       m_cfg(config),
+      m_dram(config.dram),
       m_period(period),
-      m_latency(sc_core::sc_time::from_value(period.value() * config.latency_cycles)),
-      m_stats(std::string(sc_core::sc_module::name()), "DRAM: every unit's traffic through one data bus"),
+      m_period_ps(period.value() / sc_core::sc_time(1, sc_core::SC_PS).value()),
+      m_controller_ps(uint64_t(config.controller_latency_ns) * 1000),
+      m_stats(std::string(sc_core::sc_module::name()), "memory system: LPDDR4-class DRAM shared by every unit"),
       m_read(m_stats.add("bytes_read", "bytes", "bytes read")),
       m_written(m_stats.add("bytes_written", "bytes", "bytes written")),
-      m_transactions(m_stats.add("transactions", "transactions", "TLM transactions served")),
-      m_busy(m_stats.add("busy_cycles", "cycles", "cycles the data bus transfers", false)),
-      m_queue(m_stats.add("queue_cycles", "cycles", "cycles transactions waited for the bus (contention)", false)) {
+      m_transactions(m_stats.add("transactions", "transactions", "transfers served")),
+      m_bursts(m_stats.add("bursts", "bursts", "DRAM bursts")),
+      m_row_hits(m_stats.add("row_hits", "bursts", "bursts to an open row")),
+      m_row_misses(m_stats.add("row_misses", "bursts", "bursts that opened a row in a closed bank")),
+      m_row_conflicts(m_stats.add("row_conflicts", "bursts", "bursts that closed another row first")),
+      m_refreshes(m_stats.add("refreshes", "refreshes", "all-bank refreshes, summed over the channels")),
+      m_refresh_wait(m_stats.add("refresh_wait_cycles", "cycles", "time bursts waited for a refresh to end", false)),
+      m_busy(m_stats.add("busy_cycles", "cycles", "data-bus cycles, averaged over the channels", false)),
+      m_utilisation(m_stats.add("utilisation", "share", "busy_cycles / frame cycles", false)) {
   socket.register_b_transport(this, &Memory::b_transport);
 }
 
-uint64_t Memory::account(uint64_t bytes, bool read) {
-  if (bytes == 0) return 0;
+int Memory::attach(tlm_utils::simple_initiator_socket<UnitBase>& initiator, const std::string& stream) {
+  initiator.bind(socket);
+  int index = -1;
+  for (size_t i = 0; i < m_streams.size(); ++i)
+    if (m_streams[i]->name == "bytes_" + stream) index = int(i);
+  if (index < 0) {
+    m_streams.push_back(&m_stats.add("bytes_" + stream, "bytes", "bytes moved by the " + stream + " stream"));
+    index = int(m_streams.size() - 1);
+  }
+  m_stream_of.push_back(index);
+  return index;
+}
+
+uint64_t Memory::read_latency_cycles() const {
+  const DramConfig& d = m_cfg.dram;
+  const uint64_t ps = m_controller_ps + uint64_t(d.rcd + d.rl + d.ccd) * d.tck_ps;
+  return (ps + m_period_ps - 1) / m_period_ps;
+}
+
+sc_core::sc_time Memory::occupy(const sc_core::sc_time& at, uint64_t address, uint64_t bytes, bool read, int stream,
+                                bool hidden) {
+  if (bytes == 0) return sc_core::SC_ZERO_TIME;
   (read ? m_read : m_written).value += double(bytes);
   m_transactions.value += 1;
-  m_busy.value += double(bytes) / double(m_cfg.bytes_per_cycle);
-  return (bytes + m_cfg.bytes_per_cycle - 1) / m_cfg.bytes_per_cycle;
+  if (stream >= 0 && size_t(stream) < m_streams.size()) m_streams[size_t(stream)]->value += double(bytes);
+  const uint64_t ps = sc_core::sc_time(1, sc_core::SC_PS).value();
+  const uint64_t at_ps = at.value() / ps;
+  // Reads come back through the controller; writes are posted once the DRAM has them.
+  uint64_t queued = 0;
+  const uint64_t done = m_dram.access(at_ps, address, bytes, read, &queued) + (read ? m_controller_ps : 0);
+  // A write is posted into the controller's write buffer: like a prefetched read, its
+  // issuer waits only for other traffic ahead of it (the buffer drains behind).
+  return sc_core::sc_time::from_value((!read || hidden ? queued : done - at_ps) * ps);
 }
 
-sc_core::sc_time Memory::occupy(const sc_core::sc_time& at, uint64_t bytes, bool read) {
-  account(bytes, read);
-  const sc_core::sc_time start = m_free_at > at ? m_free_at : at;
-  // The bus holds bytes / bandwidth cycles, to the picosecond: no rounding per transaction,
-  // so a stream cut into per-primitive transactions takes the same time as one transfer.
-  const sc_core::sc_time hold = sc_core::sc_time::from_value(
-      sc_dt::uint64(double(m_period.value()) * double(bytes) / double(m_cfg.bytes_per_cycle) + 0.5));
-  m_free_at = start + hold;
-  m_queue.value += double((start - at).value()) / double(m_period.value());
-  // Reads return after the latency; writes are posted once the bus has taken the data.
-  return (start - at) + hold + (read ? m_latency : sc_core::SC_ZERO_TIME);
+uint64_t Memory::service(uint64_t at, const Traffic& traffic, bool read, int stream) {
+  const sc_core::sc_time t = sc_core::sc_time::from_value(m_period.value() * at);
+  uint64_t longest = 0;
+  for (const Span& s : traffic.spans) {
+    const uint64_t v = occupy(t, s.address, s.bytes, read, stream).value();
+    longest = std::max(longest, v);
+  }
+  return (longest + m_period.value() - 1) / m_period.value();
 }
 
-void Memory::b_transport(int, tlm::tlm_generic_payload& p, sc_core::sc_time& delay) {
+void Memory::finish(uint64_t frame_cycles) {
+  const DramCounters& n = m_dram.counters();
+  m_bursts.value = double(n.bursts);
+  m_row_hits.value = double(n.row_hits);
+  m_row_misses.value = double(n.row_misses);
+  m_row_conflicts.value = double(n.row_conflicts);
+  m_refreshes.value = double(n.refreshes);
+  m_refresh_wait.value = double(n.refresh_wait_ps) / double(m_period_ps);
+  m_busy.value = double(n.bus_busy_ps) / double(m_period_ps) / double(m_cfg.dram.channels);
+  m_utilisation.value = frame_cycles ? m_busy.value / double(frame_cycles) : 0.0;
+}
+
+void Memory::b_transport(int id, tlm::tlm_generic_payload& p, sc_core::sc_time& delay) {
   const sc_core::sc_time at = sc_core::sc_time_stamp() + delay;
-  delay += occupy(at, p.get_data_length(), p.is_read());
+  LatencyHidden* hidden = nullptr;
+  p.get_extension(hidden);
+  delay += occupy(at, p.get_address(), p.get_data_length(), p.is_read(), size_t(id) < m_stream_of.size() ? m_stream_of[size_t(id)] : -1, hidden != nullptr);
   p.set_response_status(tlm::TLM_OK_RESPONSE);
 }
 

@@ -1,25 +1,43 @@
-// DRAM behind a TLM-2.0 target socket: latency, bandwidth in bytes per cycle, and an
-// occupancy-based contention model (the data bus is one resource; a transfer waits until
-// the bus is free, holds it for bytes / bandwidth cycles). Every initiator binds to one
-// multi-passthrough socket. Timing only: no data is stored. Streams (control streams,
-// primitive records, tile write-outs) are contiguous, so a transfer is charged its bytes,
-// not whole bursts: splitting a stream into per-primitive transactions costs no extra.
+// The memory system behind a TLM-2.0 target socket: the DRAM timing model (dram.h:
+// channels, banks, rows, refresh) shared by every requester, plus the fabric and
+// controller latency a read pays on top. Each requester binds through attach() under a
+// stream name, and the stats count its bytes. Timing only: no data is stored; the
+// transaction's address says where the bytes lie (traffic.h's regions), its length how
+// many.
 #pragma once
+
+#include <string>
+#include <vector>
 
 #include <systemc>
 #include <tlm>
 #include <tlm_utils/multi_passthrough_target_socket.h>
+#include <tlm_utils/simple_initiator_socket.h>
 
 #include "units/common/stats.h"
+#include "units/memory/dram.h"
+#include "units/memory/traffic.h"
 
 namespace tilevis::sim {
 
+class UnitBase;
+
+// On a read whose address was known ahead (prefetched from a control stream or an index
+// stream) or whose latency the unit hides (shader threads waiting on texture): the reader
+// waits only for other traffic ahead of it on the DRAM's buses, not for the latency, its
+// own bursts or a refresh (those the prefetch covers; the bandwidth they cost still
+// delays everyone behind them).
+struct LatencyHidden : tlm::tlm_extension<LatencyHidden> {
+  tlm::tlm_extension_base* clone() const override { return new LatencyHidden; }
+  void copy_from(const tlm::tlm_extension_base&) override {}
+};
+
 struct MemoryConfig {
-  // LPDDR4-3200 on a 64-bit bus: 3200 MT/s x 8 B = 25.6 GB/s (data rate: JEDEC JESD209-4;
-  // the 64-bit bus is an assumption for a PowerVR-class SoC) = 32 B per 800 MHz GPU cycle.
-  uint32_t bytes_per_cycle = 32;
-  // Load-to-use latency of ~100 ns, typical of mobile LPDDR4 systems (assumption) = 80 cycles.
-  uint32_t latency_cycles = 80;
+  DramConfig dram;
+  // Interconnect and controller latency of a read beyond the DRAM's own (assumption: a
+  // mobile SoC's unloaded DRAM read takes ~100 ns; the LPDDR4 row miss, RCD + RL + a
+  // burst, is ~39 ns of it).
+  uint32_t controller_latency_ns = 60;
 };
 
 class Memory : public sc_core::sc_module {
@@ -27,28 +45,44 @@ class Memory : public sc_core::sc_module {
   tlm_utils::multi_passthrough_target_socket<Memory> socket;
 
   Memory(const sc_core::sc_module_name& name, const MemoryConfig& config, const sc_core::sc_time& period);
+  // Binds a requester's socket; its bytes are counted as `stream` (sockets may share a
+  // stream). Returns the stream's index, for service().
+  int attach(tlm_utils::simple_initiator_socket<UnitBase>& initiator, const std::string& stream);
   StatsGroup& stats() { return m_stats; }
   uint64_t bytes() const { return uint64_t(m_read.value + m_written.value); }
 
-  // Delay of a transfer of `bytes` issued at `at`, occupying the bus (what b_transport
-  // annotates; also the closed form the analytic level uses for one transfer).
-  sc_core::sc_time occupy(const sc_core::sc_time& at, uint64_t bytes, bool read);
-  // Counts a transfer without simulated time (the analytic level); returns its bus cycles.
-  uint64_t account(uint64_t bytes, bool read);
-  uint32_t latency_cycles() const { return m_cfg.latency_cycles; }
+  // Delay of one transfer issued at `at` (what b_transport annotates).
+  sc_core::sc_time occupy(const sc_core::sc_time& at, uint64_t address, uint64_t bytes, bool read, int stream,
+                          bool hidden = false);
+  // The analytic level: `traffic` issued at cycle `at`, returns the cycles until it is done.
+  uint64_t service(uint64_t at, const Traffic& traffic, bool read, int stream);
+  // A read's unloaded latency (a row miss plus the controller), in cycles of the clock.
+  uint64_t read_latency_cycles() const;
+  // Copies the DRAM's counters into the stats (call once the frame is done).
+  void finish(uint64_t frame_cycles);
+  const Dram& dram() const { return m_dram; }
 
  private:
   void b_transport(int id, tlm::tlm_generic_payload& p, sc_core::sc_time& delay);
 
   MemoryConfig m_cfg;
-  sc_core::sc_time m_period, m_latency;
-  sc_core::sc_time m_free_at;  // the data bus is busy until then
+  Dram m_dram;
+  sc_core::sc_time m_period;
+  uint64_t m_period_ps, m_controller_ps;
   StatsGroup m_stats;
   Stat& m_read;
   Stat& m_written;
   Stat& m_transactions;
+  Stat& m_bursts;
+  Stat& m_row_hits;
+  Stat& m_row_misses;
+  Stat& m_row_conflicts;
+  Stat& m_refreshes;
+  Stat& m_refresh_wait;
   Stat& m_busy;
-  Stat& m_queue;
+  Stat& m_utilisation;
+  std::vector<Stat*> m_streams;      // per stream
+  std::vector<int> m_stream_of;      // per bound socket, in bind order: its stream
 };
 
 }  // namespace tilevis::sim

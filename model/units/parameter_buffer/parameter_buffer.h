@@ -12,6 +12,7 @@
 
 #include "units/common/stage.h"
 #include "units/geometry_front_end/geometry_front_end.h"
+#include "units/memory/traffic.h"
 
 namespace tilevis::sim {
 
@@ -42,6 +43,11 @@ class ParameterBuffer : public UnitBase {
   // does not fit.
   void prepare(const GeometryFrontEnd& front_end);
   uint64_t bytes(uint32_t first, uint32_t end) const { return m_prefix[end] - m_prefix[first]; }
+  // Where trace triangle `id` of segment `k` starts in DRAM: each segment fills the buffer
+  // from its start (its positions, then its new vertices' varyings, then its edges).
+  uint64_t address(uint32_t k, uint32_t id) const {
+    return region::parameters + m_prefix[id] - m_prefix[m_work.segment_first(k)];
+  }
   uint64_t segment_bytes(uint32_t k) const { return m_segment_bytes[k]; }
   // What tile fetch reads for one triangle of a tile's list: its positions only (the ISP
   // "only fetches screen-space position data", docs.imgtec.com, PowerVR architecture,

@@ -100,8 +100,9 @@ Cost SilhouetteUnit::cost(const Item& it) const {
   const uint32_t a = it.first, b = it.first + it.count;
   c.cycles = m_cycles[b] - m_cycles[a];
   if (it.last && uses_evu(m_work.mode())) c.cycles += m_cfg.latency_cycles;
-  c.write_bytes = m_spill_write[b] - m_spill_write[a];
-  c.read_bytes = m_spill_read[b] - m_spill_read[a];
+  // Spilled entries go to a region of their own, written and read back in order.
+  c.writes.add(region::spill + m_spill_write[a], m_spill_write[b] - m_spill_write[a]);
+  c.reads.add(region::spill + m_spill_read[a], m_spill_read[b] - m_spill_read[a]);
   return c;
 }
 

@@ -5,7 +5,7 @@ namespace tilevis::sim {
 TileFetch::TileFetch(const sc_core::sc_module_name& name, const UnitEnv& env, const TileFetchConfig& config,
                      const ParameterBuffer& buffer, const FramebufferConfig& framebuffer, bool per_primitive)
     : UnitBase(name, env, "tile fetch: control streams, edges and primitives of each tile from the parameter buffer"),
-      ready("ready"),
+      tiles("tiles"),
       out("out"),
       pb("pb"),
       mem("mem"),
@@ -13,35 +13,53 @@ TileFetch::TileFetch(const sc_core::sc_module_name& name, const UnitEnv& env, co
       m_buffer(buffer),
       m_fb(framebuffer),
       m_per_primitive(per_primitive),
+      m_cache(config.cache),
       m_tiles(m_stats.add("tiles", "tiles", "tiles fetched (a tile counts once per segment)")),
       m_triangles(m_stats.add("triangle_fetches", "triangles", "triangle records fetched (one per tile reference)")),
       m_reloads(m_stats.add("tile_reloads", "tiles", "tiles whose stored depth/colour was read back")),
       m_extra_passes(m_stats.add("evu_extra_passes", "passes",
-                                 "extra passes over lists longer than the EVU's on-chip capacity")) {
+                                 "extra passes over lists longer than the EVU's on-chip capacity")),
+      m_cache_hits(m_stats.add("cache_hits", "lines", "primitive-record lines found in the parameter cache")),
+      m_cache_misses(m_stats.add("cache_misses", "lines", "primitive-record lines read from DRAM")) {
   SC_THREAD(run);
 }
 
-Cost TileFetch::cost(const Item& it) const {
+Cost TileFetch::cost(const Item& it) {
   const TileWork& w = *it.tile;
   const ParameterBufferConfig& pc = m_buffer.config();
   Cost c;
-  c.read_bytes = uint64_t(it.count) * m_buffer.position_record_bytes();
+  // The tile's control stream (references, then its edge records: their placement beside
+  // the stream is an assumption), read once, in order.
+  const uint64_t stream = region::control + uint64_t(w.tile) * region::control_per_tile;
+  if (it.first_of_tile)
+    c.reads.add(stream, uint64_t(w.triangles()) * pc.reference_bytes + uint64_t(w.edges) * (pc.edge_bytes + pc.reference_bytes));
+  // Each triangle's position record, through the parameter cache.
+  const uint64_t hits_before = m_cache.hits(), misses_before = m_cache.misses();
+  for (uint32_t i = it.first; i < it.first + it.count; ++i)
+    m_cache.read(m_buffer.address(w.segment, w.ids[i]), m_buffer.position_record_bytes(), c.reads);
+  m_cache_hits.value += double(m_cache.hits() - hits_before);
+  m_cache_misses.value += double(m_cache.misses() - misses_before);
   c.cycles = ceil_div(it.count, m_cfg.primitives_per_clock);
   if (it.first_of_tile) {
-    c.read_bytes += uint64_t(w.triangles()) * pc.reference_bytes + uint64_t(w.edges) * (pc.edge_bytes + pc.reference_bytes);
     c.cycles += ceil_div(w.edges, m_cfg.edges_per_clock);
     // Each extra pass streams the edges and the occluders' positions again.
     const uint64_t extra = w.passes - 1;
-    c.read_bytes += extra * (uint64_t(w.edges) * pc.edge_bytes + uint64_t(w.opaque) * m_buffer.position_record_bytes());
+    c.reads.add(stream + uint64_t(w.triangles()) * pc.reference_bytes,
+                extra * (uint64_t(w.edges) * pc.edge_bytes + uint64_t(w.opaque) * m_buffer.position_record_bytes()));
     c.cycles += extra * (ceil_div(w.edges, m_cfg.edges_per_clock) + ceil_div(w.opaque, m_cfg.primitives_per_clock));
   }
   if (it.last) c.cycles += m_cfg.latency_cycles;
   return c;
 }
 
-uint64_t TileFetch::reload_bytes(const Item& it) const {
-  if (!it.first_of_tile || !it.tile->reload) return 0;
-  return uint64_t(it.tile->pixels) * m_work.samples() * (m_fb.colour_bytes + m_fb.depth_bytes);
+Traffic TileFetch::reload(const Item& it) const {
+  Traffic t;
+  if (!it.first_of_tile || !it.tile->reload) return t;
+  const uint64_t tile_bytes = uint64_t(m_work.config().tile_w) * m_work.config().tile_h * m_work.samples() *
+                              (m_fb.colour_bytes + m_fb.depth_bytes);
+  t.add(region::stored + uint64_t(it.tile->tile) * tile_bytes, uint64_t(it.tile->pixels) * m_work.samples() *
+                                                                   (m_fb.colour_bytes + m_fb.depth_bytes));
+  return t;
 }
 
 std::vector<Item> TileFetch::items(TileWork* w) const {
@@ -61,10 +79,9 @@ std::vector<Item> TileFetch::items(TileWork* w) const {
 }
 
 void TileFetch::account(const Item& it, const Cost& c) {
-  const uint64_t reload = reload_bytes(it);
   m_busy.value += double(c.cycles);
   m_items.value += 1;
-  m_bytes.value += double(c.read_bytes + reload);
+  m_bytes.value += double(c.reads.bytes() + reload(it).bytes());
   it.tile->cycles[size_t(TileUnit::fetch)] += c.cycles;
   m_triangles.value += it.count;
   if (it.first_of_tile) {
@@ -76,33 +93,30 @@ void TileFetch::account(const Item& it, const Cost& c) {
 
 void TileFetch::run() {
   for (;;) {
-    const uint32_t k = ready.read();
-    m_work.prepare_segment(k);
-    for (uint32_t tile : m_work.segment_tiles()) {
-      TileWork* w = m_work.open_tile(tile);
-      w->start_cycle = cycles(sc_core::sc_time_stamp());
-      for (const Item& it : items(w)) {
-        const Cost c = cost(it);
-        // The control stream names every record of the tile: after the tile's first read
-        // the rest are prefetched, so only the first waits for the DRAM latency.
-        sc_core::sc_time memory = transfer(pb, tlm::TLM_READ_COMMAND, c.read_bytes, !it.first_of_tile);
-        const sc_core::sc_time reload = transfer(mem, tlm::TLM_READ_COMMAND, reload_bytes(it));
-        if (reload > memory) memory = reload;
-        spend(c.cycles, memory, w, TileUnit::fetch);
-        m_items.value += 1;
-        m_triangles.value += it.count;
-        if (it.first_of_tile) {
-          m_tiles.value += 1;
-          m_reloads.value += w->reload;
-          m_extra_passes.value += w->passes - 1;
-        }
-        push(out, it);
-      }
+    const Item tile = tiles.read();
+    if (tile.kind == Item::Kind::segment_end) {
+      push(out, tile);
+      continue;
     }
-    Item end;
-    end.kind = Item::Kind::segment_end;
-    end.segment = k;
-    push(out, end);
+    TileWork* w = tile.tile;
+    w->start_cycle = cycles(sc_core::sc_time_stamp());
+    for (const Item& it : items(w)) {
+      const Cost c = cost(it);
+      // The control stream names every record of the tile: after the tile's first read
+      // the rest are prefetched, so only the first waits for the DRAM latency.
+      sc_core::sc_time memory = transfer(pb, tlm::TLM_READ_COMMAND, c.reads, !it.first_of_tile);
+      const sc_core::sc_time stored = transfer(mem, tlm::TLM_READ_COMMAND, reload(it));
+      if (stored > memory) memory = stored;
+      spend(c.cycles, memory, w, TileUnit::fetch);
+      m_items.value += 1;
+      m_triangles.value += it.count;
+      if (it.first_of_tile) {
+        m_tiles.value += 1;
+        m_reloads.value += w->reload;
+        m_extra_passes.value += w->passes - 1;
+      }
+      push(out, it);
+    }
   }
 }
 

@@ -31,7 +31,7 @@ void TilingEngine::prepare() {
 Cost TilingEngine::cost(const Item& it) const {
   Cost c;
   c.cycles = m_cycles[it.first + it.count] - m_cycles[it.first] + (it.last ? m_cfg.latency_cycles : 0);
-  c.write_bytes = m_buffer.bytes(it.first, it.first + it.count);
+  c.writes.add(m_buffer.address(it.segment, it.first), m_buffer.bytes(it.first, it.first + it.count));
   return c;
 }
 

@@ -1,0 +1,56 @@
+// Tile scheduler: hands a segment's tiles to the tile cores (each: fetch, EVU or HSR,
+// fragment, writer) and joins them at the segment's end.
+//   row_major: tiles in row-major order, tile i to core i mod N (static);
+//   morton:    tiles in Morton (Z) order, tile i to core i mod N (static);
+//   dynamic:   Morton order, each tile to the first core that takes one (a core's queue
+//              holds one tile beyond the one it fetches).
+// At a segment's end every core gets a segment_end; when all have written their last
+// tile the scheduler closes the segment and releases its parameter-buffer pages.
+#pragma once
+
+#include <vector>
+
+#include "units/common/unit_base.h"
+
+namespace tilevis::sim {
+
+enum class Schedule : uint8_t { row_major, morton, dynamic };
+const char* to_string(Schedule s);
+
+struct TileSchedulerConfig {
+  uint32_t cores = 1;
+  Schedule policy = Schedule::row_major;
+};
+
+class TileScheduler : public UnitBase {
+ public:
+  sc_core::sc_fifo_in<uint32_t> ready;                  // segments the parameter buffer holds
+  sc_core::sc_vector<sc_core::sc_fifo_out<Item>> to_core;
+  sc_core::sc_vector<sc_core::sc_fifo_in<uint32_t>> done;  // per core: it finished a segment
+  sc_core::sc_fifo_out<uint32_t> released;              // segments rendered: free their pages
+
+  SC_HAS_PROCESS(TileScheduler);
+  TileScheduler(const sc_core::sc_module_name& name, const UnitEnv& env, const TileSchedulerConfig& config);
+
+  // The segment's non-empty tiles in this policy's order (both levels).
+  std::vector<uint32_t> order(const std::vector<uint32_t>& row_major) const;
+  // Static policies: the core of the i-th tile in order.
+  uint32_t static_core(size_t i) const { return uint32_t(i % m_cfg.cores); }
+  const TileSchedulerConfig& config() const { return m_cfg; }
+  // Counts a tile given to `core` (both levels).
+  void count(uint32_t core);
+  uint64_t frame_end_cycle() const { return m_frame_end; }
+  bool frame_done() const { return m_done; }
+
+ private:
+  void dispatch();
+  void join();
+  uint32_t free_core();
+
+  TileSchedulerConfig m_cfg;
+  uint64_t m_frame_end = 0;
+  bool m_done = false;
+  std::vector<Stat*> m_core_tiles;
+};
+
+}  // namespace tilevis::sim
