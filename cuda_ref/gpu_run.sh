@@ -117,34 +117,44 @@ phase_cross() {
   # Golden (CPU) first and all at once, so that no CPU load overlaps the timed GPU runs.
   for s in $(scenes); do
     for t in $TILES; do
-      [ -f "$WORK/$s/t$t/golden/stats.json" ] || jobs+=("$s $t")
+      [ -f "$WORK/$s/t$t/golden/stats.json" ] || jobs+=("$s $t analytic golden")
+      [ -f "$WORK/$s/t$t/golden_hybrid/stats.json" ] || jobs+=("$s $t hybrid golden_hybrid")
     done
   done
   if [ ${#jobs[@]} -gt 0 ]; then
     say "golden: ${#jobs[@]} runs on $JOBS cores"
     printf '%s\n' "${jobs[@]}" | xargs -P "$JOBS" -L 1 bash -c \
-      '"$0" golden "$1/$4.tvt" --tile "$5" -o "$2/$4/t$5/golden" >"$3/golden_$4_$5.log" 2>&1 || echo "golden $4 $5 failed" >&2' \
+      '"$0" golden "$1/$4.tvt" --tile "$5" --mode "$6" -o "$2/$4/t$5/$7" >"$3/$7_$4_$5.log" 2>&1 || echo "golden $4 $5 $6 failed" >&2' \
       "$BIN" "$TRACES" "$WORK" "$LOGS" 2>&1 | tee -a "$LOGS/errors.log" >&2 || true
   fi
   say "golden done ($(elapsed))"
   for s in $(scenes); do
     for t in $TILES; do
       local d="$WORK/$s/t$t"
-      for p in exact float; do
+      for p in exact float hybrid_exact hybrid_float; do
+        local mode=analytic prec="$p" ref=golden
+        case "$p" in hybrid_*) mode=hybrid prec="${p#hybrid_}" ref=golden_hybrid ;; esac
         if [ ! -f "$d/$p/stats.json" ]; then
           local hw; hw="$(hw_ms "$s")"
-          "$BIN" cuda "$TRACES/$s.tvt" --tile "$t" --precision "$p" --runs "$RUNS" --device "$DEVICE" -o "$d/$p" \
-            ${hw:+--hw-raster-ms "$hw"} \
+          "$BIN" cuda "$TRACES/$s.tvt" --tile "$t" --mode "$mode" --precision "$prec" --runs "$RUNS" --device "$DEVICE" \
+            -o "$d/$p" ${hw:+--hw-raster-ms "$hw"} \
             >"$LOGS/cuda_${s}_${t}_$p.log" 2>&1 || { say "cuda $s $t $p failed: $(tail -n 1 "$LOGS/cuda_${s}_${t}_$p.log")"; continue; }
         fi
-        if [ -f "$d/golden/stats.json" ] && [ ! -f "$d/cmp_$p/compare.json" ]; then
-          "$BIN" compare "$d/golden" "$d/$p" -o "$d/cmp_$p" >"$LOGS/compare_${s}_${t}_$p.log" 2>&1 || say "compare $s $t $p failed"
+        if [ -f "$d/$ref/stats.json" ] && [ ! -f "$d/cmp_$p/compare.json" ]; then
+          "$BIN" compare "$d/$ref" "$d/$p" -o "$d/cmp_$p" >"$LOGS/compare_${s}_${t}_$p.log" 2>&1 || say "compare $s $t $p failed"
+        fi
+        # Hybrid against the exact truth (ids): float hybrid's disagreement measured too.
+        if [ "$mode" = hybrid ] && [ -f "$WORK/$s/truth/stats.json" ] && [ ! -f "$d/cmp_truth_$p/compare.json" ]; then
+          "$BIN" compare "$WORK/$s/truth" "$d/$p" -o "$d/cmp_truth_$p" >/dev/null 2>&1 || say "compare truth $s $t $p failed"
         fi
       done
       if [ -f "$d/exact/stats.json" ] && [ -f "$d/float/stats.json" ] && [ ! -f "$d/cmp_float_exact/compare.json" ]; then
         "$BIN" compare "$d/exact" "$d/float" -o "$d/cmp_float_exact" >/dev/null 2>&1 || say "compare $s $t float/exact failed"
       fi
       # An exact mismatch is a bug: say where, with the cause of every mismatched sample.
+      if grep -qE '"(mismatched_samples|tile_counter_mismatches)": [1-9]' "$d/cmp_hybrid_exact/compare.json" 2>/dev/null; then
+        say "MISMATCH: $s at $t (exact hybrid vs golden hybrid)"
+      fi
       if grep -qE '"(mismatched_samples|tile_counter_mismatches)": [1-9]' "$d/cmp_exact/compare.json" 2>/dev/null; then
         say "MISMATCH: $s at $t (exact vs golden): explaining"
         "$BIN" compare "$d/golden" "$d/exact" --explain "$TRACES/$s.tvt" -o "$d/cmp_exact_explain" \
@@ -226,10 +236,14 @@ phase_sanitize() {
   command -v compute-sanitizer >/dev/null || { echo "compute-sanitizer not found" >"$WORK/meta/sanitizer.txt"; return; }
   : >"$WORK/meta/sanitizer.txt.tmp"
   for tool in memcheck racecheck; do
-    for p in exact float zb_tiled zb_naive; do
+    for p in exact float zb_tiled zb_naive hybrid_exact hybrid_float; do
       local log="$LOGS/sanitizer_${tool}_$p.log" rc=0
       local args=(--tile 32 --precision "$p" --baselines off)
-      case "$p" in zb_*) args=(--zbuffer "${p#zb_}") ;; esac
+      # Hybrid with small lists, so that tiles go per pixel (budget) and its kernels run.
+      case "$p" in
+        zb_*) args=(--zbuffer "${p#zb_}") ;;
+        hybrid_*) args=(--tile 32 --mode hybrid --list-capacity 24,8 --precision "${p#hybrid_}" --baselines off) ;;
+      esac
       compute-sanitizer --tool "$tool" --error-exitcode 3 "$BIN" cuda "$small" "${args[@]}" --runs 1 \
         -o "$WORK/sanitize/${tool}_$p" >"$log" 2>&1 || rc=$?
       local line

@@ -52,7 +52,7 @@ struct ZArgs {
   const uint64_t* key_sorted;
   const uint32_t* tri_sorted;
   uint64_t* bin_begin;  // n_bins + 1
-  uint64_t n_pairs;
+  uint64_t n_pairs, n_setup;
   const uint32_t* sample_xy;
   int32_t* ids;
   uint32_t width, height, samples, sb, bin_w, bin_h, bins_x, bins_y;
@@ -92,16 +92,22 @@ TV_HD void zb_prepare(const ZArgs& a, uint64_t i) {
   a.bin_count[i] = uint32_t((px1 / a.bin_w - px0 / a.bin_w + 1) * (py1 / a.bin_h - py0 / a.bin_h + 1));
 }
 
-TV_HD void zb_emit(const ZArgs& a, uint64_t i) {
-  if (a.bin_count[i] == 0) return;
-  const ZTri& z = a.tris[i];
-  uint64_t o = a.bin_offset[i];
-  for (int32_t by = z.py0 / int32_t(a.bin_h); by <= z.py1 / int32_t(a.bin_h); ++by)
-    for (int32_t bx = z.px0 / int32_t(a.bin_w); bx <= z.px1 / int32_t(a.bin_w); ++bx) {
-      a.pair_key[o] = uint64_t(by) * a.bins_x + uint64_t(bx);
-      a.pair_tri[o] = uint32_t(i);
-      ++o;
-    }
+// A thread per (bin, triangle) pair, so a triangle over many bins costs no more than many
+// small ones: the pair's triangle is the last whose offset is <= it (binary search), its bin
+// the pair's rank in the triangle's bins, row-major.
+TV_HD void zb_emit(const ZArgs& a, uint64_t o) {
+  uint64_t lo = 0, hi = a.n_setup;  // bin_offset[lo] <= o < bin_offset[hi]
+  while (hi - lo > 1) {
+    const uint64_t mid = (lo + hi) / 2;
+    if (a.bin_offset[mid] <= o) lo = mid;
+    else hi = mid;
+  }
+  const ZTri& z = a.tris[lo];
+  const uint64_t r = o - a.bin_offset[lo];
+  const uint32_t bx0 = uint32_t(z.px0) / a.bin_w, by0 = uint32_t(z.py0) / a.bin_h;
+  const uint32_t w = uint32_t(z.px1) / a.bin_w - bx0 + 1;
+  a.pair_key[o] = uint64_t(by0 + uint32_t(r / w)) * a.bins_x + (bx0 + uint32_t(r % w));
+  a.pair_tri[o] = uint32_t(lo);
 }
 
 // bin_begin[b]: the first sorted pair of bin b or after (lower bound), for b in [0, n_bins].
@@ -423,7 +429,8 @@ ZBufferResult run_cuda_zbuffer(const trace::Frame& frame, const CudaConfig& cfg,
     a.key_sorted = z.key_sorted.need(n_pairs + 1);
     a.tri_sorted = z.tri_sorted.need(n_pairs + 1);
     a.bin_begin = z.bin_begin.need(n_bins + 1);
-    ex.launch(k_zb_emit, zb_emit, p.n_setup, a);
+    a.n_setup = p.n_setup;
+    ex.launch(k_zb_emit, zb_emit, n_pairs, a);
     marks.mark(2);
     ex.sort_pairs(a.pair_key, z.key_sorted.get(), a.pair_tri, z.tri_sorted.get(), n_pairs, int(bits_for(n_bins)));
     ex.launch(k_zb_bounds, zb_bounds, n_bins + 1, a);

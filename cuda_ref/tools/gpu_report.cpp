@@ -93,7 +93,8 @@ int main(int argc, char** argv) {
     });
     for (const auto& td : tiles) {
       const json golden = load(td / "golden/stats.json");
-      for (const char* prec : {"exact", "float"}) {
+      for (const char* prec : {"exact", "float", "hybrid_exact", "hybrid_float"}) {
+        if (std::string(prec).rfind("hybrid", 0) == 0 && !fs::exists(td / prec)) continue;
         const json st = load(td / prec / "stats.json");
         json e = {{"scene", sd.filename().string()},
                   {"tile", std::stoi(td.filename().string().substr(1))},
@@ -125,6 +126,12 @@ int main(int argc, char** argv) {
         if (num(st, "hw_raster_ms", 0) > 0) e["hw_raster_ratio_new_frame"] = num(st, "stream_total_ms") / num(st, "hw_raster_ms");
         if (num(st, "cuda_zbuffer_ms", 0) > 0)
           e["cuda_zbuffer_ratio_new_frame"] = num(st, "stream_total_ms") / num(st, "cuda_zbuffer_ms");
+        if (std::string(prec).rfind("hybrid", 0) == 0) {
+          const json tr = load(td / (std::string("cmp_truth_") + prec) / "compare.json");
+          e["per_pixel_fallback"] = st["totals"].value("per_pixel_fallback", json(nullptr));
+          e["mismatched_samples_vs_truth"] = tr.is_null() ? json(nullptr) : tr["mismatched_samples"];
+          e["area_mismatches_vs_golden_hybrid"] = cmp.is_null() ? json(nullptr) : cmp["area_mismatches"];
+        }
         e["peak_device_bytes"] = st["peak_device_bytes"];
         e["retries"] = st["retries"];
         e["upload_ms"] = st["upload_ms"];
@@ -221,6 +228,24 @@ int main(int argc, char** argv) {
        << (std::isnan(agree) ? "n/a" : fmt(100 * agree, 4) + " %") << " | " << e["tile_counter_mismatches"].dump()
        << " | " << fve << " | " << fmt(num(e, "peak_device_bytes", 0) / 1048576.0, 1) << " | "
        << fmt(num(e["floor"], "bandwidth_ms"), 4) << " / " << fmt(num(e["floor"], "launch_and_sync_ms"), 3) << " |\n";
+  }
+  md << "\n## Hybrid (golden --mode hybrid on the GPU)\n\n`vs golden hybrid`: ids, tile counters (the verdict "
+        "columns per_pixel, per_pixel_cause, detection_screens, detection_tests included) and areas against golden's "
+        "hybrid; `vs truth`: mismatched samples against the exact z-buffer truth.\n\n"
+        "| scene | tile | precision | total ms | new frame ms | agreement vs golden hybrid | tile-counter mismatches | "
+        "area mismatches | vs truth | per-pixel tiles (interpenetration / non-opaque / budget) |\n"
+        "|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const auto& e : report["entries"]) {
+    if (e.contains("error") || !e.contains("per_pixel_fallback")) continue;
+    const json& fb = e["per_pixel_fallback"];
+    md << "| " << e["scene"].get<std::string>() << " | " << e["tile"] << " | " << e["precision"].get<std::string>()
+       << " | " << fmt(num(e, "total_ms")) << " | " << fmt(num(e, "stream_total_ms")) << " | "
+       << fmt(100 * num(e, "sample_agreement_vs_golden"), 4) << " % | " << e["tile_counter_mismatches"].dump() << " | "
+       << e["area_mismatches_vs_golden_hybrid"].dump() << " | " << e["mismatched_samples_vs_truth"].dump() << " | "
+       << (fb.is_object() ? fb["tiles"].dump() + " (" + fb["tiles_interpenetration"].dump() + " / " +
+                                fb["tiles_non_opaque"].dump() + " / " + fb["tiles_budget"].dump() + ")"
+                          : std::string("n/a"))
+       << " |\n";
   }
   md << "\n## Z-buffer baselines on the same GPU (1080p or the trace's viewport, 1 sample)\n\n"
         "`gl`: the GPU's own rasteriser through OpenGL/EGL (GL_TIME_ELAPSED around clear + draws), ids against the "
