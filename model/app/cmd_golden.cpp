@@ -1,6 +1,7 @@
 // tilevis golden T -o DIR: the untimed SVGPU visibility pipeline's canonical outputs;
 // with --truth, the z-buffer truth of the same snapped scene in the same layout.
 #include <chrono>
+#include <filesystem>
 #include <vector>
 
 #include <fmt/format.h>
@@ -9,6 +10,7 @@
 #include "progress.h"
 #include "tilevis/outputs.h"
 #include "tilevis/trace.h"
+#include "visibility/evu_jobs.h"
 #include "visibility/golden.h"
 #include "visibility/setup.h"
 #include "visibility/svg.h"
@@ -18,7 +20,7 @@ namespace tilevis::app {
 namespace {
 
 struct GoldenArgs {
-  std::string trace, out, tile = "32", svg, occlusion_bin;
+  std::string trace, out, tile = "32", svg, occlusion_bin, dump_evu_jobs;
   uint32_t samples = 0, frame = 0, depth_bits = 24, quantized_depth_bits = 0;
   bool truth = false;
   std::string mode = "analytic";
@@ -149,6 +151,12 @@ int run_golden(const GoldenArgs& a, const trace::Frame& frame, uint32_t tw, uint
                {"host_seconds", setup_s + tiles_s}};
   outputs::write_result(out, a.out);
   if (!a.svg.empty()) vis::write_svg(a.svg, r.width, r.height, r.pieces);
+  if (!a.dump_evu_jobs.empty()) {
+    std::filesystem::create_directories(a.dump_evu_jobs);
+    const std::string path = a.dump_evu_jobs + "/evu_jobs.txt";
+    const uint64_t jobs = vis::write_evu_jobs(s, tw, th, a.frame, path);
+    fmt::print("  {} early-visibility tile jobs -> {}\n", jobs, path);
+  }
   fmt::print("golden {} frame {} at {}x{} tiles: {} triangles, {} silhouette edges, {} candidate pairs, {} clips, "
              "{} pieces ({} visible), {:.3f} s -> {}\n",
              a.trace, a.frame, tw, th, s.stats.triangles_in, s.stats.silhouette_edges, r.candidate_pairs,
@@ -192,6 +200,9 @@ Command add_golden_command(CLI::App& app) {
       ->delimiter(',')
       ->capture_default_str();
   cmd->add_option("--svg", a->svg, "Also write the visible planar map as SVG");
+  cmd->add_option("--dump-evu-jobs", a->dump_evu_jobs,
+                  "Also write every tile's early-visibility job (rectangle, triangles, silhouette edges, the "
+                  "analytic counters) to DIR/evu_jobs.txt: the RTL testbenches' vectors (rtl_ref/README.md)");
   cmd->add_option("--occlusion-bin", a->occlusion_bin,
                   "Finer occlusion bins (SVGPU 4.1), N or WxH pixels within each tile: only the scanning of "
                   "occluders shrinks; ids and counters are unchanged (default: the tile)");
