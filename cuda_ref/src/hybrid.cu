@@ -10,7 +10,8 @@
 // `detection_bin` pixels in row-major order, in each a sweep keeping the triangles whose depth
 // range reaches the current one's nearest depth, a pair screened (may_cross, opposite mesh
 // neighbours) and tested (planes_cross) in the first bin it shares; the first crossing ends
-// the tile's search. A thread per tile: the verdict is a sequential walk by definition.
+// the tile's search. A warp per tile: the pairs the walk visits are known in order (see
+// crossing_pairs), so its lanes take them 32 at a time.
 //
 // Per-pixel tiles: ids and the tile's samples_covered / fragments_generated from the tile's
 // z-buffer (the other per-tile counters are 0, as golden's per_pixel resolver leaves them);
@@ -39,7 +40,6 @@ struct HybArgs {
   uint64_t* tests;
   uint32_t* crossing;
   uint32_t* range;   // per occluder position: bins x0, y0, x1, y1 (8 bits each); ~0: empty in the tile
-  uint32_t* active;  // per occluder position: scratch of the sweep
   uint8_t* flag;     // per occluder position: in some crossing pair (count_all)
   // Per-pixel tiles.
   const uint32_t* sample_xy;
@@ -50,7 +50,8 @@ struct HybArgs {
 
 template <class P>
 TV_HD inline XTri exact_of(const TileTri<P>& t) {
-  return make_tile_tri<ExactP>(t.v[0], t.v[1], t.v[2], t.id, t.opaque != 0);
+  if constexpr (P::kExact) return t;  // already exact
+  else return make_tile_tri<ExactP>(t.v[0], t.v[1], t.v[2], t.id, t.opaque != 0);
 }
 
 // sign(z_p - z_q) at an implicit point (w > 0): M = alpha x + beta y + gamma w < 2^(100+D),
@@ -105,6 +106,14 @@ TV_HD inline bool planes_cross(const PEdge<ExactP>* region, uint32_t n, const XT
   return nearer && farther;
 }
 
+TV_HD inline uint32_t lowest_bit(uint32_t v) {
+#if defined(__CUDA_ARCH__)
+  return uint32_t(__ffs(int(v)) - 1);
+#else
+  return uint32_t(__builtin_ctz(v));
+#endif
+}
+
 struct Bins {
   uint32_t x, y;
   int64_t step, x0, y0;
@@ -114,14 +123,18 @@ struct Bins {
   }
 };
 
-// hybrid_resolver.cpp crossing_pairs: 1 at the first crossing pair (counting screens and
-// tests), or with count_all the triangles in some crossing pair.
-template <class P>
-TV_HD uint32_t crossing_pairs(const HybArgs<P>& a, uint32_t tile, bool count_all, uint64_t& screens, uint64_t& tests) {
+// hybrid_resolver.cpp crossing_pairs, by a team of lanes: 1 at the first crossing pair
+// (counting screens and tests up to it), or with count_all the triangles in some crossing pair.
+// Golden's sweep visits, in each bin (row-major), each member k in list order against the
+// active members a < k, in list order; since z_min never decreases along the list, a is still
+// active at k exactly when z_max[a] > z_min[k]. So the visited pairs are known in advance and
+// in order: the lanes take 32 consecutive a at a time, and a ballot finds the first crossing.
+template <class P, class Team>
+TV_HD uint32_t crossing_pairs(const HybArgs<P>& a, uint32_t tile, bool count_all, uint64_t& screens, uint64_t& tests,
+                              Team team) {
   const uint32_t base = a.item_begin[tile], n = a.occ_count[tile];
   const OccRec* occ = a.occ + base;
   uint32_t* range = a.range + base;
-  uint32_t* active = a.active + base;
   uint8_t* flag = a.flag + base;
   const Rect rect = a.grid.rect(tile);
   Bins g;
@@ -129,12 +142,12 @@ TV_HD uint32_t crossing_pairs(const HybArgs<P>& a, uint32_t tile, bool count_all
   g.step = int64_t(a.detection_bin ? a.detection_bin : (tw > th ? tw : th)) << a.grid.sb;
   g.x = uint32_t((int64_t(rect.x1) - rect.x0 + g.step - 1) / g.step);
   g.y = uint32_t((int64_t(rect.y1) - rect.y0 + g.step - 1) / g.step);
-  PEdge<ExactP> poly[kTileCap];
-  for (uint32_t k = 0; k < n; ++k) {
+  const uint32_t lane = team.lane();
+  for (uint32_t k = lane; k < n; k += Team::kSize) {
     const TileTri<P>& t = a.tris[occ[k].tri];
+    PEdge<ExactP> poly[kTileCap];
     bool overflow = false;
-    const XTri x = exact_of(t);
-    if (tile_polygon<ExactP>(x, rect, poly, overflow) == 0) {
+    if (tile_polygon<ExactP>(exact_of(t), rect, poly, overflow) == 0) {
       range[k] = ~0u;
     } else {
       range[k] = g.of(t.bbox.x0, rect.x0, g.x) | g.of(t.bbox.y0, rect.y0, g.y) << 8 | g.of(t.bbox.x1, rect.x0, g.x) << 16 |
@@ -142,50 +155,64 @@ TV_HD uint32_t crossing_pairs(const HybArgs<P>& a, uint32_t tile, bool count_all
     }
     flag[k] = 0;
   }
-  uint32_t found = 0;
+  team.sync();
+  auto in_bin = [](uint32_t r, uint32_t bx, uint32_t by) {
+    return r != ~0u && bx >= (r & 0xff) && by >= (r >> 8 & 0xff) && bx <= (r >> 16 & 0xff) && by <= (r >> 24);
+  };
+  bool any = false;
   for (uint32_t by = 0; by < g.y; ++by)
-    for (uint32_t bx = 0; bx < g.x; ++bx) {
-      uint32_t n_active = 0;
+    for (uint32_t bx = 0; bx < g.x; ++bx)
       for (uint32_t k = 0; k < n; ++k) {
         const uint32_t rk = range[k];
-        if (rk == ~0u || bx < (rk & 0xff) || by < (rk >> 8 & 0xff) || bx > (rk >> 16 & 0xff) || by > (rk >> 24)) continue;
+        if (!in_bin(rk, bx, by)) continue;
         const TileTri<P>& t = a.tris[occ[k].tri];
-        uint32_t m = 0;
-        for (uint32_t i = 0; i < n_active; ++i)
-          if (!(a.tris[occ[active[i]].tri].z_max <= t.z_min)) active[m++] = active[i];
-        n_active = m;
-        bool have_poly = false;
-        uint32_t np = 0;
-        XTri xt;
-        for (uint32_t i = 0; i < n_active; ++i) {
-          const uint32_t q = active[i];
-          const TileTri<P>& u = a.tris[occ[q].tri];
-          if (u.id == t.id) continue;
-          screens += count_all ? 0 : 1;
-          const uint32_t rq = range[q];
-          const uint32_t x0 = tmax(rk & 0xff, rq & 0xff), y0 = tmax(rk >> 8 & 0xff, rq >> 8 & 0xff);
-          if (x0 != bx || y0 != by) continue;
-          if (!may_cross(t, u) || opposite_neighbours(t, u)) continue;
-          tests += count_all ? 0 : 1;
-          if (!have_poly) {
-            xt = exact_of(t);
-            bool overflow = false;
-            np = tile_polygon<ExactP>(xt, rect, poly, overflow);
-            have_poly = true;
+        for (uint32_t a0 = 0; a0 < k; a0 += Team::kSize) {
+          const uint32_t q = a0 + lane;
+          bool screen = false, test = false, cross = false;
+          if (q < k && in_bin(range[q], bx, by)) {
+            const TileTri<P>& u = a.tris[occ[q].tri];
+            if (u.z_max > t.z_min && u.id != t.id) {
+              screen = true;
+              const uint32_t rq = range[q];
+              const uint32_t x0 = tmax(rk & 0xff, rq & 0xff), y0 = tmax(rk >> 8 & 0xff, rq >> 8 & 0xff);
+              if (x0 == bx && y0 == by && may_cross(t, u) && !opposite_neighbours(t, u)) {
+                test = true;
+                const XTri xt = exact_of(t);
+                PEdge<ExactP> poly[kTileCap];
+                bool overflow = false;
+                const uint32_t np = tile_polygon<ExactP>(xt, rect, poly, overflow);
+                cross = planes_cross(poly, np, xt, exact_of(u));
+              }
+            }
           }
-          if (!planes_cross(poly, np, xt, exact_of(u))) continue;
-          if (!count_all) return 1;
-          found += (flag[k] ? 0u : 1u) + (flag[q] ? 0u : 1u);
-          flag[k] = flag[q] = 1;
+          const uint32_t sm = team.ballot(screen), tm = team.ballot(test), cm = team.ballot(cross);
+          if (count_all) {
+            if (cross) flag[q] = flag[k] = 1;
+            any = any || cm != 0;
+            continue;
+          }
+          if (cm == 0) {
+            screens += popc(sm);
+            tests += popc(tm);
+            continue;
+          }
+          // The first crossing lane ends the search: the pairs before it and it were visited.
+          const uint32_t first = lowest_bit(cm);
+          const uint32_t upto = first == 31 ? ~0u : (2u << first) - 1u;
+          screens += popc(sm & upto);
+          tests += popc(tm & upto);
+          return 1;
         }
-        active[n_active++] = k;
       }
-    }
-  return found;
+  if (!count_all) return 0;
+  team.sync();
+  uint32_t found = 0;
+  for (uint32_t k = lane; k < n; k += Team::kSize) found += flag[k];
+  return uint32_t(team.sum(found));
 }
 
-template <class P>
-TV_HD void verdict(const HybArgs<P>& a, uint64_t tile) {
+template <class P, class Team>
+TV_HD void verdict(const HybArgs<P>& a, uint64_t tile, Team team) {
   const int64_t* row = a.rows + tile * kTileColumns;
   const uint64_t tris = uint64_t(row[kColTriangles]), edges = uint64_t(row[kColEdges]);
   uint64_t screens = 0, tests = 0;
@@ -194,20 +221,31 @@ TV_HD void verdict(const HybArgs<P>& a, uint64_t tile) {
   else if ((a.pair_budget && tris * edges > a.pair_budget) || (a.list_triangles && tris > a.list_triangles) ||
            (a.list_edges && edges > a.list_edges))
     cause = 3;
-  else if (crossing_pairs(a, uint32_t(tile), false, screens, tests)) {
+  else if (crossing_pairs(a, uint32_t(tile), false, screens, tests, team)) {
     cause = 1;
     uint64_t s2 = 0, t2 = 0;
-    crossing = crossing_pairs(a, uint32_t(tile), true, s2, t2);
+    team.sync();
+    crossing = crossing_pairs(a, uint32_t(tile), true, s2, t2, team);
   }
-  a.cause[tile] = cause;
-  a.screens[tile] = screens;
-  a.tests[tile] = tests;
-  a.crossing[tile] = crossing;
+  if (team.lane() == 0) {
+    a.cause[tile] = cause;
+    a.screens[tile] = screens;
+    a.tests[tile] = tests;
+    a.crossing[tile] = crossing;
+  }
+  team.sync();
+}
+
+template <class P>
+TV_HD void verdict_host(const HybArgs<P>& a, uint64_t tile) {
+  verdict<P>(a, tile, HostTeam{});
 }
 
 template <class P>
 __global__ void k_verdict(HybArgs<P> a, uint64_t n) {
-  TV_GRID_LOOP(i, n) verdict<P>(a, i);
+  const uint64_t warps = uint64_t(gridDim.x) * (blockDim.x / 32);
+  for (uint64_t t = uint64_t(blockIdx.x) * (blockDim.x / 32) + threadIdx.x / 32; t < n; t += warps)
+    verdict<P>(a, t, WarpTeam{});
 }
 
 // ---- per-pixel tiles ------------------------------------------------------------------------
@@ -441,7 +479,6 @@ void stage_hybrid(Pipeline<P>& p) {
   a.tests = p.hyb_tests.need(nt + 1);
   a.crossing = p.hyb_crossing.need(nt + 1);
   a.range = p.hyb_range.need(ni + 1);
-  a.active = p.hyb_active.need(ni + 1);
   a.flag = p.hyb_flag.need(ni + 1);
   a.sample_xy = p.sample_xy.get();
   a.n_samples = p.f.n_samples;
@@ -450,7 +487,13 @@ void stage_hybrid(Pipeline<P>& p) {
   a.ids = p.ids.get();
   a.owned = p.hyb_owned.need(ni + 1);
   ex.zero(a.owned, (ni + 1) * 4);
-  ex.launch(k_verdict<P>, verdict<P>, nt, a, 64);
+  if (ex.where == Where::cpu) {
+    for (uint64_t t = 0; t < nt; ++t) verdict_host<P>(a, ex.host_index(t, nt));
+  } else {
+    k_verdict<P><<<uint32_t(tmin<uint64_t>((nt + 3) / 4, uint64_t(ex.grid_blocks) * 8)), 128, 0, ex.stream>>>(a, nt);
+    TV_CUDA(cudaGetLastError());
+    ++ex.queued;
+  }
   if (ex.where == Where::cpu) {
     for (uint64_t t = 0; t < nt; ++t) per_pixel_tile<P>(a, ex.host_index(t, nt));
   } else {
