@@ -121,7 +121,7 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team, uint64_t* stag
     a.item_slot[j] = uint32_t(base);
   }
   team.sync();
-  uint32_t count = 1, splits = 0, anomalies = 0;
+  uint32_t count = 1, splits = 0, anomalies = 0, regularized = 0;
   bool failed = false;
   // A step waits on nothing it could have loaded earlier: the next step's edge is read during
   // this one, and a piece's polygon (written by an earlier step, so not in L1) is read whole,
@@ -161,7 +161,9 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team, uint64_t* stag
       if (flag && !fail) {
         const uint64_t at = step_at + incl - need;
         PolyOut<P> in{a.pool + at, 0, m + 1, false}, out{a.pool + at + m + 1, 0, m + 1, false};
-        split<P>(poly, m, e.line, in, out);
+        bool regular = false;
+        split<P>(poly, m, e.line, in, out, &regular);
+        regularized += regular ? 1 : 0;
         if (in.overflow || out.overflow) {
           ++anomalies;  // only float arithmetic can break convexity
           in.n = tmin(in.n, m + 1);
@@ -184,6 +186,7 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team, uint64_t* stag
   team.sync();
   count_add(&a.rows[uint64_t(tile) * kTileColumns + kColClips], splits);
   count_add(&a.counters[kFloatAnomalies], anomalies);
+  count_add(&a.counters[kFloatRegularized], regularized);
   if (lane == 0) {
     if (failed) atomic_add(&a.counters[kClipOverflow], 1);
     a.piece_count[j] = count;

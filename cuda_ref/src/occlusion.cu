@@ -110,7 +110,13 @@ TV_HD void occ_finish(const OccArgs<P>& a, uint64_t p, const PieceView<P>& v, bo
   a.visible[p] = hidden ? 0 : 1;
   count_add(&row[kColVisiblePieces], hidden ? 0 : 1);
   count_add(&a.counters[kVisibleTriangles], hidden ? 0 : v.n - 2);
-  if (!hidden) a.area[p] = ddiv(doubled_area<P>(v.e, v.n), a.area_scale);
+  if (!hidden) {
+    // A piece's area is positive; float vertices of a sliver can turn its computed area
+    // negative: it counts as 0 (and is counted), so no area changes sign.
+    const double area = ddiv(doubled_area<P>(v.e, v.n), a.area_scale);
+    if constexpr (!P::kExact) count_add(&a.counters[kFloatNegativeAreas], area < 0 ? 1u : 0u);
+    a.area[p] = P::kExact || area >= 0 ? area : 0.0;
+  }
 }
 
 // An unclipped item's piece (if its tile polygon is not empty) in the per-tile piece count and

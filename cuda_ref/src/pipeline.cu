@@ -625,6 +625,8 @@ CudaResult run(const trace::Frame& frame, const CudaConfig& cfg) {
   r.visible_triangles = c[kVisibleTriangles];
   r.max_tile_pieces = c[kMaxTilePieces];
   r.float_anomalies = c[kFloatAnomalies];
+  r.float_regularized = c[kFloatRegularized];
+  r.float_negative_areas = c[kFloatNegativeAreas];
   r.deep_pairs = c[kDeepPairs];
   r.peak_device_bytes = ex.peak_bytes();
   r.min_dram_bytes = p.f.n_vertices * 16 + p.f.n_triangles * 12 + n_samples * 4;

@@ -44,6 +44,8 @@ enum Counter : uint32_t {
   kVisibleTriangles,
   kMaxTilePieces,
   kHeavyPieces,     // occlusion of unclipped pieces with finer bins: pieces queued for a warp each
+  kFloatRegularized,  // float: splits whose vertex sides were made those of a convex polygon
+  kFloatNegativeAreas,  // float: visible pieces whose float area came out negative (counted as 0)
   kCounterCount
 };
 

@@ -179,11 +179,39 @@ TV_HD inline SilEdge<P> make_sil_edge(const Vtx& a, const Vtx& b) {
   return e;
 }
 
+inline constexpr uint32_t kTileCap = 8;  // edges of a tile polygon (tile_polygon)
+
+// Float: the sides of a polygon's vertices against l, made those of a convex polygon. Float
+// vertices (meets rounded to float) can leave more than one run of positive vertices, and a
+// split would then emit a non-convex part with more edges than its bound. Keeps the first run
+// of positive vertices (cyclically) and a zero at either end of it; every other vertex counts
+// as negative. Returns whether a sign was changed. Exact polygons are convex: never called.
+inline constexpr uint32_t kSideCap = 32;
+template <class P>
+TV_HD inline bool convex_sides(const PEdge<P>* poly, uint32_t n, const typename P::Line& l, int8_t* sg) {
+  for (uint32_t i = 0; i < n; ++i) sg[i] = int8_t(P::side(l, poly[i].start));
+  uint32_t start = n;
+  for (uint32_t i = 0; i < n && start == n; ++i)
+    if (sg[i] > 0 && sg[i == 0 ? n - 1 : i - 1] <= 0) start = i;
+  if (start == n) return false;  // all positive, or none: nothing to split
+  bool changed = false;
+  uint32_t i = start, end;
+  while (sg[i] > 0 && (i = i + 1 == n ? 0 : i + 1) != start) {}
+  end = i;  // first vertex after the run
+  const uint32_t before = start == 0 ? n - 1 : start - 1;
+  for (uint32_t k = end; k != start; k = k + 1 == n ? 0 : k + 1) {
+    const bool keep_zero = sg[k] == 0 && (k == end || k == before);
+    if (sg[k] >= 0 && !keep_zero) {
+      changed = true;
+      sg[k] = -1;
+    }
+  }
+  return changed;
+}
+
 // The triangle's polygon (positive order, vertex 0 = v0) clipped to the tile rectangle by
 // its top, right, bottom and left lines, keeping the inside. <= 3 + 4 = 7 edges when exact.
 // Returns the edge count (0: empty); `overflow` when a float polygon outgrew kTileCap.
-inline constexpr uint32_t kTileCap = 8;
-
 template <class P>
 TV_HD inline uint32_t tile_polygon(const TileTri<P>& t, const Rect& r, PEdge<P>* out, bool& overflow) {
   PEdge<P> buf[kTileCap];
@@ -217,11 +245,17 @@ TV_HD inline uint32_t tile_polygon(const TileTri<P>& t, const Rect& r, PEdge<P>*
     if (!neg) continue;
     if (!pos) return 0;
     PolyOut<P> o{next, 0, kTileCap, false};
-    const int s0 = P::side(l, cur[0].start);
-    int si = s0;
+    // Float: the sides made those of a convex polygon (convex_sides), so no part outgrows it.
+    int8_t sg[kTileCap];
+    if constexpr (P::kExact) {
+      for (uint32_t i = 0; i < n; ++i) sg[i] = int8_t(P::side(l, cur[i].start));
+    } else {
+      convex_sides<P>(cur, n, l, sg);
+    }
+    int si = sg[0];
     for (uint32_t i = 0; i < n; ++i) {
       const uint32_t j = i + 1 == n ? 0 : i + 1;
-      const int sn = j == 0 ? s0 : P::side(l, cur[j].start);
+      const int sn = sg[j];
       if (si > 0 || sn > 0) {
         o.push(cur[i].line, si >= 0 ? cur[i].start : P::meet(l, cur[i].line));
         if (sn <= 0) o.push(l, sn == 0 ? cur[j].start : P::meet(cur[i].line, l));
@@ -293,10 +327,41 @@ TV_HD inline bool survives(const PEdge<P>* poly, uint32_t n, const TileTri<P>& t
   return s2 > 0 || (s1 == 0 && s2 == 0);
 }
 
+// split's pass with the sides given.
+template <class P>
+TV_HD inline void split_sides(const PEdge<P>* poly, uint32_t n, const typename P::Line& l, const int8_t* sg,
+                              PolyOut<P>& in, PolyOut<P>& out) {
+  const typename P::Line lf = l.flipped();
+  for (uint32_t i = 0; i < n; ++i) {
+    const uint32_t j = i + 1 == n ? 0 : i + 1;
+    const int si = sg[i], sn = sg[j];
+    const typename P::Line& li = poly[i].line;
+    if (si > 0 || sn > 0) {
+      in.push(li, si >= 0 ? poly[i].start : P::meet(l, li));
+      if (sn <= 0) in.push(l, sn == 0 ? poly[j].start : P::meet(li, l));
+    }
+    if (si < 0 || sn < 0) {
+      out.push(li, si <= 0 ? poly[i].start : P::meet(lf, li));
+      if (sn >= 0) out.push(lf, sn == 0 ? poly[j].start : P::meet(li, lf));
+    }
+  }
+}
+
 // Splits a polygon that `l` crosses into inside = poly ∩ {l >= 0} and outside = poly ∩
 // {l <= 0}, in one pass over the vertices (signs: one positive block, one negative block).
+// Float: the signs made convex first (convex_sides; `regularized` says whether they changed).
 template <class P>
-TV_HD inline void split(const PEdge<P>* poly, uint32_t n, const typename P::Line& l, PolyOut<P>& in, PolyOut<P>& out) {
+TV_HD inline void split(const PEdge<P>* poly, uint32_t n, const typename P::Line& l, PolyOut<P>& in, PolyOut<P>& out,
+                        bool* regularized = nullptr) {
+  if constexpr (!P::kExact) {
+    if (n <= kSideCap) {
+      int8_t sg[kSideCap];
+      const bool changed = convex_sides<P>(poly, n, l, sg);
+      if (regularized) *regularized = changed;
+      split_sides<P>(poly, n, l, sg, in, out);
+      return;
+    }
+  }
   const typename P::Line lf = l.flipped();
   const int s0 = P::side(l, poly[0].start);
   int si = s0;

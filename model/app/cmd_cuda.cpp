@@ -158,7 +158,9 @@ int run(const CudaArgs& a, const trace::Frame& frame, uint32_t tw, uint32_t th) 
                            {"max_tile_edges", r.max_tile_edges},
                            {"max_tile_pieces", r.max_tile_pieces},
                            {"deep_pairs", r.deep_pairs},
-                           {"float_anomalies", r.float_anomalies}};
+                           {"float_anomalies", r.float_anomalies},
+                           {"float_regularized", r.float_regularized},
+                           {"float_negative_areas", r.float_negative_areas}};
   // Shader invocations (once per pixel and triangle) are the covered samples at 1 sample per
   // pixel; with more samples the CUDA reference does not count them (golden does).
   if (r.samples == 1) totals["fragments_shaded"] = r.samples_covered;

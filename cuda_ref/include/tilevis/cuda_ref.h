@@ -70,6 +70,8 @@ struct CudaResult {
   uint64_t max_tile_triangles = 0, max_tile_edges = 0, max_tile_pieces = 0;
   uint64_t deep_pairs = 0;       // pairs past the cheap tests (test 6, bounding boxes, test 4)
   uint64_t float_anomalies = 0;  // float only: polygons that outgrew their bound (non-convex results)
+  uint64_t float_regularized = 0;     // float only: splits whose vertex sides were made convex first
+  uint64_t float_negative_areas = 0;  // float only: visible pieces whose area came out negative (counted 0)
 
   // Medians of the whole pipeline (trace in device memory -> id raster). GPU: the frame as one
   // CUDA graph, replayed (its host reads of sizes answered by the first runs; each replay is
