@@ -136,7 +136,8 @@ int main(int argc, char** argv) {
         e["retries"] = st["retries"];
         e["upload_ms"] = st["upload_ms"];
         e["golden_host_seconds"] = golden.is_null() ? json(nullptr) : golden["host_seconds"];
-        for (const char* k : {"candidate_pairs", "clip_polygons", "pieces", "visible_pieces", "pair_tests", "float_anomalies"})
+        for (const char* k : {"candidate_pairs", "clip_polygons", "pieces", "visible_pieces", "pair_tests", "float_anomalies",
+                              "float_regularized", "float_negative_areas"})
           e[k] = st["totals"].value(k, json(nullptr));
         // Lower bounds: DRAM traffic no implementation avoids, and the launches and host
         // round trips this implementation makes (at the device's measured costs).
@@ -228,6 +229,18 @@ int main(int argc, char** argv) {
        << (std::isnan(agree) ? "n/a" : fmt(100 * agree, 4) + " %") << " | " << e["tile_counter_mismatches"].dump()
        << " | " << fve << " | " << fmt(num(e, "peak_device_bytes", 0) / 1048576.0, 1) << " | "
        << fmt(num(e["floor"], "bandwidth_ms"), 4) << " / " << fmt(num(e["floor"], "launch_and_sync_ms"), 3) << " |\n";
+  }
+  md << "\n## Float and sign\n\n`float_anomalies`: polygons that outgrew their bound; `regularized`: splits whose "
+        "float vertex sides were made convex first; `negative areas`: visible pieces whose float area came out "
+        "negative (counted as 0); `max area rel error` vs exact above 1 would mean a sign flip.\n\n"
+        "| scene | tile | precision | float_anomalies | regularized | negative areas | max area rel error vs exact |\n"
+        "|---|---|---|---|---|---|---|\n";
+  for (const auto& e : report["entries"]) {
+    if (e.contains("error") || e["precision"].get<std::string>().find("float") == std::string::npos) continue;
+    const double rel = e.contains("float_vs_exact") ? num(e["float_vs_exact"], "max_area_rel_error") : NAN;
+    md << "| " << e["scene"].get<std::string>() << " | " << e["tile"] << " | " << e["precision"].get<std::string>()
+       << " | " << e["float_anomalies"].dump() << " | " << e["float_regularized"].dump() << " | "
+       << e["float_negative_areas"].dump() << " | " << (std::isnan(rel) ? std::string("") : fmt(rel, 4)) << " |\n";
   }
   md << "\n## Hybrid (golden --mode hybrid on the GPU)\n\n`vs golden hybrid`: ids, tile counters (the verdict "
         "columns per_pixel, per_pixel_cause, detection_screens, detection_tests included) and areas against golden's "
