@@ -23,6 +23,8 @@ Command add_golden_command(CLI::App& app);
 Command add_sim_command(CLI::App& app);
 Command add_cuda_command(CLI::App& app);
 Command add_sweep_command(CLI::App& app);
+Command add_capture_command(CLI::App& app);
+Command add_compare_depth_command(CLI::App& app);
 
 // Parses "WxH" or "N" (square).
 bool parse_size(const std::string& text, uint32_t& width, uint32_t& height);

@@ -18,6 +18,8 @@ int main(int argc, char** argv) {
       tilevis::app::add_compare_command(app),
       tilevis::app::add_cuda_command(app),
       tilevis::app::add_sweep_command(app),
+      tilevis::app::add_capture_command(app),
+      tilevis::app::add_compare_depth_command(app),
   };
   try {
     app.parse(argc, argv);
