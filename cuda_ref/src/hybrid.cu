@@ -41,6 +41,8 @@ struct HybArgs {
   uint32_t* crossing;
   uint32_t* range;   // per occluder position: bins x0, y0, x1, y1 (8 bits each); ~0: empty in the tile
   uint8_t* flag;     // per occluder position: in some crossing pair (count_all)
+  uint32_t* zmax;    // per occluder position: its z_max and id, contiguous for the pair loop
+  uint32_t* ids_at;
   // Per-pixel tiles.
   const uint32_t* sample_xy;
   uint32_t n_samples, width, height;
@@ -154,8 +156,12 @@ TV_HD uint32_t crossing_pairs(const HybArgs<P>& a, uint32_t tile, bool count_all
                  g.of(t.bbox.y1, rect.y0, g.y) << 24;
     }
     flag[k] = 0;
+    a.zmax[base + k] = t.z_max;
+    a.ids_at[base + k] = t.id;
   }
   team.sync();
+  const uint32_t* zmax = a.zmax + base;
+  const uint32_t* idk = a.ids_at + base;
   auto in_bin = [](uint32_t r, uint32_t bx, uint32_t by) {
     return r != ~0u && bx >= (r & 0xff) && by >= (r >> 8 & 0xff) && bx <= (r >> 16 & 0xff) && by <= (r >> 24);
   };
@@ -169,13 +175,13 @@ TV_HD uint32_t crossing_pairs(const HybArgs<P>& a, uint32_t tile, bool count_all
         for (uint32_t a0 = 0; a0 < k; a0 += Team::kSize) {
           const uint32_t q = a0 + lane;
           bool screen = false, test = false, cross = false;
-          if (q < k && in_bin(range[q], bx, by)) {
-            const TileTri<P>& u = a.tris[occ[q].tri];
-            if (u.z_max > t.z_min && u.id != t.id) {
-              screen = true;
-              const uint32_t rq = range[q];
-              const uint32_t x0 = tmax(rk & 0xff, rq & 0xff), y0 = tmax(rk >> 8 & 0xff, rq >> 8 & 0xff);
-              if (x0 == bx && y0 == by && may_cross(t, u) && !opposite_neighbours(t, u)) {
+          if (q < k && in_bin(range[q], bx, by) && zmax[q] > t.z_min && idk[q] != t.id) {
+            screen = true;
+            const uint32_t rq = range[q];
+            const uint32_t x0 = tmax(rk & 0xff, rq & 0xff), y0 = tmax(rk >> 8 & 0xff, rq >> 8 & 0xff);
+            if (x0 == bx && y0 == by) {
+              const TileTri<P>& u = a.tris[occ[q].tri];
+              if (may_cross(t, u) && !opposite_neighbours(t, u)) {
                 test = true;
                 const XTri xt = exact_of(t);
                 PEdge<ExactP> poly[kTileCap];
@@ -480,6 +486,8 @@ void stage_hybrid(Pipeline<P>& p) {
   a.crossing = p.hyb_crossing.need(nt + 1);
   a.range = p.hyb_range.need(ni + 1);
   a.flag = p.hyb_flag.need(ni + 1);
+  a.zmax = p.hyb_zmax.need(ni + 1);
+  a.ids_at = p.hyb_id.need(ni + 1);
   a.sample_xy = p.sample_xy.get();
   a.n_samples = p.f.n_samples;
   a.width = p.f.width;
