@@ -10,6 +10,7 @@
 //            f32 depth_range[2], u32 vertex_count, f32 vertices[4 × n] (clip space),
 //            u32 index_count, u32 indices[] (triangle list, as drawn: facing not yet applied)
 //   'SKIP' = u32 frame, u32 reason_length, reason    (a draw that is not in the trace, and why)
+//   'CLRD' = u32 frame, u32 draws_before       (a glClear of the depth buffer inside the frame)
 //   'FEND' = u32 frame, u32 width, u32 height, f32 depth_clear, u32 depth_bits,
 //            f32 depth[width × height] (the application's depth buffer, rows bottom-up as
 //            glReadPixels gives them; width = height = 0 when it could not be read)
@@ -28,6 +29,7 @@ constexpr uint32_t tag(const char (&s)[5]) {
 inline constexpr uint32_t kTagDraw = tag("DRAW");
 inline constexpr uint32_t kTagSkip = tag("SKIP");
 inline constexpr uint32_t kTagFrameEnd = tag("FEND");
+inline constexpr uint32_t kTagDepthClear = tag("CLRD");
 
 // Rasteriser state the trace's flags cannot hold; `tilevis capture` applies what it can
 // (facing) and names the rest in the draw's name.
@@ -46,6 +48,7 @@ enum StateBit : uint32_t {
   kStateDepthClamp = 1u << 11,
   kStateDepthFuncOther = 1u << 12, // depth function other than LESS / LEQUAL
   kStateDepthFuncAlways = 1u << 13,
+  kStateStencil = 1u << 14,
 };
 
 }  // namespace tilevis::capture

@@ -130,7 +130,12 @@ REAL(decltype(&::glPixelStorei), glPixelStorei)
 REAL(PFNGLBINDFRAMEBUFFERPROC, glBindFramebuffer)
 REAL(decltype(&::glReadBuffer), glReadBuffer)
 REAL(decltype(&::glGetError), glGetError)
-REAL(PFNGLGETVERTEXATTRIBIVPROC, glGetVertexAttribiv)
+REAL(PFNGLCREATESHADERPROC, glCreateShader)
+REAL(PFNGLSHADERSOURCEPROC, glShaderSource)
+REAL(PFNGLCOMPILESHADERPROC, glCompileShader)
+REAL(PFNGLCREATEPROGRAMPROC, glCreateProgram)
+REAL(PFNGLATTACHSHADERPROC, glAttachShader)
+REAL(PFNGLUSEPROGRAMPROC, glUseProgram)
 
 // Functions the application calls and we wrap.
 REAL(decltype(&::glDrawArrays), glDrawArrays)
@@ -142,6 +147,8 @@ REAL(PFNGLDRAWELEMENTSBASEVERTEXPROC, glDrawElementsBaseVertex)
 REAL(PFNGLMULTIDRAWARRAYSPROC, glMultiDrawArrays)
 REAL(PFNGLMULTIDRAWELEMENTSPROC, glMultiDrawElements)
 REAL(PFNGLLINKPROGRAMPROC, glLinkProgram)
+REAL(decltype(&::glBegin), glBegin)
+REAL(decltype(&::glClear), glClear)
 
 using SwapFn = void (*)(Display*, GLXDrawable);
 using QueryDrawableFn = void (*)(Display*, GLXDrawable, int, unsigned int*);
@@ -250,6 +257,29 @@ ProgramInfo inspect_program(GLuint program) {
   return info;
 }
 
+// The fixed-function vertex stage as a program: ftransform() is the fixed-function transform
+// of gl_Vertex by the current modelview and projection matrices (GLSL 1.20 §7.1), which a
+// compatibility context's built-in uniforms track. Null where it cannot be built (core).
+GLuint fixed_function_program() {
+  static GLuint program = [] {
+    const char* src = "#version 120\nvoid main() { gl_Position = ftransform(); }\n";
+    GLuint vs = glCreateShader_()(GL_VERTEX_SHADER);
+    if (!vs) return GLuint(0);
+    glShaderSource_()(vs, 1, &src, nullptr);
+    glCompileShader_()(vs);
+    GLuint p = glCreateProgram_()();
+    glAttachShader_()(p, vs);
+    const char* varying = "gl_Position";
+    glTransformFeedbackVaryings_()(p, 1, &varying, GL_INTERLEAVED_ATTRIBS);
+    glLinkProgram_()(p);
+    GLint ok = 0;
+    glGetProgramiv_()(p, GL_LINK_STATUS, &ok);
+    glGetError_()();
+    return ok ? p : GLuint(0);
+  }();
+  return program;
+}
+
 // ---- one draw ----------------------------------------------------------------------------
 
 const char* mode_name(GLenum mode) {
@@ -341,6 +371,7 @@ uint32_t state_bits() {
   if (!cm[0] && !cm[1] && !cm[2] && !cm[3]) s |= kStateColorMaskNone;
   if (glIsEnabled_()(GL_POLYGON_OFFSET_FILL)) s |= kStatePolygonOffset;
   if (glIsEnabled_()(GL_DEPTH_CLAMP)) s |= kStateDepthClamp;
+  if (glIsEnabled_()(GL_STENCIL_TEST)) s |= kStateStencil;
   return s;
 }
 
@@ -419,8 +450,15 @@ void capture_draw(const char* call, GLenum mode, GLint first, GLsizei count, con
   if (framebuffer != 0) return skip_record(name + ": framebuffer object " + std::to_string(framebuffer) + " (off screen)");
   GLint program = 0;
   glGetIntegerv_()(GL_CURRENT_PROGRAM, &program);
-  if (program == 0) return skip_record(name + ": fixed-function vertex stage");
-  const ProgramInfo& info = g_programs[GLuint(program)];
+  ProgramInfo info;
+  GLuint shadow = 0;  // the fixed-function stage's program, used for this draw only
+  if (program == 0) {
+    shadow = fixed_function_program();
+    if (!shadow) return skip_record(name + ": fixed-function vertex stage (no ftransform program in this context)");
+    info.feedback = true;
+  } else {
+    info = g_programs[GLuint(program)];
+  }
   if (!info.feedback) return skip_record(name + ": program " + std::to_string(program) + " has no gl_Position feedback");
   GLint active = 0;
   glGetIntegerv_()(GL_TRANSFORM_FEEDBACK_ACTIVE, &active);
@@ -455,8 +493,10 @@ void capture_draw(const char* call, GLenum mode, GLint first, GLsizei count, con
 
   std::vector<float> positions;
   const size_t expected = drawn.size() * size_t(instances);
-  if (!feedback(expected, positions, replay_points))
-    return skip_record(name + ": transform feedback wrote fewer positions than drawn");
+  if (shadow) glUseProgram_()(shadow);
+  const bool complete = feedback(expected, positions, replay_points);
+  if (shadow) glUseProgram_()(0);
+  if (!complete) return skip_record(name + ": transform feedback wrote fewer positions than drawn");
 
   // One trace vertex per distinct index value and instance; triangles over them.
   std::vector<float> vertices;
@@ -490,7 +530,7 @@ void capture_draw(const char* call, GLenum mode, GLint first, GLsizei count, con
   glGetIntegerv_()(GL_VIEWPORT, viewport);
   GLfloat range[2] = {0, 1};
   glGetFloatv_()(GL_DEPTH_RANGE, range);
-  name += " program " + std::to_string(program);
+  name += program ? " program " + std::to_string(program) : " fixed-function";
 
   put_u32(kTagDraw);
   put_u32(g_frame);
@@ -595,6 +635,33 @@ EXPORT void glLinkProgram(GLuint program) {
   info.discards = shader.discards;
   info.writes_depth = shader.writes_depth;
   g_programs[program] = info;
+}
+
+// A depth clear inside a frame: what was drawn before it no longer occludes what follows.
+EXPORT void glClear(GLbitfield mask) {
+  {
+    std::lock_guard<std::recursive_mutex> lock(g_mutex);
+    GLint framebuffer = 0;
+    if (capturing() && (mask & GL_DEPTH_BUFFER_BIT)) {
+      glGetIntegerv_()(GL_DRAW_FRAMEBUFFER_BINDING, &framebuffer);
+      if (framebuffer == 0) {
+        if (g_last_frame != g_frame) g_last_frame = g_frame, g_draw_in_frame = 0;
+        put_u32(kTagDepthClear);
+        put_u32(g_frame);
+        put_u32(g_draw_in_frame);
+      }
+    }
+  }
+  glClear_()(mask);
+}
+
+// Immediate mode is not captured; counted so the capture says what it left out.
+EXPORT void glBegin(GLenum mode) {
+  {
+    std::lock_guard<std::recursive_mutex> lock(g_mutex);
+    if (capturing()) skip_record(std::string("glBegin(") + mode_name(mode) + "): immediate mode");
+  }
+  glBegin_()(mode);
 }
 
 EXPORT void glDrawArrays(GLenum mode, GLint first, GLsizei count) {
@@ -735,6 +802,8 @@ void* wrapper_for(const char* name) {
       {"glMultiDrawArrays", reinterpret_cast<void*>(&glMultiDrawArrays)},
       {"glMultiDrawElements", reinterpret_cast<void*>(&glMultiDrawElements)},
       {"glLinkProgram", reinterpret_cast<void*>(&glLinkProgram)},
+      {"glBegin", reinterpret_cast<void*>(&glBegin)},
+      {"glClear", reinterpret_cast<void*>(&glClear)},
       {"glLinkProgramARB", reinterpret_cast<void*>(&glLinkProgram)},
       {"glXSwapBuffers", reinterpret_cast<void*>(&glXSwapBuffers)},
       {"eglSwapBuffers", reinterpret_cast<void*>(&eglSwapBuffers)},
