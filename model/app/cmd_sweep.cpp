@@ -1,22 +1,18 @@
 // tilevis sweep SWEEP.json -o DIR: runs an exploration sweep (model/sweep) as subprocesses
 // of this binary, -j at a time, resumable, then writes the report (reports/make_report.py:
-// DIR/index.html, DIR/report.md, DIR/points.csv).
-#include <spawn.h>
-#include <sys/wait.h>
+// DIR/index.html, DIR/report.md, DIR/points.csv); or writes a jobs file (--jobs-file), or
+// submits it to Slurm (--slurm; --status, --cancel, and the hidden --task an array task runs).
 #include <unistd.h>
 
-#include <cerrno>
 #include <cstdlib>
-#include <cstring>
 #include <filesystem>
+#include <sstream>
 #include <thread>
 
 #include <fmt/format.h>
 
 #include "commands.h"
 #include "sweep/sweep.h"
-
-extern char** environ;
 
 namespace tilevis::app {
 namespace {
@@ -27,6 +23,11 @@ struct SweepArgs {
   std::string file, out, jobs_file;
   unsigned jobs = 0;
   bool report_only = false, no_report = false;
+  bool slurm = false, status = false, cancel = false;
+  sweep::SlurmOptions slurm_options;
+  std::string sbatch_args;
+  std::string task, task_list;  // a Slurm array task (internal)
+  long task_index = -1;
 };
 
 std::string self_path() {
@@ -36,32 +37,43 @@ std::string self_path() {
   return p.string();
 }
 
-fs::path report_script() {
-  if (const char* env = std::getenv("TILEVIS_REPORT_SCRIPT"); env && *env) return env;
-  return sweep::source_dir() / "reports" / "make_report.py";
+std::vector<std::string> words_of(const std::string& text) {
+  std::istringstream in(text);
+  std::vector<std::string> words;
+  for (std::string w; in >> w;) words.push_back(w);
+  return words;
 }
 
-// python3 reports/make_report.py OUT; its output goes to ours. Returns its exit status.
-int make_report(const fs::path& out) {
-  const fs::path script = report_script();
-  if (!fs::is_regular_file(script))
-    throw std::runtime_error(fmt::format("sweep: report generator {} not found (set TILEVIS_REPORT_SCRIPT)",
-                                         script.string()));
-  // Debian's python3 has python3-matplotlib; a python3 earlier on PATH (pyenv, venv) may not.
-  std::string python = "python3";
-  if (const char* env = std::getenv("TILEVIS_PYTHON"); env && *env) python = env;
-  else if (fs::exists("/usr/bin/python3")) python = "/usr/bin/python3";
-  std::vector<std::string> argv = {python, script.string(), out.string()};
-  std::vector<char*> args;
-  for (auto& a : argv) args.push_back(a.data());
-  args.push_back(nullptr);
-  pid_t pid = -1;
-  if (int rc = posix_spawnp(&pid, python.c_str(), nullptr, nullptr, args.data(), environ); rc != 0)
-    throw std::runtime_error(fmt::format("sweep: cannot run {} for the report: {}", python, std::strerror(rc)));
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+// A Slurm array task's index: --task-index, else SLURM_ARRAY_TASK_ID.
+long task_index(long given) {
+  if (given >= 0) return given;
+  const char* env = std::getenv("SLURM_ARRAY_TASK_ID");
+  if (!env || !*env) throw std::runtime_error("sweep --task: no --task-index and no SLURM_ARRAY_TASK_ID");
+  return std::stol(env);
+}
+
+// The report task of a Slurm submission: its run in sweep.json's history, then the report.
+int slurm_report_task(const sweep::Sweep& sw, const sweep::Plan& plan, const sweep::RunOptions& opt) {
+  auto availability = sweep::probe_producers(sw, plan, opt.tilevis);
+  sweep::write_manifest(sw, plan, availability, opt, sweep::slurm_run_summary(sw, plan, opt));
+  if (int r = sweep::make_report(opt.out); r != 0) {
+    fmt::print(stderr, "tilevis sweep: the report generator failed (exit status {})\n", r);
+    return r;
   }
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 1;
+  return 0;
+}
+
+// --status, --cancel and the Slurm tasks: no probes, nothing else written. -1: none of them.
+int run_side_command(const SweepArgs& a, const sweep::Sweep& sw, const sweep::Plan& plan,
+                     const sweep::RunOptions& opt) {
+  if (a.status) {
+    fmt::print("{}", sweep::sweep_status(sw, plan, opt));
+    return 0;
+  }
+  if (a.cancel) return sweep::cancel_slurm(opt);
+  if (a.task == "report") return slurm_report_task(sw, plan, opt);
+  if (!a.task.empty()) return sweep::run_slurm_task(sw, plan, opt, a.task, a.task_list, task_index(a.task_index));
+  return -1;
 }
 
 int run_sweep(const SweepArgs& a) {
@@ -71,10 +83,18 @@ int run_sweep(const SweepArgs& a) {
   opt.out = fs::absolute(a.out).lexically_normal();
   opt.tilevis = self_path();
   opt.jobs = a.jobs ? a.jobs : std::max(1u, std::thread::hardware_concurrency());
+  if (int rc = run_side_command(a, sw, plan, opt); rc >= 0) return rc;
   auto availability = sweep::probe_producers(sw, plan, opt.tilevis);
   sweep::check_params(sw, plan, availability);
   for (const auto& [name, av] : availability)
     if (!av.available) fmt::print(stderr, "tilevis sweep: producer {} unavailable here, its points are left out: {}\n", name, av.why);
+
+  if (a.slurm) {
+    sweep::write_manifest(sw, plan, availability, opt, std::nullopt);
+    sweep::SlurmOptions so = a.slurm_options;
+    so.sbatch_args = words_of(a.sbatch_args);
+    return sweep::submit_slurm(sw, plan, availability, opt, so);
+  }
 
   if (!a.jobs_file.empty()) {
     sweep::write_manifest(sw, plan, availability, opt, std::nullopt);
@@ -113,7 +133,7 @@ int run_sweep(const SweepArgs& a) {
     sweep::write_manifest(sw, plan, availability, opt, std::nullopt);
   }
   if (a.no_report) return rc;
-  if (int r = make_report(opt.out); r != 0) {
+  if (int r = sweep::make_report(opt.out); r != 0) {
     fmt::print(stderr, "tilevis sweep: the report generator failed (exit status {})\n", r);
     return r;
   }
@@ -133,6 +153,30 @@ Command add_sweep_command(CLI::App& app) {
                   "Write one independent command line per job not yet done to this file instead of running");
   cmd->add_flag("--report-only", a->report_only, "Run nothing; make the report from the points that exist");
   cmd->add_flag("--no-report", a->no_report, "Run the points; do not make the report");
+  auto* slurm = cmd->add_flag("--slurm", a->slurm,
+                              "Submit the jobs not yet done to Slurm as job arrays (traces, points, comparisons, "
+                              "report), chained by dependencies; the job ids go into OUT/sweep.json");
+  cmd->add_option("--partition", a->slurm_options.partition, "Slurm partition (with --slurm)")->needs(slurm);
+  cmd->add_option("--max-array", a->slurm_options.max_array,
+                  "Tasks of one array running at once (with --slurm; default: no limit)")
+      ->check(CLI::Range(1u, 100000u))
+      ->needs(slurm);
+  cmd->add_option("--sbatch-args", a->sbatch_args,
+                  "More sbatch words for every job, as one argument: --sbatch-args='--time=30 --qos=low'")
+      ->needs(slurm);
+  auto* status = cmd->add_flag("--status", a->status,
+                               "Print progress and time left from OUT's points (and squeue, after --slurm); run nothing");
+  auto* cancel = cmd->add_flag("--cancel", a->cancel, "Cancel the Slurm jobs of this sweep (scancel)");
+  slurm->excludes(status)->excludes(cancel);
+  status->excludes(cancel);
+  for (auto* o : {slurm, status, cancel}) {
+    o->excludes("--jobs-file");
+    o->excludes("--report-only");
+  }
+  // What a Slurm array task runs (internal, hidden from --help).
+  cmd->add_option("--task", a->task)->group("")->check(CLI::IsMember({"traces", "points", "comparisons", "report"}));
+  cmd->add_option("--task-list", a->task_list)->group("");
+  cmd->add_option("--task-index", a->task_index)->group("");
   return {cmd, [a]() { return run_sweep(*a); }};
 }
 

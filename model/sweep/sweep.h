@@ -171,6 +171,7 @@ struct RunSummary {
   bool interrupted = false;
   double wall_seconds = 0;
   std::vector<std::string> failures;     // one line each: job, exit status, log file
+  nlohmann::json extra;                  // more members of the run's record in sweep.json (Slurm), or null
 };
 
 // Runs each producer's probe; the map is keyed by producer name (only producers in the plan).
@@ -193,6 +194,44 @@ RunSummary run_plan(const Sweep& sweep, const Plan& plan, std::map<std::string, 
 // comparisons); lines within a stage are independent of each other.
 void write_jobs_file(const Sweep& sweep, const Plan& plan, const std::map<std::string, Availability>& availability,
                      const RunOptions& options, const std::filesystem::path& file);
+
+// python3 reports/make_report.py OUT (TILEVIS_REPORT_SCRIPT, TILEVIS_PYTHON override them); its
+// output goes to ours. Returns its exit status.
+int make_report(const std::filesystem::path& out);
+
+// ---- Slurm (slurm.cpp): job arrays chained by dependencies, one array task per job.
+
+struct SlurmOptions {
+  std::string partition;                 // sbatch --partition, when not empty
+  unsigned max_array = 0;                // tasks of one array running at once (sbatch --array=...%N); 0: no limit
+  std::vector<std::string> sbatch_args;  // more sbatch words, given to every submission
+};
+
+// Submits every job not done as job arrays: traces, then points (afterok on the traces; one
+// array per exclusive resource R, asking for --gres=R:1), then comparisons (afterany), then
+// the report (afterany). Records the job ids in OUT/sweep.json. Refuses while jobs of an
+// earlier submission are still queued or running. Returns the exit status.
+int submit_slurm(const Sweep& sweep, const Plan& plan, const std::map<std::string, Availability>& availability,
+                 const RunOptions& options, const SlurmOptions& slurm);
+
+// Cancels (scancel) every job of every submission recorded in OUT/sweep.json.
+int cancel_slurm(const RunOptions& options);
+
+// One array task: runs the job named on line `index` of `list` (stage "traces", "points" or
+// "comparisons") exactly as the local runner runs it, or, for stage "report", records the
+// submission's run and makes the report. Returns the exit status.
+int run_slurm_task(const Sweep& sweep, const Plan& plan, const RunOptions& options, const std::string& stage,
+                   const std::filesystem::path& list, long index);
+
+// The run record of the latest submission, for sweep.json when its report task runs: jobs
+// submitted and done now (ran), submitted and not done (failed), seconds since submission.
+RunSummary slurm_run_summary(const Sweep& sweep, const Plan& plan, const RunOptions& options);
+
+// ---- Progress (status.cpp)
+
+// What `tilevis sweep --status` prints: jobs done per stage from the point directories, queued
+// and running tasks from squeue (when the sweep was submitted to Slurm), and the time left.
+std::string sweep_status(const Sweep& sweep, const Plan& plan, const RunOptions& options);
 
 // Machine and commit, as recorded with every result.
 nlohmann::json machine_info();
