@@ -159,7 +159,7 @@ std::string state_names(uint32_t s) {
 
 struct CaptureSummary {
   std::map<std::string, uint64_t> skipped;  // reason -> draws
-  uint64_t draws = 0, triangles = 0, non_occluding_draws = 0;
+  uint64_t draws = 0, triangles = 0, non_occluding_draws = 0, non_occluding_triangles = 0;
 };
 
 // One dump draw into a trace draw of a frame of `width` x `height` (the window) with depth
@@ -559,7 +559,7 @@ Command add_capture_command(CLI::App& app) {
                 trace::Draw d = convert_draw(in, *cur, state);
                 sum.triangles += d.triangle_count();
                 ++sum.draws;
-                if (!d.opaque()) ++sum.non_occluding_draws;
+                if (!d.opaque() || d.per_pixel_only()) ++sum.non_occluding_draws, sum.non_occluding_triangles += d.triangle_count();
                 ++states[state_names(state).empty() ? "(default)" : state_names(state).substr(1)];
                 const size_t hash = d.name.find(" #");
                 call_numbers[frame_index[frame]].push_back(hash == std::string::npos ? 0 : uint32_t(std::stoul(d.name.substr(hash + 2))));
@@ -601,6 +601,8 @@ Command add_capture_command(CLI::App& app) {
             j["draws"] = sum.draws;
             j["triangles"] = sum.triangles;
             j["non_occluding_draws"] = sum.non_occluding_draws;
+            j["non_occluding_triangles"] = sum.non_occluding_triangles;
+            j["viewport"] = tr.frames.empty() ? std::vector<uint32_t>{} : std::vector<uint32_t>{tr.frames[0].width, tr.frames[0].height};
             j["skipped_draws"] = sum.skipped;
             j["draws_before_a_depth_clear"] = cleared_draws;
             j["draw_states"] = states;
