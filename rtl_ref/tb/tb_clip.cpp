@@ -1,0 +1,227 @@
+// Clip against geom::split (svgpu::split), bit for bit: both children's lines and vertex
+// representations in canonical order, for constrained-random polygons and clip lines
+// (--random N --seed S) and for every split the analytic resolver performs in the dumped tile
+// jobs (--jobs FILE), whose count must equal golden's clip_polygons and pieces.
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "VClip.h"
+#include "port_bits.h"
+#include "scoreboard.h"
+#include "verilated.h"
+#include "visibility/evu_jobs.h"
+
+using namespace tilevis;
+using namespace tilevis::rtl;
+
+namespace {
+
+constexpr int kMaxV = 16, kCW = 25, kLA = 26, kLC = 49, kPX = 74, kPW = 51, kNW = 5;
+
+struct Coverage {
+  uint64_t splits = 0, status[3] = {}, vertex_on_line = 0, collinear = 0, max_vertices = 0, too_big = 0;
+  uint64_t clocks = 0, edges_in = 0;
+  std::string report() const {
+    char b[512];
+    std::snprintf(b, sizeof b,
+                  "%llu splits (crosses %llu, inside %llu, outside %llu); a vertex on the line %llu, the line along "
+                  "an edge %llu; most edges %llu; over MAXV (C++ only) %llu; %llu clocks for %llu parent edges",
+                  (unsigned long long)splits, (unsigned long long)status[0], (unsigned long long)status[1],
+                  (unsigned long long)status[2], (unsigned long long)vertex_on_line, (unsigned long long)collinear,
+                  (unsigned long long)max_vertices, (unsigned long long)too_big, (unsigned long long)clocks,
+                  (unsigned long long)edges_in);
+    return b;
+  }
+};
+
+bool same(const geom::ConvexPolygon& a, const geom::ConvexPolygon& b) {
+  if (a.size() != b.size()) return false;
+  for (size_t i = 0; i < a.size(); ++i) {
+    const auto &la = a.line(i), &lb = b.line(i);
+    const auto &va = a.vertex(i), &vb = b.vertex(i);
+    if (!(la == lb) || va.x != vb.x || va.y != vb.y || va.w != vb.w) return false;
+  }
+  return true;
+}
+
+class Bench {
+ public:
+  Bench() : m_ctx(std::make_unique<VerilatedContext>()), m_dut(std::make_unique<VClip>(m_ctx.get())) {
+    m_dut->rst = 1;
+    tick();
+    tick();
+    m_dut->rst = 0;
+  }
+  // One split through the RTL; compares with geom::split. Returns false on a mismatch.
+  bool split(const geom::ConvexPolygon& poly, const vis::svgpu::Edge& e, Coverage& cov) {
+    ++cov.splits;
+    const geom::SplitResult want = vis::svgpu::split(poly, e);
+    const int want_status = !want.outside.empty() ? (want.inside.empty() ? 2 : 0) : 1;
+    bool on = false, col = false;
+    for (size_t i = 0; i < poly.size(); ++i) {
+      const bool z0 = geom::side(e.line, poly.vertex(i)) == 0;
+      const bool z1 = geom::side(e.line, poly.vertex((i + 1) % poly.size())) == 0;
+      on |= z0;
+      col |= z0 && z1;
+    }
+    cov.vertex_on_line += on;
+    cov.collinear += col;
+    cov.max_vertices = std::max<uint64_t>(cov.max_vertices, poly.size());
+    if (poly.size() > size_t(kMaxV)) {
+      ++cov.too_big;
+      ++cov.status[want_status];
+      return true;
+    }
+    m_dut->start = 1;
+    m_dut->n = uint32_t(poly.size());
+    m_dut->ax = uint32_t(e.a.x) & ((1u << kCW) - 1);
+    m_dut->ay = uint32_t(e.a.y) & ((1u << kCW) - 1);
+    m_dut->bx = uint32_t(e.b.x) & ((1u << kCW) - 1);
+    m_dut->by = uint32_t(e.b.y) & ((1u << kCW) - 1);
+    tick();
+    m_dut->start = 0;
+    uint64_t clocks = 1;
+    for (size_t i = 0; i < poly.size(); ++i) {
+      const auto& l = poly.line(i);
+      const auto& v = poly.vertex(i);
+      m_dut->e_valid = 1;
+      put_field(m_dut->e_la, 0, kLA, l.a);
+      put_field(m_dut->e_lb, 0, kLA, l.b);
+      put_field(m_dut->e_lc, 0, kLC, l.c);
+      put_field(m_dut->e_vx, 0, kPX, v.x);
+      put_field(m_dut->e_vy, 0, kPX, v.y);
+      put_field(m_dut->e_vw, 0, kPW, v.w);
+      tick();
+      ++clocks;
+    }
+    m_dut->e_valid = 0;
+    geom::ConvexPolygon in, out;
+    while (!m_dut->done) {
+      tick();
+      ++clocks;
+      collect(in, out);
+      if (clocks > 4 + 3 * poly.size()) {
+        std::printf("Clip: no done after %llu clocks\n", (unsigned long long)clocks);
+        std::exit(1);
+      }
+    }
+    cov.clocks += clocks;
+    cov.edges_in += poly.size();
+    const int status = int(m_dut->status);
+    ++cov.status[want_status];
+    bool ok = status == want_status;
+    if (ok && status == 0) ok = same(in, want.inside) && same(out, want.outside);
+    if (!ok && m_mismatches++ < 10)
+      std::printf("MISMATCH split of a %zu-gon: rtl status %d (%zu + %zu edges), model %d (%zu + %zu)\n", poly.size(),
+                  status, in.size(), out.size(), want_status, want.inside.size(), want.outside.size());
+    return ok;
+  }
+  uint64_t mismatches() const { return m_mismatches; }
+
+ private:
+  void collect(geom::ConvexPolygon& in, geom::ConvexPolygon& out) {
+    for (int s = 0; s < 2; ++s) {
+      if ((m_dut->o_in_valid >> s) & 1)
+        in.push_edge({int64_t(get_signed(m_dut->o_in_la, s * kLA, kLA)), int64_t(get_signed(m_dut->o_in_lb, s * kLA, kLA)),
+                      int64_t(get_signed(m_dut->o_in_lc, s * kLC, kLC))},
+                     {get_signed(m_dut->o_in_vx, s * kPX, kPX), get_signed(m_dut->o_in_vy, s * kPX, kPX),
+                      int64_t(get_signed(m_dut->o_in_vw, s * kPW, kPW))});
+      if ((m_dut->o_out_valid >> s) & 1)
+        out.push_edge({int64_t(get_signed(m_dut->o_out_la, s * kLA, kLA)), int64_t(get_signed(m_dut->o_out_lb, s * kLA, kLA)),
+                       int64_t(get_signed(m_dut->o_out_lc, s * kLC, kLC))},
+                      {get_signed(m_dut->o_out_vx, s * kPX, kPX), get_signed(m_dut->o_out_vy, s * kPX, kPX),
+                       int64_t(get_signed(m_dut->o_out_vw, s * kPW, kPW))});
+    }
+  }
+  void tick() {
+    m_dut->clk = 1;
+    m_dut->eval();
+    m_dut->clk = 0;
+    m_dut->eval();
+  }
+  std::unique_ptr<VerilatedContext> m_ctx;
+  std::unique_ptr<VClip> m_dut;
+  uint64_t m_mismatches = 0;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  uint64_t random = 0, seed = 1, job_stride = 1;
+  std::vector<std::string> jobs;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto val = [&]() -> std::string {
+      if (i + 1 >= argc) { std::fprintf(stderr, "%s needs a value\n", a.c_str()); std::exit(2); }
+      return argv[++i];
+    };
+    if (a == "--random") random = std::stoull(val());
+    else if (a == "--seed") seed = std::stoull(val());
+    else if (a == "--jobs") jobs.push_back(val());
+    else if (a == "--job-stride") job_stride = std::max<uint64_t>(1, std::stoull(val()));
+    else { std::fprintf(stderr, "usage: %s [--random N --seed S] [--jobs FILE [--job-stride K]]\n", argv[0]); return 2; }
+  }
+  Verilated::commandArgs(argc, argv);
+  uint64_t bad = 0;
+  if (random) {
+    Bench b;
+    Coverage cov;
+    PairSource src(seed);
+    std::mt19937_64 rng(seed ^ 0x9e3779b97f4a7c15ull);
+    for (uint64_t k = 0; k < random; ++k) {
+      PairVector v = src.next();
+      // Grow the piece now and then by more splits (up to MAXV edges), keeping a random side.
+      const int extra = int(rng() % 4);
+      for (int s = 0; s < extra; ++s) {
+        const PairVector w = src.next();
+        geom::SplitResult sr = geom::split(v.poly, w.e.line);
+        const geom::ConvexPolygon& keep = (rng() & 1) ? sr.inside : sr.outside;
+        if (!keep.empty() && keep.size() <= size_t(kMaxV)) v.poly = keep;
+      }
+      // Clip lines through the piece's own vertices where they are snapped points (ties).
+      if (rng() % 4 == 0) {
+        std::vector<geom::Point> snapped;
+        for (size_t i = 0; i < v.poly.size(); ++i)
+          if (v.poly.vertex(i).w == 1) snapped.push_back({int32_t(v.poly.vertex(i).x), int32_t(v.poly.vertex(i).y)});
+        if (snapped.size() >= 2) {
+          const auto p = snapped[rng() % snapped.size()], q = snapped[rng() % snapped.size()];
+          if (!(p == q)) v.e = vis::svgpu::Edge::from({p.x, p.y, 0}, {q.x, q.y, 0});
+        }
+      }
+      bad += !b.split(v.poly, v.e, cov);
+    }
+    std::printf("Clip random (seed %llu): %s; mismatches %llu\n", (unsigned long long)seed, cov.report().c_str(),
+                (unsigned long long)b.mismatches());
+  }
+  for (const std::string& f : jobs) {
+    Bench b;
+    Coverage cov;
+    uint64_t seen = 0, checked = 0, counter_mismatch = 0;
+    vis::read_evu_jobs(f, [&](const vis::EvuJob& j) {
+      if (seen++ % job_stride != 0) return;
+      ++checked;
+      const ReplayedJob r = replay_job(j, [&](const geom::ConvexPolygon& piece, const vis::svgpu::Edge& e) {
+        bad += !b.split(piece, e, cov);
+      });
+      const int64_t clips = r.clips;
+      int64_t pieces = 0;
+      for (const auto& t : r.triangles) pieces += int64_t(t.pieces.size());
+      if (clips != j.golden.clip_polygons || pieces != j.golden.pieces) {
+        if (counter_mismatch < 10)
+          std::printf("COUNTER MISMATCH tile %u: clips %lld/%lld pieces %lld/%lld (tb/golden)\n", j.tile, (long long)clips,
+                      (long long)j.golden.clip_polygons, (long long)pieces, (long long)j.golden.pieces);
+        ++counter_mismatch;
+      }
+    });
+    std::printf("Clip jobs %s: %llu of %llu tile jobs; %s; mismatches %llu, tile counter mismatches %llu\n", f.c_str(),
+                (unsigned long long)checked, (unsigned long long)seen, cov.report().c_str(),
+                (unsigned long long)b.mismatches(), (unsigned long long)counter_mismatch);
+    bad += counter_mismatch;
+  }
+  return bad ? 1 : 0;
+}

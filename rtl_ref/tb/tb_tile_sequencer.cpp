@@ -1,0 +1,241 @@
+// TileSequencer against the analytic resolver's pair order: for every tile job (--jobs FILE)
+// and for constrained-random lists (--random N --seed S), the issued (triangle, edge) pairs
+// must be exactly the resolver's, triangle by triangle, and the pass must end. Measures the
+// clocks of each job (list loads + walks, passes by the overflow rule) beside the SystemC
+// EVU reject stage's cost for the same job (--csv FILE: one row per job).
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "VTileSequencer.h"
+#include "port_bits.h"
+#include "verilated.h"
+#include "visibility/evu_jobs.h"
+#include "visibility/svgpu.h"
+
+using namespace tilevis;
+using namespace tilevis::rtl;
+
+namespace {
+
+constexpr uint32_t kLanes = TB_LANES, kTriCap = TB_TRI_CAP, kEdgeCap = TB_EDGE_CAP;
+constexpr int kEIW = TB_EIW;
+// The SystemC model's defaults (model/units/early_visibility_unit/early_visibility_unit.h):
+// reject {lanes 8, ii 1, latency 6}, pass_overhead_cycles 32.
+constexpr uint64_t kModelRejectLatency = 6, kModelPassOverhead = 32;
+
+// A job as the sequencer sees it: triangles' z_max, edges' z_min sorted ascending (stable).
+struct SeqJob {
+  uint32_t tile = 0;
+  std::vector<uint32_t> tri_zmax, edge_zmin;
+};
+
+struct Result {
+  uint64_t jobs = 0, passes = 0, pairs = 0, mismatches = 0, cycles = 0, load_cycles = 0, stopped = 0;
+  uint64_t model_cycles = 0;
+};
+
+class Bench {
+ public:
+  Bench() : m_ctx(std::make_unique<VerilatedContext>()), m_dut(std::make_unique<VTileSequencer>(m_ctx.get())) {
+    m_dut->rst = 1;
+    tick();
+    tick();
+    m_dut->rst = 0;
+  }
+
+  // Runs a job in passes; returns its clocks (loads included). Appends the issued pairs as
+  // (global triangle index, global edge index) in issue order.
+  uint64_t run(const SeqJob& j, std::vector<std::pair<uint32_t, uint32_t>>& issued, uint64_t& passes,
+               uint64_t& load_cycles, uint64_t& stopped) {
+    const uint32_t nt = uint32_t(j.tri_zmax.size()), ne = uint32_t(j.edge_zmin.size());
+    uint64_t clocks = 0;
+    for (uint32_t t0 = 0; t0 < nt; t0 += kTriCap) {
+      const uint32_t tn = std::min(kTriCap, nt - t0);
+      std::vector<bool> stopped_before(tn, false);
+      for (uint32_t e0 = 0; e0 == 0 || e0 < ne; e0 += kEdgeCap) {
+        const uint32_t en = std::min(kEdgeCap, ne - e0);
+        // Load: one entry per list per clock (the longer list sets the time).
+        const uint32_t load = std::max(tn, en);
+        for (uint32_t k = 0; k < load; ++k) {
+          m_dut->tri_we = k < tn;
+          m_dut->tri_waddr = k;
+          m_dut->tri_wzmax = k < tn ? j.tri_zmax[t0 + k] : 0;
+          m_dut->edge_we = k < en;
+          m_dut->edge_waddr = k;
+          m_dut->edge_wzmin = k < en ? j.edge_zmin[e0 + k] : 0;
+          tick();
+        }
+        m_dut->tri_we = m_dut->edge_we = 0;
+        load_cycles += load;
+        clocks += load;
+        ++passes;
+        m_dut->n_tris = tn;
+        m_dut->n_edges = en;
+        m_dut->start = 1;
+        uint64_t walk = 0;
+        for (;;) {
+          tick();
+          m_dut->start = 0;
+          ++walk;
+          for (uint32_t l = 0; l < kLanes; ++l)
+            if (get_bit(m_dut->iss_valid, int(l))) {
+              const uint32_t t = m_dut->iss_tri;
+              const uint32_t e = uint32_t(get_field(m_dut->iss_edge, int(l) * kEIW, kEIW));
+              issued.emplace_back(t0 + t, e0 + e);
+            }
+          if (m_dut->tri_end && m_dut->tri_stop) {
+            stopped += !stopped_before[m_dut->iss_tri];
+            stopped_before[m_dut->iss_tri] = true;
+          }
+          if (m_dut->done) break;
+          if (walk > 4 + uint64_t(tn) * (kEdgeCap / kLanes + 2)) {
+            std::printf("TileSequencer: pass of tile %u never ended\n", j.tile);
+            std::exit(1);
+          }
+        }
+        clocks += walk;
+        if (ne == 0) break;
+      }
+    }
+    return clocks;
+  }
+
+ private:
+  void tick() {
+    m_dut->clk = 1;
+    m_dut->eval();
+    m_dut->clk = 0;
+    m_dut->eval();
+  }
+  std::unique_ptr<VerilatedContext> m_ctx;
+  std::unique_ptr<VTileSequencer> m_dut;
+};
+
+// The resolver's pairs (analytic_resolver.cpp: edges by z_min, stable; per triangle until the
+// first edge with z_min > z_max) and each triangle's pair count.
+std::vector<std::pair<uint32_t, uint32_t>> model_pairs(const SeqJob& j, std::vector<uint64_t>& per_tri) {
+  std::vector<std::pair<uint32_t, uint32_t>> p;
+  per_tri.assign(j.tri_zmax.size(), 0);
+  for (uint32_t t = 0; t < j.tri_zmax.size(); ++t)
+    for (uint32_t e = 0; e < j.edge_zmin.size(); ++e) {
+      if (j.edge_zmin[e] > j.tri_zmax[t]) break;
+      p.emplace_back(t, e);
+      ++per_tri[t];
+    }
+  return p;
+}
+
+// The SystemC EVU reject stage's cycles for the job at `lanes` lanes, ii 1 (EvuReject::cost).
+uint64_t model_reject_cycles(const std::vector<uint64_t>& per_tri, uint32_t nt, uint32_t ne, uint64_t lanes) {
+  uint64_t c = 0;
+  for (uint64_t p : per_tri) c += p ? (p + lanes - 1) / lanes : 1;
+  const uint64_t tp = (nt + 511) / 512, ep = (ne + 255) / 256;  // evu.*_list_entries defaults
+  const uint64_t passes = std::max<uint64_t>(1, std::max(tp, ep));
+  return c + (passes - 1) * kModelPassOverhead + kModelRejectLatency;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  uint64_t random = 0, seed = 1, job_stride = 1;
+  std::vector<std::string> jobs;
+  std::string csv;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto val = [&]() -> std::string {
+      if (i + 1 >= argc) { std::fprintf(stderr, "%s needs a value\n", a.c_str()); std::exit(2); }
+      return argv[++i];
+    };
+    if (a == "--random") random = std::stoull(val());
+    else if (a == "--seed") seed = std::stoull(val());
+    else if (a == "--jobs") jobs.push_back(val());
+    else if (a == "--job-stride") job_stride = std::max<uint64_t>(1, std::stoull(val()));
+    else if (a == "--csv") csv = val();
+    else { std::fprintf(stderr, "usage: %s [--random N --seed S] [--jobs FILE [--job-stride K]] [--csv FILE]\n", argv[0]); return 2; }
+  }
+  Verilated::commandArgs(argc, argv);
+  std::ofstream out;
+  if (!csv.empty()) {
+    out.open(csv);
+    out << "source,tile,triangles,edges,pair_tests,passes,rtl_load_cycles,rtl_walk_cycles,rtl_cycles,model_reject_cycles\n";
+  }
+  uint64_t bad = 0;
+  auto check = [&](Bench& b, const SeqJob& j, Result& r, const std::string& source) {
+    std::vector<uint64_t> per_tri;
+    auto want = model_pairs(j, per_tri);
+    std::vector<std::pair<uint32_t, uint32_t>> got;
+    uint64_t passes = 0, load = 0;
+    const uint64_t clocks = b.run(j, got, passes, load, r.stopped);
+    ++r.jobs;
+    r.passes += passes;
+    r.pairs += want.size();
+    r.cycles += clocks;
+    r.load_cycles += load;
+    const uint64_t model = model_reject_cycles(per_tri, uint32_t(j.tri_zmax.size()), uint32_t(j.edge_zmin.size()), kLanes);
+    r.model_cycles += model;
+    // One pass issues in the resolver's order; passes interleave triangles by edge chunk.
+    if (passes > 1) {
+      std::sort(got.begin(), got.end());
+      std::sort(want.begin(), want.end());
+    }
+    if (got != want) {
+      if (r.mismatches < 10) std::printf("MISMATCH %s tile %u: %zu pairs issued, model %zu\n", source.c_str(), j.tile, got.size(), want.size());
+      ++r.mismatches;
+    }
+    if (out.is_open())
+      out << source << ',' << j.tile << ',' << j.tri_zmax.size() << ',' << j.edge_zmin.size() << ',' << want.size() << ','
+          << passes << ',' << load << ',' << clocks - load << ',' << clocks << ',' << model << '\n';
+  };
+  auto print = [&](const Result& r, const std::string& what) {
+    std::printf("TileSequencer x%u (lists %u/%u) %s: %llu jobs, %llu passes, %llu pairs, %llu triangles stopped by "
+                "test 6; %llu clocks (%llu loading); model reject stage %llu cycles; mismatches %llu\n",
+                kLanes, kTriCap, kEdgeCap, what.c_str(), (unsigned long long)r.jobs, (unsigned long long)r.passes,
+                (unsigned long long)r.pairs, (unsigned long long)r.stopped, (unsigned long long)r.cycles,
+                (unsigned long long)r.load_cycles, (unsigned long long)r.model_cycles, (unsigned long long)r.mismatches);
+    bad += r.mismatches;
+  };
+  if (random) {
+    Bench b;
+    Result r;
+    std::mt19937_64 rng(seed);
+    for (uint64_t k = 0; k < random; ++k) {
+      SeqJob j;
+      j.tile = uint32_t(k);
+      // Sizes around the capacities (overflow on both lists), depths with many equal values.
+      const uint32_t nt = 1 + uint32_t(rng() % (k % 8 == 0 ? 2 * kTriCap + 3 : 24));
+      const uint32_t ne = uint32_t(rng() % (k % 8 == 0 ? 2 * kEdgeCap + 3 : 3 * kLanes + 2));
+      const uint32_t range = 1 + uint32_t(rng() % 64);
+      for (uint32_t t = 0; t < nt; ++t) j.tri_zmax.push_back(uint32_t(rng() % range));
+      for (uint32_t e = 0; e < ne; ++e) j.edge_zmin.push_back(uint32_t(rng() % range));
+      std::sort(j.edge_zmin.begin(), j.edge_zmin.end());
+      check(b, j, r, "random");
+    }
+    print(r, "random (seed " + std::to_string(seed) + ")");
+  }
+  for (const std::string& f : jobs) {
+    Bench b;
+    Result r;
+    uint64_t seen = 0, golden_mismatch = 0;
+    vis::read_evu_jobs(f, [&](const vis::EvuJob& job) {
+      if (seen++ % job_stride != 0) return;
+      SeqJob j;
+      j.tile = job.tile;
+      for (const auto& t : job.triangles) j.tri_zmax.push_back(std::max({t.v[0].z, t.v[1].z, t.v[2].z}));
+      for (size_t k = 0; k < job.edges.size(); k += 2) j.edge_zmin.push_back(std::min(job.edges[k].z, job.edges[k + 1].z));
+      std::stable_sort(j.edge_zmin.begin(), j.edge_zmin.end());
+      std::vector<uint64_t> per_tri;
+      if (int64_t(model_pairs(j, per_tri).size()) != job.golden.pair_tests) ++golden_mismatch;
+      check(b, j, r, f);
+    });
+    print(r, f);
+    std::printf("  tile jobs whose pair count differs from golden's pair_tests: %llu\n", (unsigned long long)golden_mismatch);
+    bad += golden_mismatch;
+  }
+  return bad ? 1 : 0;
+}
