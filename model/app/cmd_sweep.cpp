@@ -97,6 +97,7 @@ int run_sweep(const SweepArgs& a) {
   }
 
   if (!a.jobs_file.empty()) {
+    sweep::check_slurm_idle(opt, "sweep --jobs-file", false);
     sweep::write_manifest(sw, plan, availability, opt, std::nullopt);
     sweep::write_jobs_file(sw, plan, availability, opt, a.jobs_file);
     fmt::print("tilevis sweep: {} points, {} traces, {} comparisons; the jobs not yet done are in {}\n",
@@ -106,6 +107,7 @@ int run_sweep(const SweepArgs& a) {
 
   int rc = 0;
   if (!a.report_only) {
+    sweep::check_slurm_idle(opt, "sweep", false);
     sweep::write_manifest(sw, plan, availability, opt, std::nullopt);
     const bool tty = isatty(STDERR_FILENO);
     opt.progress = [tty](const std::string& line, bool event) {

@@ -247,15 +247,27 @@ std::map<std::string, std::string> queued_keys(const nlohmann::json& submission,
 
 }  // namespace detail
 
+void check_slurm_idle(const RunOptions& opt, const std::string& action, bool strict) {
+  const nlohmann::json slurm = slurm_record(opt.out);
+  const std::vector<std::string> ids = slurm_job_ids(slurm);
+  if (ids.empty()) return;
+  const Queue queue = query_queue(ids);
+  if (!queue.ok) {
+    if (strict) throw SweepError(fmt::format("{}: {}", action, queue.error));
+    fmt::print(stderr, "tilevis sweep: warning: cannot tell whether this sweep's Slurm jobs ({}) are still queued: {}\n",
+               join(ids, ", "), queue.error);
+    return;
+  }
+  if (!queue.tasks.empty())
+    throw SweepError(fmt::format("{}: {} tasks of this sweep's Slurm jobs ({}) are still queued or running: wait for "
+                                 "them (--status) or cancel them (--cancel) first",
+                                 action, queue.tasks.size(), join(ids, ", ")));
+}
+
 int submit_slurm(const Sweep& sw, const Plan& plan, const std::map<std::string, Availability>& av,
                  const RunOptions& opt, const SlurmOptions& so) {
+  check_slurm_idle(opt, "sweep --slurm", true);
   const nlohmann::json slurm = slurm_record(opt.out);
-  const Queue queue = query_queue(slurm_job_ids(slurm));
-  if (!queue.ok) throw SweepError(fmt::format("sweep --slurm: {}", queue.error));
-  if (!queue.tasks.empty())
-    throw SweepError(fmt::format("sweep --slurm: {} tasks of this sweep's jobs ({}) are still queued or running: "
-                                 "wait for them (--status) or cancel them (--cancel), then submit again",
-                                 queue.tasks.size(), join(slurm_job_ids(slurm), ", ")));
   const Pending p = pending_jobs(make_jobs(sw, plan, opt.out, opt.tilevis), av, plan);
   if (p.count == 0 && fs::is_regular_file(opt.out / "report.md")) {
     fmt::print("tilevis sweep: all {} jobs are done and the report is written; nothing to submit\n", p.total);

@@ -214,6 +214,11 @@ struct SlurmOptions {
 int submit_slurm(const Sweep& sweep, const Plan& plan, const std::map<std::string, Availability>& availability,
                  const RunOptions& options, const SlurmOptions& slurm);
 
+// Throws SweepError naming `action` while tasks of the sweep's Slurm submissions are queued or
+// running (a local run or a second submission would run the same jobs in the same folder).
+// Where squeue cannot answer: an error when `strict`, else a warning.
+void check_slurm_idle(const RunOptions& options, const std::string& action, bool strict);
+
 // Cancels (scancel) every job of every submission recorded in OUT/sweep.json.
 int cancel_slurm(const RunOptions& options);
 

@@ -6,8 +6,9 @@
 Brings up munged, slurmctld and slurmd (Debian: munge, slurmctld, slurmd, slurm-client) in the
 foreground with a generated slurm.conf in a temporary directory, then:
   1. runs the sweep locally (tilevis sweep ... -j 2);
-  2. submits it with --slurm --max-array 1, waits (polling --status) until a few points are
-     done, cancels it with --cancel, and checks that some points are done and some are not;
+  2. submits it with --slurm --max-array 1 (a local run into the same folder, or a second
+     submission, is then refused), waits (polling --status) until a few points are done,
+     cancels it with --cancel, and checks that some points are done and some are not;
   3. submits the same command again: it must submit only the jobs not done (the points done
      before the cancel keep their files untouched) and finish the sweep and its report;
   4. checks that every point has the local run's outputs and process.json keys, that
@@ -53,7 +54,10 @@ class Cluster:
     def __init__(self):
         self.dir = Path(tempfile.mkdtemp(prefix="tilevis-slurm-"))
         self.procs = []
-        self.env = dict(os.environ, SLURM_CONF=str(self.dir / "slurm.conf"))
+        # The commit recorded with each point is pinned: a commit landing in the working tree
+        # between the local run and the Slurm run is not a difference between the runners.
+        self.env = dict(os.environ, SLURM_CONF=str(self.dir / "slurm.conf"),
+                        TILEVIS_COMMIT=os.environ.get("TILEVIS_COMMIT", "slurm-test"))
 
     def start(self):
         """Returns None when the node is up, else why it is not."""
@@ -275,7 +279,12 @@ def run(a, cluster, work):
     t0 = time.time()
     text, _ = tilevis(a, env, slurm, "--slurm", "--max-array", "1")
     print(text.strip())
-    done, total, _, _, _ = status(a, env, slurm)
+    text, _ = tilevis(a, env, slurm, "-j", "1", expect=1)
+    if "still queued or running" not in text:
+        fail(f"a local run into a folder whose Slurm jobs are queued should be refused:\n{text}")
+    text, _ = tilevis(a, env, slurm, "--slurm", expect=1)
+    if "still queued or running" not in text:
+        fail(f"a second submission while the first is queued should be refused:\n{text}")
     wait_until("two points done under Slurm", lambda: status(a, env, slurm)[0] >= 2, 120)
     text, _ = tilevis(a, env, slurm, "--cancel")
     print(text.strip())
