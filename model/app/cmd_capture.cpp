@@ -443,6 +443,7 @@ Command add_capture_command(CLI::App& app) {
     uint32_t frames = 1, skip = 0;
     std::string viewport, out;
     int timeout = 300;
+    bool offscreen = false;
     std::vector<std::string> command;
   };
   auto args = std::make_shared<Args>();
@@ -453,6 +454,8 @@ Command add_capture_command(CLI::App& app) {
                   "WxH: the trace's viewport (default: the window's); under Xvfb also the screen size");
   cmd->add_option("-o,--output", args->out, "Trace to write (OUT.depth and OUT.capture.json beside it)")->required();
   cmd->add_option("--timeout", args->timeout, "Seconds the program may run")->capture_default_str();
+  cmd->add_flag("--offscreen", args->offscreen,
+                "Also capture draws into framebuffer objects: each render pass becomes a trace frame of its own");
   cmd->add_option("command", args->command, "The program and its arguments (after --)")->required();
   return {cmd, [args]() {
             uint32_t vw = 0, vh = 0;
@@ -474,7 +477,8 @@ Command add_capture_command(CLI::App& app) {
             const char* preload = getenv("LD_PRELOAD");
             argv.insert(argv.end(), {"env", "LD_PRELOAD=" + lib + (preload && *preload ? std::string(":") + preload : ""),
                                      "TILEVIS_CAPTURE_OUT=" + dump, fmt::format("TILEVIS_CAPTURE_SKIP={}", args->skip),
-                                     fmt::format("TILEVIS_CAPTURE_FRAMES={}", args->frames), "TILEVIS_CAPTURE_EXIT=1"});
+                                     fmt::format("TILEVIS_CAPTURE_FRAMES={}", args->frames), "TILEVIS_CAPTURE_EXIT=1",
+                                     args->offscreen ? "TILEVIS_CAPTURE_OFFSCREEN=1" : "TILEVIS_CAPTURE_OFFSCREEN=0"});
             argv.insert(argv.end(), args->command.begin(), args->command.end());
             fs::remove(dump);
             const int rc = run_program(argv, args->timeout);
@@ -487,13 +491,17 @@ Command add_capture_command(CLI::App& app) {
             std::vector<AppDepth> depth;
             CaptureSummary sum;
             uint32_t tag = 0;
-            // Two passes over the dump: sizes first.
-            std::map<uint32_t, std::pair<uint32_t, uint32_t>> sizes;
+            // Two passes over the dump: pass sizes first (a pass's end follows its draws).
+            using PassKey = std::pair<uint32_t, uint32_t>;  // frame, pass
+            struct PassInfo {
+              uint32_t framebuffer = 0, width = 0, height = 0;
+            };
+            std::map<PassKey, PassInfo> sizes;
             {
               DumpReader scan(dump);
               while (scan.next_tag(tag)) {
                 if (tag == kTagDraw) {
-                  scan.u32();
+                  scan.u32(), scan.u32();
                   scan.str();
                   scan.u32(), scan.u32();
                   for (int i = 0; i < 6; ++i) scan.u32();
@@ -505,13 +513,16 @@ Command add_capture_command(CLI::App& app) {
                   scan.u32();
                   scan.str();
                 } else if (tag == kTagDepthClear) {
-                  scan.u32(), scan.u32();
-                } else if (tag == kTagFrameEnd) {
-                  const uint32_t frame = scan.u32(), w = scan.u32(), h = scan.u32();
+                  scan.u32(), scan.u32(), scan.u32();
+                } else if (tag == kTagPassEnd) {
+                  const uint32_t frame = scan.u32(), pass = scan.u32();
+                  PassInfo info;
+                  info.framebuffer = scan.u32(), info.width = scan.u32(), info.height = scan.u32();
                   scan.f32(), scan.u32();
+                  const uint32_t dw = scan.u32(), dh = scan.u32();
                   std::vector<float> v;
-                  scan.array(v, size_t(w) * h);
-                  sizes[frame] = {w, h};
+                  scan.array(v, size_t(dw) * dh);
+                  sizes[{frame, pass}] = info;
                 } else {
                   throw std::runtime_error(dump + ": unknown record");
                 }
@@ -520,12 +531,13 @@ Command add_capture_command(CLI::App& app) {
             if (sizes.empty())
               throw std::runtime_error(fmt::format("capture: no frame was captured (the program exited with {} before "
                                                    "{} buffer swaps)", rc, args->skip + args->frames));
-            std::map<uint32_t, size_t> frame_index;
+            std::map<PassKey, size_t> frame_index;
             trace::Frame* cur = nullptr;
             AppDepth* cur_depth = nullptr;
             std::map<std::string, uint64_t> states;
-            std::map<uint32_t, uint32_t> clears;  // frame -> draws before its last depth clear
+            std::map<PassKey, uint32_t> clears;  // pass -> the frame's draw calls before its last depth clear
             std::vector<std::vector<uint32_t>> call_numbers;  // per trace frame and draw: the frame's draw call number
+            nlohmann::json passes = nlohmann::json::array();
             while (in.next_tag(tag)) {
               if (tag == kTagSkip) {
                 in.u32();
@@ -536,24 +548,32 @@ Command add_capture_command(CLI::App& app) {
                 continue;
               }
               if (tag == kTagDepthClear) {
-                const uint32_t frame = in.u32(), before = in.u32();
-                clears[frame] = before;  // the last one counts
+                const uint32_t frame = in.u32(), pass = in.u32(), before = in.u32();
+                clears[{frame, pass}] = before;  // the last one counts
                 continue;
               }
-              const uint32_t frame = in.u32();
-              if (!frame_index.count(frame)) {
-                if (!sizes.count(frame)) break;  // a frame the program did not finish
-                frame_index[frame] = tr.frames.size();
+              const uint32_t frame = in.u32(), pass = in.u32();
+              const PassKey key{frame, pass};
+              if (!frame_index.count(key)) {
+                if (!sizes.count(key)) break;  // a pass the program did not finish
+                frame_index[key] = tr.frames.size();
                 call_numbers.emplace_back();
                 tr.frames.emplace_back();
                 depth.emplace_back();
                 auto& f = tr.frames.back();
-                f.width = sizes[frame].first, f.height = sizes[frame].second;
+                const PassInfo& info = sizes[key];
+                if (info.width == 0 || info.height == 0 || info.width > trace::kMaxViewport || info.height > trace::kMaxViewport)
+                  throw std::runtime_error(fmt::format("capture: frame {} pass {}: framebuffer {} has no usable size ({}x{})",
+                                                       frame, pass, info.framebuffer, info.width, info.height));
+                f.width = info.width, f.height = info.height;
                 f.samples = trace::standard_samples(1, f.subpixel_bits);
                 f.depth_near = -1;  // set by the first draw
+                passes.push_back({{"trace_frame", tr.frames.size() - 1}, {"frame", frame}, {"pass", pass},
+                                  {"framebuffer", info.framebuffer}, {"width", info.width}, {"height", info.height}});
               }
-              cur = &tr.frames[frame_index[frame]];
-              cur_depth = &depth[frame_index[frame]];
+              const size_t k = frame_index[key];
+              cur = &tr.frames[k];
+              cur_depth = &depth[k];
               if (tag == kTagDraw) {
                 uint32_t state = 0;
                 trace::Draw d = convert_draw(in, *cur, state);
@@ -562,13 +582,14 @@ Command add_capture_command(CLI::App& app) {
                 if (!d.opaque() || d.per_pixel_only()) ++sum.non_occluding_draws, sum.non_occluding_triangles += d.triangle_count();
                 ++states[state_names(state).empty() ? "(default)" : state_names(state).substr(1)];
                 const size_t hash = d.name.find(" #");
-                call_numbers[frame_index[frame]].push_back(hash == std::string::npos ? 0 : uint32_t(std::stoul(d.name.substr(hash + 2))));
+                call_numbers[k].push_back(hash == std::string::npos ? 0 : uint32_t(std::stoul(d.name.substr(hash + 2))));
                 cur->draws.push_back(std::move(d));
                 cur_depth->draw_bits.push_back(depth_bits_of(state));
-              } else if (tag == kTagFrameEnd) {
-                cur_depth->width = in.u32(), cur_depth->height = in.u32();
+              } else if (tag == kTagPassEnd) {
+                in.u32(), in.u32(), in.u32();  // framebuffer and size: read in the first pass
                 cur_depth->clear = in.f32();
                 cur_depth->bits = in.u32();
+                cur_depth->width = in.u32(), cur_depth->height = in.u32();
                 std::vector<float> bottom_up;
                 in.array(bottom_up, size_t(cur_depth->width) * cur_depth->height);
                 cur_depth->depth.resize(bottom_up.size());
@@ -576,12 +597,16 @@ Command add_capture_command(CLI::App& app) {
                   std::copy_n(&bottom_up[size_t(cur_depth->height - 1 - y) * cur_depth->width], cur_depth->width,
                               &cur_depth->depth[size_t(y) * cur_depth->width]);
                 if (cur->depth_near < 0) cur->depth_near = 0, cur->depth_far = 1;
+                passes[k]["draws"] = cur->draws.size();
+                passes[k]["triangles"] = cur->triangle_count();
               }
             }
+            const size_t complete = std::count_if(passes.begin(), passes.end(), [](const auto& p) { return p.contains("draws"); });
+            tr.frames.resize(complete), depth.resize(complete), passes.erase(passes.begin() + long(complete), passes.end());
             uint64_t cleared_draws = 0;
-            for (const auto& [frame, before] : clears) {
-              if (!frame_index.count(frame)) continue;
-              const size_t k = frame_index[frame];
+            for (const auto& [key, before] : clears) {
+              if (!frame_index.count(key) || frame_index[key] >= tr.frames.size()) continue;
+              const size_t k = frame_index[key];
               for (size_t d = 0; d < call_numbers[k].size(); ++d)
                 if (call_numbers[k][d] < before) {
                   depth[k].draw_bits[d] |= kDepthCleared;
@@ -589,8 +614,9 @@ Command add_capture_command(CLI::App& app) {
                   ++cleared_draws;
                 }
             }
-            if (vw) {  // the trace's viewport: clip space is resolution-free, only the frame size changes
-              for (auto& f : tr.frames) f.width = vw, f.height = vh;
+            if (vw) {  // the trace's viewport: clip space is resolution-free, only the window's size changes
+              for (size_t k = 0; k < tr.frames.size(); ++k)
+                if (passes[k]["framebuffer"] == 0) tr.frames[k].width = vw, tr.frames[k].height = vh;
             }
             trace::write(tr, args->out);
             write_depth_file(args->out + ".depth", depth);
@@ -606,9 +632,10 @@ Command add_capture_command(CLI::App& app) {
             j["skipped_draws"] = sum.skipped;
             j["draws_before_a_depth_clear"] = cleared_draws;
             j["draw_states"] = states;
+            j["passes"] = passes;
             std::ofstream(args->out + ".capture.json") << j.dump(2) << "\n";
             fs::remove(dump);
-            fmt::print("{}: {} frames, {} draws, {} triangles ({} draws non-occluding)\n", args->out, tr.frames.size(),
+            fmt::print("{}: {} trace frames, {} draws, {} triangles ({} draws non-occluding)\n", args->out, tr.frames.size(),
                        sum.draws, sum.triangles, sum.non_occluding_draws);
             for (const auto& [reason, n] : sum.skipped) fmt::print("  not in the trace: {} x {}\n", n, reason);
             return 0;
@@ -638,6 +665,11 @@ Command add_compare_depth_command(CLI::App& app) {
             nlohmann::json all = nlohmann::json::array();
             bool below = false;
             for (size_t k = 0; k < tr.frames.size(); ++k) {
+              if (app_depth[k].width == 0) {  // a pass into a framebuffer without depth: nothing to compare
+                fmt::print("frame {}: no depth buffer in the application's framebuffer\n", k);
+                all.push_back({{"frame", k}, {"no_depth_buffer", true}});
+                continue;
+              }
               nlohmann::json j = compare_frame(tr.frames[k], app_depth[k], args->tolerance);
               j["frame"] = k;
               fmt::print("frame {}: {} of {} covered pixels within {:g} ({:.4f} %)", k, j["within_tolerance"].get<uint64_t>(),

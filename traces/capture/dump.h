@@ -5,15 +5,19 @@
 //
 //   file   = "TVCAPDMP" record*
 //   record = u32 tag, then its fields
-//   'DRAW' = u32 frame, u32 name_length, name, u32 flags (tilevis::trace::DrawFlag bits),
+//   'DRAW' = u32 frame, u32 pass, u32 name_length, name, u32 flags (tilevis::trace::DrawFlag bits),
 //            u32 state (kState* bits), i32 viewport[4] (x, y, w, h, window pixels, y up),
 //            f32 depth_range[2], u32 vertex_count, f32 vertices[4 × n] (clip space),
 //            u32 index_count, u32 indices[] (triangle list, as drawn: facing not yet applied)
 //   'SKIP' = u32 frame, u32 reason_length, reason    (a draw that is not in the trace, and why)
-//   'CLRD' = u32 frame, u32 draws_before       (a glClear of the depth buffer inside the frame)
-//   'FEND' = u32 frame, u32 width, u32 height, f32 depth_clear, u32 depth_bits,
-//            f32 depth[width × height] (the application's depth buffer, rows bottom-up as
-//            glReadPixels gives them; width = height = 0 when it could not be read)
+//   'CLRD' = u32 frame, u32 pass, u32 draws_before   (a depth clear inside a pass; draws_before
+//            counts the frame's draw calls so far, the number after '#' in draw names)
+//   'PEND' = u32 frame, u32 pass, u32 framebuffer (0: the window), u32 width, u32 height,
+//            f32 depth_clear, u32 depth_bits, u32 depth_width, u32 depth_height,
+//            f32 depth[depth_width × depth_height] (the pass's depth buffer when it ended, rows
+//            bottom-up as glReadPixels gives them; 0 x 0 when there is none)
+// A pass is a run of captured draws into one framebuffer; a frame's last pass ends at its
+// swap, and a frame with no draw into the window still gets an empty window pass.
 #pragma once
 
 #include <cstdint>
@@ -28,7 +32,7 @@ constexpr uint32_t tag(const char (&s)[5]) {
 }
 inline constexpr uint32_t kTagDraw = tag("DRAW");
 inline constexpr uint32_t kTagSkip = tag("SKIP");
-inline constexpr uint32_t kTagFrameEnd = tag("FEND");
+inline constexpr uint32_t kTagPassEnd = tag("PEND");
 inline constexpr uint32_t kTagDepthClear = tag("CLRD");
 
 // Rasteriser state the trace's flags cannot hold; `tilevis capture` applies what it can

@@ -21,6 +21,7 @@
 #include <dlfcn.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -130,6 +131,9 @@ REAL(decltype(&::glPixelStorei), glPixelStorei)
 REAL(PFNGLBINDFRAMEBUFFERPROC, glBindFramebuffer)
 REAL(decltype(&::glReadBuffer), glReadBuffer)
 REAL(decltype(&::glGetError), glGetError)
+REAL(PFNGLGETNAMEDFRAMEBUFFERATTACHMENTPARAMETERIVPROC, glGetNamedFramebufferAttachmentParameteriv)
+REAL(PFNGLGETTEXTURELEVELPARAMETERIVPROC, glGetTextureLevelParameteriv)
+REAL(PFNGLGETNAMEDRENDERBUFFERPARAMETERIVPROC, glGetNamedRenderbufferParameteriv)
 REAL(PFNGLCREATESHADERPROC, glCreateShader)
 REAL(PFNGLSHADERSOURCEPROC, glShaderSource)
 REAL(PFNGLCOMPILESHADERPROC, glCompileShader)
@@ -161,6 +165,7 @@ struct Config {
   FILE* out = nullptr;
   uint32_t skip = 0, frames = 1;
   bool exit_after = true;
+  bool offscreen = false;  // framebuffer-object passes too, each a trace frame of its own
 };
 
 Config& config() {
@@ -174,6 +179,7 @@ Config& config() {
     if (const char* p = getenv("TILEVIS_CAPTURE_SKIP")) c.skip = uint32_t(strtoul(p, nullptr, 10));
     if (const char* p = getenv("TILEVIS_CAPTURE_FRAMES")) c.frames = uint32_t(strtoul(p, nullptr, 10));
     if (const char* p = getenv("TILEVIS_CAPTURE_EXIT")) c.exit_after = strcmp(p, "0") != 0;
+    if (const char* p = getenv("TILEVIS_CAPTURE_OFFSCREEN")) c.offscreen = strcmp(p, "1") == 0;
     return c;
   }();
   return c;
@@ -401,6 +407,15 @@ size_t g_feedback_capacity = 0;
 uint32_t g_draw_in_frame = 0;
 uint32_t g_last_frame = UINT32_MAX;
 
+// Render passes of the frame: a run of captured draws into one framebuffer (0: the window).
+int64_t g_pass_fb = -1;          // the current pass's framebuffer, -1 none
+uint32_t g_pass = 0;             // passes ended in this frame
+bool g_window_pass_seen = false; // a pass into the window in this frame
+GLint g_pass_viewport[4] = {0, 0, 0, 0};
+uint32_t g_window_w = 0, g_window_h = 0;
+
+void end_pass();
+
 // Runs `replay` (the application's draw, as points) under transform feedback of gl_Position
 // and returns the positions written, `expected` of them.
 template <class Replay>
@@ -447,7 +462,8 @@ void capture_draw(const char* call, GLenum mode, GLint first, GLsizei count, con
   if (count <= 0 || instances <= 0) return skip_record(name + ": empty");
   GLint framebuffer = 0;
   glGetIntegerv_()(GL_DRAW_FRAMEBUFFER_BINDING, &framebuffer);
-  if (framebuffer != 0) return skip_record(name + ": framebuffer object " + std::to_string(framebuffer) + " (off screen)");
+  if (framebuffer != 0 && !config().offscreen)
+    return skip_record(name + ": framebuffer object " + std::to_string(framebuffer) + " (off screen)");
   GLint program = 0;
   glGetIntegerv_()(GL_CURRENT_PROGRAM, &program);
   ProgramInfo info;
@@ -519,6 +535,13 @@ void capture_draw(const char* call, GLenum mode, GLint first, GLsizei count, con
     }
   }
 
+  if (g_pass_fb != framebuffer) {
+    if (g_pass_fb >= 0) end_pass();
+    g_pass_fb = framebuffer;
+    glGetIntegerv_()(GL_VIEWPORT, g_pass_viewport);
+    g_window_pass_seen |= framebuffer == 0;
+  }
+  if (framebuffer != 0) name += " fbo " + std::to_string(framebuffer);
   const uint32_t state = state_bits();
   uint32_t flags = 0;
   if (state & kStateBlend) flags |= 2u;           // kBlended
@@ -534,6 +557,7 @@ void capture_draw(const char* call, GLenum mode, GLint first, GLsizei count, con
 
   put_u32(kTagDraw);
   put_u32(g_frame);
+  put_u32(g_pass);
   put_str(name);
   put_u32(flags);
   put_u32(state);
@@ -558,52 +582,109 @@ void around_draw(Capture capture) {
 
 // ---- the end of a frame ----------------------------------------------------------------
 
+// The size of framebuffer object `fb` from its depth (else first colour) attachment, 0 x 0
+// when it has neither.
+void framebuffer_size(GLuint fb, uint32_t& w, uint32_t& h) {
+  w = h = 0;
+  for (GLenum attachment : {GLenum(GL_DEPTH_ATTACHMENT), GLenum(GL_DEPTH_STENCIL_ATTACHMENT), GLenum(GL_COLOR_ATTACHMENT0)}) {
+    GLint type = GL_NONE, name = 0, level = 0, iw = 0, ih = 0;
+    glGetNamedFramebufferAttachmentParameteriv_()(fb, attachment, GL_FRAMEBUFFER_ATTACHMENT_OBJECT_TYPE, &type);
+    if (type == GL_NONE) continue;
+    glGetNamedFramebufferAttachmentParameteriv_()(fb, attachment, GL_FRAMEBUFFER_ATTACHMENT_OBJECT_NAME, &name);
+    if (type == GL_TEXTURE) {
+      glGetNamedFramebufferAttachmentParameteriv_()(fb, attachment, GL_FRAMEBUFFER_ATTACHMENT_TEXTURE_LEVEL, &level);
+      glGetTextureLevelParameteriv_()(GLuint(name), level, GL_TEXTURE_WIDTH, &iw);
+      glGetTextureLevelParameteriv_()(GLuint(name), level, GL_TEXTURE_HEIGHT, &ih);
+    } else if (type == GL_RENDERBUFFER) {
+      glGetNamedRenderbufferParameteriv_()(GLuint(name), GL_RENDERBUFFER_WIDTH, &iw);
+      glGetNamedRenderbufferParameteriv_()(GLuint(name), GL_RENDERBUFFER_HEIGHT, &ih);
+    }
+    if (iw > 0 && ih > 0) {
+      w = uint32_t(iw), h = uint32_t(ih);
+      return;
+    }
+  }
+}
+
+// Ends the current pass: its size and the depth its framebuffer holds now.
+void end_pass() {
+  const Config& c = config();
+  const GLuint fb = GLuint(g_pass_fb < 0 ? 0 : g_pass_fb);
+  uint32_t width = 0, height = 0;
+  glGetError_()();
+  if (fb == 0) width = g_window_w, height = g_window_h;
+  else framebuffer_size(fb, width, height);
+  glGetError_()();
+  if (width == 0 || height == 0) {  // unknown: the extent of the pass's first viewport
+    width = uint32_t(std::max(0, g_pass_viewport[0] + g_pass_viewport[2]));
+    height = uint32_t(std::max(0, g_pass_viewport[1] + g_pass_viewport[3]));
+  }
+  GLint read_fb = 0, read_buffer = 0, pack_buffer = 0, alignment = 4, row_length = 0, skip_rows = 0, skip_pixels = 0;
+  glGetIntegerv_()(GL_READ_FRAMEBUFFER_BINDING, &read_fb);
+  glGetIntegerv_()(GL_READ_BUFFER, &read_buffer);
+  glGetIntegerv_()(GL_PIXEL_PACK_BUFFER_BINDING, &pack_buffer);
+  glGetIntegerv_()(GL_PACK_ALIGNMENT, &alignment);
+  glGetIntegerv_()(GL_PACK_ROW_LENGTH, &row_length);
+  glGetIntegerv_()(GL_PACK_SKIP_ROWS, &skip_rows);
+  glGetIntegerv_()(GL_PACK_SKIP_PIXELS, &skip_pixels);
+  glBindFramebuffer_()(GL_READ_FRAMEBUFFER, fb);
+  if (fb == 0) glReadBuffer_()(GL_BACK);
+  glBindBuffer_()(GL_PIXEL_PACK_BUFFER, 0);
+  glPixelStorei_()(GL_PACK_ALIGNMENT, 4);
+  glPixelStorei_()(GL_PACK_ROW_LENGTH, 0);
+  glPixelStorei_()(GL_PACK_SKIP_ROWS, 0);
+  glPixelStorei_()(GL_PACK_SKIP_PIXELS, 0);
+  uint32_t dw = width, dh = height;
+  std::vector<float> depth(size_t(dw) * dh);
+  glGetError_()();
+  glReadPixels_()(0, 0, GLsizei(dw), GLsizei(dh), GL_DEPTH_COMPONENT, GL_FLOAT, depth.data());
+  if (glGetError_()() != GL_NO_ERROR) dw = dh = 0, depth.clear();  // no depth buffer there
+  GLfloat clear = 1.0f;
+  glGetFloatv_()(GL_DEPTH_CLEAR_VALUE, &clear);
+  GLint bits = 0;
+  if (fb == 0) glGetIntegerv_()(GL_DEPTH_BITS, &bits);
+  glGetError_()();  // GL_DEPTH_BITS is not in core contexts
+  glBindFramebuffer_()(GL_READ_FRAMEBUFFER, GLuint(read_fb));
+  if (fb == 0) glReadBuffer_()(GLenum(read_buffer));
+  glGetError_()();
+  glBindBuffer_()(GL_PIXEL_PACK_BUFFER, GLuint(pack_buffer));
+  glPixelStorei_()(GL_PACK_ALIGNMENT, alignment);
+  glPixelStorei_()(GL_PACK_ROW_LENGTH, row_length);
+  glPixelStorei_()(GL_PACK_SKIP_ROWS, skip_rows);
+  glPixelStorei_()(GL_PACK_SKIP_PIXELS, skip_pixels);
+  put_u32(kTagPassEnd);
+  put_u32(g_frame);
+  put_u32(g_pass);
+  put_u32(fb);
+  put_u32(width);
+  put_u32(height);
+  put_f32(clear);
+  put_u32(uint32_t(bits));
+  put_u32(dw);
+  put_u32(dh);
+  fwrite(depth.data(), 4, depth.size(), c.out);
+  ++g_pass;
+  g_pass_fb = -1;
+}
+
 void end_frame(uint32_t width, uint32_t height) {
   std::lock_guard<std::recursive_mutex> lock(g_mutex);
   Config& c = config();
+  if (width && height) g_window_w = width, g_window_h = height;
   if (capturing()) {
     g_inside = true;
-    GLint read_fb = 0, read_buffer = 0, pack_buffer = 0, alignment = 4, row_length = 0, skip_rows = 0, skip_pixels = 0;
-    glGetIntegerv_()(GL_READ_FRAMEBUFFER_BINDING, &read_fb);
-    glGetIntegerv_()(GL_READ_BUFFER, &read_buffer);
-    glGetIntegerv_()(GL_PIXEL_PACK_BUFFER_BINDING, &pack_buffer);
-    glGetIntegerv_()(GL_PACK_ALIGNMENT, &alignment);
-    glGetIntegerv_()(GL_PACK_ROW_LENGTH, &row_length);
-    glGetIntegerv_()(GL_PACK_SKIP_ROWS, &skip_rows);
-    glGetIntegerv_()(GL_PACK_SKIP_PIXELS, &skip_pixels);
-    glBindFramebuffer_()(GL_READ_FRAMEBUFFER, 0);
-    glReadBuffer_()(GL_BACK);
-    glBindBuffer_()(GL_PIXEL_PACK_BUFFER, 0);
-    glPixelStorei_()(GL_PACK_ALIGNMENT, 4);
-    glPixelStorei_()(GL_PACK_ROW_LENGTH, 0);
-    glPixelStorei_()(GL_PACK_SKIP_ROWS, 0);
-    glPixelStorei_()(GL_PACK_SKIP_PIXELS, 0);
-    std::vector<float> depth(size_t(width) * height);
-    glGetError_()();
-    glReadPixels_()(0, 0, GLsizei(width), GLsizei(height), GL_DEPTH_COMPONENT, GL_FLOAT, depth.data());
-    if (glGetError_()() != GL_NO_ERROR) width = height = 0, depth.clear();
-    GLfloat clear = 1.0f;
-    glGetFloatv_()(GL_DEPTH_CLEAR_VALUE, &clear);
-    GLint bits = 0;
-    glGetIntegerv_()(GL_DEPTH_BITS, &bits);
-    glGetError_()();  // GL_DEPTH_BITS is not in core contexts
-    glBindFramebuffer_()(GL_READ_FRAMEBUFFER, GLuint(read_fb));
-    glReadBuffer_()(GLenum(read_buffer));
-    glBindBuffer_()(GL_PIXEL_PACK_BUFFER, GLuint(pack_buffer));
-    glPixelStorei_()(GL_PACK_ALIGNMENT, alignment);
-    glPixelStorei_()(GL_PACK_ROW_LENGTH, row_length);
-    glPixelStorei_()(GL_PACK_SKIP_ROWS, skip_rows);
-    glPixelStorei_()(GL_PACK_SKIP_PIXELS, skip_pixels);
-    put_u32(kTagFrameEnd);
-    put_u32(g_frame);
-    put_u32(width);
-    put_u32(height);
-    put_f32(clear);
-    put_u32(uint32_t(bits));
-    fwrite(depth.data(), 4, depth.size(), c.out);
+    if (g_pass_fb >= 0) end_pass();
+    if (!g_window_pass_seen) {  // the window's pass, empty: the frame exists, with its depth
+      g_pass_fb = 0;
+      g_pass_viewport[2] = GLint(width), g_pass_viewport[3] = GLint(height);
+      end_pass();
+    }
     fflush(c.out);
     g_inside = false;
   }
+  g_pass_fb = -1;
+  g_pass = 0;
+  g_window_pass_seen = false;
   ++g_frame;
   if (c.out && c.exit_after && c.frames > 0 && g_frame == c.skip + c.frames) {
     fclose(c.out);
@@ -644,10 +725,11 @@ EXPORT void glClear(GLbitfield mask) {
     GLint framebuffer = 0;
     if (capturing() && (mask & GL_DEPTH_BUFFER_BIT)) {
       glGetIntegerv_()(GL_DRAW_FRAMEBUFFER_BINDING, &framebuffer);
-      if (framebuffer == 0) {
+      if (framebuffer == g_pass_fb) {  // a clear before a pass's first draw clears nothing captured
         if (g_last_frame != g_frame) g_last_frame = g_frame, g_draw_in_frame = 0;
         put_u32(kTagDepthClear);
         put_u32(g_frame);
+        put_u32(g_pass);
         put_u32(g_draw_in_frame);
       }
     }
