@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <ctime>
+#include <vector>
 
 #include <fmt/format.h>
 
@@ -27,6 +28,7 @@ struct Survey {
   StageCount stage[3];  // by Job::Kind
   EtaModel eta;         // from the done points' process.json
   size_t measured = 0;  // points behind it
+  std::vector<bool> in_queue;  // per job: running or queued in Slurm
 };
 
 // The squeue state of every queued job of every submission, keyed "stage:key".
@@ -39,6 +41,7 @@ std::map<std::string, std::string> queued_jobs(const nlohmann::json& slurm, cons
 Survey survey(const std::vector<Job>& jobs, const std::map<std::string, std::string>& queued, const fs::path& out,
               const Plan& plan) {
   Survey s;
+  s.in_queue.assign(jobs.size(), false);
   for (const Job& j : jobs) {
     StageCount& c = s.stage[size_t(j.kind)];
     ++c.total;
@@ -53,17 +56,21 @@ Survey survey(const std::vector<Job>& jobs, const std::map<std::string, std::str
       continue;
     }
     auto q = queued.find(std::string(to_string(j.kind)) + ":" + j.key);
-    if (q != queued.end()) ++(q->second == "RUNNING" ? c.running : c.queued);
+    if (q == queued.end()) continue;
+    ++(q->second == "RUNNING" ? c.running : c.queued);
+    s.in_queue[size_t(&j - jobs.data())] = true;
   }
   return s;
 }
 
-// Seconds of point work left by the measured rates, and what part of it has no rate yet.
-std::pair<double, bool> work_left(const std::vector<Job>& jobs, const Survey& s) {
+// Seconds of point work left by the measured rates (on Slurm: of the points in the queue), and
+// whether every such point's producer has a rate.
+std::pair<double, bool> work_left(const std::vector<Job>& jobs, const Survey& s, bool slurm) {
   double seconds = 0;
   bool known = true;
-  for (const Job& j : jobs) {
-    if (j.kind != Job::Kind::point || j.state == JobState::done) continue;
+  for (size_t i = 0; i < jobs.size(); ++i) {
+    const Job& j = jobs[i];
+    if (j.kind != Job::Kind::point || j.state == JobState::done || (slurm && !s.in_queue[i])) continue;
     const double e = s.eta.estimate(j.producer, j.work);
     if (e < 0) known = false;
     else seconds += e;
@@ -93,9 +100,10 @@ std::string report_text(const fs::path& out, const nlohmann::json& slurm, const 
 std::string eta_text(const std::vector<Job>& jobs, const Survey& s, bool slurm) {
   const StageCount& p = s.stage[size_t(Job::Kind::point)];
   if (p.done == p.total) return "ETA: every point is done";
-  const auto [seconds, known] = work_left(jobs, s);
+  const auto [seconds, known] = work_left(jobs, s, slurm);
   if (s.measured == 0) return "ETA: ? (no point has finished yet)";
-  const std::string basis = fmt::format("from {} finished points' seconds per megasample{}", s.measured,
+  const std::string basis = fmt::format("{}from {} finished points' seconds per megasample{}",
+                                        slurm ? "points in the queue, " : "", s.measured,
                                         known ? "" : "; producers with none finished yet are left out");
   if (slurm && p.running > 0)
     return fmt::format("ETA {} at {} tasks at a time ({})", duration_text(seconds / double(p.running)), p.running,
