@@ -146,6 +146,11 @@ PartitionName=tilevis Nodes={host} Default=YES MaxTime=INFINITE State=UP
         return "; ".join(out) or "no log"
 
     def stop(self):
+        # Jobs first: slurmd leaves a job's slurmstepd behind when it stops while the job runs.
+        if len(self.procs) == 3 and all(p.poll() is None for p in self.procs):
+            subprocess.run(["scancel", "--partition=tilevis"], env=self.env, capture_output=True, timeout=30)
+            self.wait(lambda: not subprocess.run(["squeue", "-h"], env=self.env, capture_output=True, text=True,
+                                                 timeout=20).stdout.strip(), 20)
         for p in reversed(self.procs):
             if p.poll() is None:
                 p.send_signal(signal.SIGTERM)
