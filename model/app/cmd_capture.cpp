@@ -484,6 +484,9 @@ Command add_capture_command(CLI::App& app) {
             const int rc = run_program(argv, args->timeout);
 
             // Dump -> trace.
+            if (!fs::exists(dump) || fs::file_size(dump) <= sizeof kDumpMagic)
+              throw std::runtime_error(fmt::format("capture: nothing captured: the program exited with status {} before "
+                                                   "frame {} ended (or it draws without OpenGL)", rc, args->skip + 1));
             DumpReader in(dump);
             trace::Trace tr;
             tr.source = "tilevis capture:";
