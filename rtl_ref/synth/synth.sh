@@ -33,6 +33,7 @@ run_point() { # unit lanes
   echo "$((SECONDS - t0))" >"$LOGS/$1_x$2.seconds"
 }
 
+if [ -z "${TABLE_ONLY:-}" ]; then  # TABLE_ONLY=1: only the table, from the logs there
 pids=()
 for u in "${UNITS[@]}"; do
   for l in "${LANES[@]}"; do
@@ -43,7 +44,8 @@ for u in "${UNITS[@]}"; do
 done
 fail=0
 for p in "${pids[@]}"; do wait "$p" || fail=1; done
-[ $fail -eq 0 ] || exit 1
+
+fi
 
 {
   echo "| unit | lanes | cells | flip-flops | longest path (gates) | list RAMs (black boxes) | yosys s |"
@@ -51,10 +53,13 @@ for p in "${pids[@]}"; do wait "$p" || fail=1; done
   for u in "${UNITS[@]}"; do
     for l in "${LANES[@]}"; do
       log="$LOGS/${u}_x$l.log"
-      cells=$(grep -E "^ +Number of cells:" "$log" | tail -1 | awk '{print $4}')
-      ffs=$(grep -E '^\s+\$_(S?DFF|DFFE|SDFFE|SDFFCE|ALDFF|DLATCH)[A-Z0-9_]*\s+[0-9]+' "$log" | awk '{s+=$2} END {print s+0}')
+      if [ ! -f "$LOGS/${u}_x$l.seconds" ]; then echo "| $u | $l | not finished | | | | |"; continue; fi
+      # the last statistics (synth prints its own before the script's stat)
+      last="$(sed -n "$(grep -n 'Printing statistics' "$log" | tail -1 | cut -d: -f1),\$p" "$log")"
+      cells=$(grep -E "^ +Number of cells:" <<<"$last" | tail -1 | awk '{print $4}')
+      ffs=$(grep -E '^\s+\$_(S?DFF|DFFE|SDFFE|SDFFCE|ALDFF|DLATCH)[A-Z0-9_]*\s+[0-9]+' <<<"$last" | awk '{s+=$2} END {print s+0}')
       ltp=$(grep -E "Longest topological path" "$log" | tail -1 | sed -E 's/.*length=([0-9]+).*/\1/')
-      bb=$(grep -E '^\s+\$paramod.ListRam|^\s+ListRam' "$log" | awk '{s+=$2} END {print s+0}')
+      bb=$(grep -E '^\s+\$paramod.ListRam|^\s+ListRam' <<<"$last" | awk '{s+=$2} END {print s+0}')
       echo "| $u | $l | $cells | $ffs | $ltp | $bb | $(cat "$LOGS/${u}_x$l.seconds") |"
     done
   done

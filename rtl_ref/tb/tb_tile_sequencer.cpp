@@ -207,9 +207,10 @@ int main(int argc, char** argv) {
     for (uint64_t k = 0; k < random; ++k) {
       SeqJob j;
       j.tile = uint32_t(k);
-      // Sizes around the capacities (overflow on both lists), depths with many equal values.
-      const uint32_t nt = 1 + uint32_t(rng() % (k % 8 == 0 ? 2 * kTriCap + 3 : 24));
-      const uint32_t ne = uint32_t(rng() % (k % 8 == 0 ? 2 * kEdgeCap + 3 : 3 * kLanes + 2));
+      // Small lists (rows of lanes, partial rows), and every 256th job past both capacities
+      // (passes); depths with many equal values.
+      const uint32_t nt = 1 + uint32_t(rng() % (k % 256 == 0 ? 2 * kTriCap + 3 : 24));
+      const uint32_t ne = uint32_t(rng() % (k % 256 == 0 ? 2 * kEdgeCap + 3 : 3 * kLanes + 2));
       const uint32_t range = 1 + uint32_t(rng() % 64);
       for (uint32_t t = 0; t < nt; ++t) j.tri_zmax.push_back(uint32_t(rng() % range));
       for (uint32_t e = 0; e < ne; ++e) j.edge_zmin.push_back(uint32_t(rng() % range));

@@ -154,7 +154,7 @@ module TileSequencer #(
           a_row <= a_row + 1;
         end
       end
-      if (!running && !a_valid && b_valid && b_end) done <= 1'b1;
+      if (b_end && b_tri + 1 == p_tris) done <= 1'b1;  // the last triangle's last row
     end
   end
 
