@@ -112,7 +112,6 @@ REAL(decltype(&::glDisable), glDisable)
 REAL(PFNGLGENBUFFERSPROC, glGenBuffers)
 REAL(PFNGLBINDBUFFERPROC, glBindBuffer)
 REAL(PFNGLBINDBUFFERBASEPROC, glBindBufferBase)
-REAL(PFNGLBINDBUFFERRANGEPROC, glBindBufferRange)
 REAL(PFNGLBUFFERDATAPROC, glBufferData)
 REAL(PFNGLGETBUFFERSUBDATAPROC, glGetBufferSubData)
 REAL(PFNGLBEGINTRANSFORMFEEDBACKPROC, glBeginTransformFeedback)
@@ -148,8 +147,6 @@ REAL(PFNGLDRAWRANGEELEMENTSPROC, glDrawRangeElements)
 REAL(PFNGLDRAWARRAYSINSTANCEDPROC, glDrawArraysInstanced)
 REAL(PFNGLDRAWELEMENTSINSTANCEDPROC, glDrawElementsInstanced)
 REAL(PFNGLDRAWELEMENTSBASEVERTEXPROC, glDrawElementsBaseVertex)
-REAL(PFNGLMULTIDRAWARRAYSPROC, glMultiDrawArrays)
-REAL(PFNGLMULTIDRAWELEMENTSPROC, glMultiDrawElements)
 REAL(PFNGLLINKPROGRAMPROC, glLinkProgram)
 REAL(decltype(&::glBegin), glBegin)
 REAL(decltype(&::glClear), glClear)
@@ -169,7 +166,7 @@ struct Config {
 };
 
 Config& config() {
-  static Config c = [] {
+  static Config config = [] {
     Config c;
     if (const char* p = getenv("TILEVIS_CAPTURE_OUT"); p && *p) {
       c.out = fopen(p, "wb");
@@ -182,7 +179,7 @@ Config& config() {
     if (const char* p = getenv("TILEVIS_CAPTURE_OFFSCREEN")) c.offscreen = strcmp(p, "1") == 0;
     return c;
   }();
-  return c;
+  return config;
 }
 
 std::recursive_mutex g_mutex;
