@@ -6,7 +6,9 @@
 #   - its one draw is opaque (the scene draws with depth test and writes, no blending);
 #   - the application's own depth buffer agrees with the exact truth's depth of the trace on
 #     at least 99.9 % of the covered pixels of each frame;
-#   - golden and the truth take the trace, and hybrid equals the truth on it.
+#   - golden and the truth take the trace, and hybrid equals the truth on it;
+#   - with --offscreen, glmark2's shadow scene gives two passes: the shadow map (a framebuffer
+#     object: the horse alone) and the window (the horse and its ground), each within 99.9 %.
 # Usage: capture_test.sh TILEVIS WORKDIR
 set -eu
 tilevis=$1
@@ -52,4 +54,17 @@ import json, sys
 c = json.load(open('$work/cmp/compare.json'))
 print('hybrid vs truth: sample_agreement', c['sample_agreement'])
 sys.exit(0 if c['sample_agreement'] == 1.0 else 1)"
+# Off-screen passes.
+"$tilevis" capture --offscreen --frames 1 --skip 2 --timeout 120 -o "$work/shadow.tvt" -- glmark2 -b shadow:duration=30
+"$tilevis" info "$work/shadow.tvt" --max-draws 10 > "$work/shadow_info.txt"
+set -- $(sed -n 's/^ *\([0-9]*\) draws, \([0-9]*\) triangles.*/\2/p' "$work/shadow_info.txt")
+[ "$#" -eq 2 ] || { echo "FAIL: $# passes in the shadow scene, expected 2"; exit 1; }
+[ "$1" -eq "$expected" ] || { echo "FAIL: shadow map pass has $1 triangles, horse.3ds has $expected"; exit 1; }
+[ "$2" -gt "$expected" ] || { echo "FAIL: window pass has $2 triangles, expected the horse and more"; exit 1; }
+python3 -c "
+import json, sys
+p = json.load(open('$work/shadow.tvt.capture.json'))['passes']
+print('passes:', [(x['framebuffer'], x['width'], x['height']) for x in p])
+sys.exit(0 if p[0]['framebuffer'] != 0 and p[1]['framebuffer'] == 0 else 1)"
+"$tilevis" compare-depth "$work/shadow.tvt" --min-agreement 0.999
 echo PASS
