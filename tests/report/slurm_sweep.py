@@ -34,7 +34,7 @@ from pathlib import Path
 
 SKIP = 77
 DAEMONS = ("munged", "slurmctld", "slurmd")
-CLIENTS = ("sbatch", "squeue", "scancel", "sinfo")
+CLIENTS = ("sbatch", "squeue", "scancel", "sinfo", "scontrol")
 
 
 def fail(msg):
@@ -90,6 +90,8 @@ class Cluster:
         user = "root" if os.geteuid() == 0 else os.environ.get("USER", "nobody")
         for sub in ("state", "spool"):
             (d / sub).mkdir()
+        # One count-only "gpu": the sweep's exclusive-resource path (--gres=gpu:1) needs one.
+        (d / "gres.conf").write_text(f"NodeName={host} Name=gpu Count=1 File=/dev/null\n")
         (d / "slurm.conf").write_text(f"""ClusterName=tilevistest
 SlurmctldHost={host}(127.0.0.1)
 SlurmUser={user}
@@ -115,7 +117,8 @@ SlurmctldLogFile={d}/slurmctld.log
 SlurmdLogFile={d}/slurmd.log
 SlurmctldPidFile={d}/slurmctld.pid
 SlurmdPidFile={d}/slurmd.pid
-NodeName={host} NodeAddr=127.0.0.1 CPUs={os.cpu_count()} State=UNKNOWN
+GresTypes=gpu
+NodeName={host} NodeAddr=127.0.0.1 CPUs={os.cpu_count()} Gres=gpu:1 State=UNKNOWN
 PartitionName=tilevis Nodes={host} Default=YES MaxTime=INFINITE State=UP
 """)
 
@@ -284,6 +287,12 @@ def run(a, cluster, work):
     t0 = time.time()
     text, _ = tilevis(a, env, slurm, "--slurm", "--max-array", "1")
     print(text.strip())
+    gpu = [x for x in json.loads((slurm / "sweep.json").read_text())["slurm"]["submissions"][0]["arrays"]
+           if x["resource"] == "gpu"]
+    job = subprocess.run(["scontrol", "show", "job", gpu[0]["id"]] if gpu else ["true"], capture_output=True,
+                         text=True, env=env).stdout
+    if len(gpu) != 1 or gpu[0]["tasks"] != 4 or "gpu:1" not in job:
+        fail(f"golden_gpu's points should be one array of 4 tasks asking --gres=gpu:1: {gpu}\n{job}")
     text, _ = tilevis(a, env, slurm, "-j", "1", expect=1)
     if "still queued or running" not in text:
         fail(f"a local run into a folder whose Slurm jobs are queued should be refused:\n{text}")
