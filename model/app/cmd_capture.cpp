@@ -366,18 +366,44 @@ nlohmann::json compare_frame(const trace::Frame& frame, const AppDepth& app, dou
 
   const uint32_t w = frame.width, h = frame.height;
   auto app_covered = [&](size_t p) { return app.depth[p] != app.clear; };
-  auto edge = [&](uint32_t x, uint32_t y, const DepthImage& im) {
+  // Window depth of triangle `id`'s plane at pixel (x, y).
+  std::vector<std::pair<uint32_t, uint32_t>> tri;  // id -> (draw, first index)
+  for (uint32_t d = 0; d < frame.draws.size(); ++d)
+    for (uint32_t t = 0; t < frame.draws[d].triangle_count(); ++t) tri.emplace_back(d, 3 * t);
+  const double dn = frame.depth_near, df = frame.depth_far;
+  auto depth_of = [&](int32_t id, uint32_t x, uint32_t y, double& out) {
+    const auto [d, i] = tri[size_t(id)];
+    const auto& dr = frame.draws[d];
+    double z = 0;
+    const double px = 2.0 * (x + 0.5) / frame.width - 1.0, py = 1.0 - 2.0 * (y + 0.5) / frame.height;
+    if (!plane_depth(dr.vertices[dr.indices[i]], dr.vertices[dr.indices[i + 1]], dr.vertices[dr.indices[i + 2]], px, py, z))
+      return false;
+    out = std::clamp(dn + (df - dn) * (z + 1.0) * 0.5, std::min(dn, df), std::max(dn, df));
+    return true;
+  };
+  // A triangle-edge difference, verified: the owner differs within one pixel, and the
+  // application's depth (or its background) is what a neighbouring owner gives here, so the
+  // two rasterisers gave a boundary pixel to different triangles (llvmpipe's rule against the
+  // 16.8 snap and top-left rule).
+  auto edge = [&](uint32_t x, uint32_t y, const DepthImage& im, bool app_has, float app_z) {
     const int32_t id = im.ids[size_t(y) * w + x];
     for (int dy = -1; dy <= 1; ++dy)
       for (int dx = -1; dx <= 1; ++dx) {
         const int64_t nx = int64_t(x) + dx, ny = int64_t(y) + dy;
         if (nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
-        if (im.ids[size_t(ny) * w + size_t(nx)] != id) return true;
+        const int32_t other = im.ids[size_t(ny) * w + size_t(nx)];
+        if (other == id) continue;
+        if (other < 0) {
+          if (!app_has) return true;  // the application left it background, as a neighbour is
+          continue;
+        }
+        double z = 0;
+        if (app_has && depth_of(other, x, y, z) && std::fabs(z - app_z) <= tolerance) return true;
       }
     return false;
   };
   uint64_t covered = 0, within = 0, gl_covered = 0, gl_within = 0;
-  std::map<std::string, uint64_t> causes;
+  std::map<std::string, uint64_t> causes, by_draw;
   double max_abs = 0;
   for (uint32_t y = 0; y < h; ++y)
     for (uint32_t x = 0; x < w; ++x) {
@@ -405,8 +431,8 @@ nlohmann::json compare_frame(const trace::Frame& frame, const AppDepth& app, dou
         cause = "depth_cleared_mid_frame";  // its owner was drawn before a depth clear of the frame
       else if (a && g && std::fabs(app.depth[p] - gl.depth[p]) <= tolerance)
         cause = "non_opaque_draw_writes_depth";  // blended/discarding draws write depth in the application
-      else if (edge(x, y, gl) || edge(x, y, exact))
-        cause = "triangle_edge";  // rasterisation at a boundary: llvmpipe's rule vs the 16.8 snap + top-left rule
+      else if (!a && ((g && std::fabs(gl.depth[p] - app.clear) <= tolerance) || (t && std::fabs(exact.depth[p] - app.clear) <= tolerance)))
+        cause = "at_clear_depth";  // the surface lies within tolerance of the clear value: it reads as background
       else if (bits & kDepthPolygonOffset)
         cause = "polygon_offset";
       else if (bits & kDepthClamp)
@@ -415,6 +441,8 @@ nlohmann::json compare_frame(const trace::Frame& frame, const AppDepth& app, dou
         cause = "scissor";
       else if (bits & kDepthStencil)
         cause = "stencil";
+      else if (edge(x, y, gl, a, app.depth[p]) || edge(x, y, exact, a, app.depth[p]))
+        cause = "triangle_edge";  // rasterisation at a boundary: llvmpipe's rule vs the 16.8 snap + top-left rule
       else if (a && !g)
         cause = "not_in_trace";  // drawn by something the capture skipped (see capture.json)
       else if (!a && g)
@@ -422,6 +450,9 @@ nlohmann::json compare_frame(const trace::Frame& frame, const AppDepth& app, dou
       else
         cause = "unexplained";
       ++causes[cause];
+      // Which draw owns the pixel (GL's rule first, else the trace's): names carry the state.
+      const int32_t owner = g ? gl.ids[p] : t ? exact.ids[p] : -1;
+      ++by_draw[cause + " | " + (owner < 0 ? std::string("(no owner)") : frame.draws[triangle_draw[size_t(owner)]].name)];
     }
   j["covered_pixels"] = covered;
   j["within_tolerance"] = within;
@@ -432,6 +463,13 @@ nlohmann::json compare_frame(const trace::Frame& frame, const AppDepth& app, dou
   j["within_tolerance_gl_rule"] = gl_within;
   j["agreement_gl_rule"] = gl_covered ? double(gl_within) / double(gl_covered) : 1.0;
   j["differences"] = causes;
+  std::vector<std::pair<uint64_t, std::string>> top;
+  for (const auto& [k, n] : by_draw) top.emplace_back(n, k);
+  std::sort(top.rbegin(), top.rend());
+  if (top.size() > 20) top.resize(20);
+  nlohmann::json tops = nlohmann::json::array();
+  for (const auto& [n, k] : top) tops.push_back({{"cause | owning draw", k}, {"pixels", n}});
+  j["differences_by_draw"] = tops;
   j["application_depth_bits"] = app.bits;
   return j;
 }
