@@ -404,6 +404,7 @@ nlohmann::json compare_frame(const trace::Frame& frame, const AppDepth& app, dou
   };
   uint64_t covered = 0, within = 0, gl_covered = 0, gl_within = 0;
   std::map<std::string, uint64_t> causes, by_draw;
+  nlohmann::json unexplained = nlohmann::json::array();  // the first few, for a look
   double max_abs = 0;
   for (uint32_t y = 0; y < h; ++y)
     for (uint32_t x = 0; x < w; ++x) {
@@ -443,12 +444,17 @@ nlohmann::json compare_frame(const trace::Frame& frame, const AppDepth& app, dou
         cause = "stencil";
       else if (edge(x, y, gl, a, app.depth[p]) || edge(x, y, exact, a, app.depth[p]))
         cause = "triangle_edge";  // rasterisation at a boundary: llvmpipe's rule vs the 16.8 snap + top-left rule
+      else if (a && g && std::fabs(app.depth[p] - gl.depth[p]) <= 10 * tolerance)
+        cause = "within_10x_tolerance";  // same surface, the application's float depth interpolation (steep triangles)
       else if (a && !g)
         cause = "not_in_trace";  // drawn by something the capture skipped (see capture.json)
       else if (!a && g)
         cause = "not_in_application_depth";
       else
         cause = "unexplained";
+      if (cause == "unexplained" && unexplained.size() < 20)
+        unexplained.push_back({{"x", x}, {"y", y}, {"application", a ? double(app.depth[p]) : -1.0},
+                               {"truth", t ? exact.depth[p] : -1.0}, {"gl_rule", g ? gl.depth[p] : -1.0}});
       ++causes[cause];
       // Which draw owns the pixel (GL's rule first, else the trace's): names carry the state.
       const int32_t owner = g ? gl.ids[p] : t ? exact.ids[p] : -1;
@@ -470,6 +476,7 @@ nlohmann::json compare_frame(const trace::Frame& frame, const AppDepth& app, dou
   nlohmann::json tops = nlohmann::json::array();
   for (const auto& [n, k] : top) tops.push_back({{"cause | owning draw", k}, {"pixels", n}});
   j["differences_by_draw"] = tops;
+  j["unexplained_pixels"] = unexplained;
   j["application_depth_bits"] = app.bits;
   return j;
 }
