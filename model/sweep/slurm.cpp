@@ -93,6 +93,7 @@ class Submitter {
   Submitter(const Sweep& sw, const RunOptions& opt, const SlurmOptions& so, size_t number)
       : m_opt(opt), m_so(so), m_number(number), m_dir(fs::path("slurm") / std::to_string(number)),
         m_sweep_file(fs::absolute(sw.file).lexically_normal().string()), m_name(opt.out.filename().string()) {
+    if (m_name.empty()) m_name = opt.out.parent_path().filename().string();  // OUT ends with a slash
     fs::create_directories(opt.out / m_dir);
   }
 
