@@ -57,9 +57,9 @@ fi
       # the last statistics (synth prints its own before the script's stat)
       last="$(sed -n "$(grep -n 'Printing statistics' "$log" | tail -1 | cut -d: -f1),\$p" "$log")"
       cells=$(grep -E "^ +Number of cells:" <<<"$last" | tail -1 | awk '{print $4}')
-      ffs=$(grep -E '^\s+\$_(S?DFF|DFFE|SDFFE|SDFFCE|ALDFF|DLATCH)[A-Z0-9_]*\s+[0-9]+' <<<"$last" | awk '{s+=$2} END {print s+0}')
+      ffs=$( { grep -E '^\s+\$_(S?DFF|DFFE|SDFFE|SDFFCE|ALDFF|DLATCH)[A-Z0-9_]*\s+[0-9]+' <<<"$last" || true; } | { grep -v "^$" || true; } | awk '{s+=$2} END {print s+0}')
       ltp=$(grep -E "Longest topological path" "$log" | tail -1 | sed -E 's/.*length=([0-9]+).*/\1/')
-      bb=$(grep -E '^\s+\$paramod.ListRam|^\s+ListRam' <<<"$last" | awk '{s+=$2} END {print s+0}')
+      bb=$( { grep -E '^\s+\$paramod.ListRam|^\s+ListRam' <<<"$last" || true; } | { grep -v "^$" || true; } | awk '{s+=$2} END {print s+0}')
       echo "| $u | $l | $cells | $ffs | $ltp | $bb | $(cat "$LOGS/${u}_x$l.seconds") |"
     done
   done

@@ -144,6 +144,7 @@ ReplayedJob replay_job(const vis::EvuJob& j,
           if (on_split) on_split(rt.pieces[k], r.edges[ei]);
           geom::SplitResult sr = vis::svgpu::split(rt.pieces[k], r.edges[ei]);
           ++r.clips;
+          ++rt.clips;
           rt.pieces[k] = std::move(sr.inside);
           if (!sr.outside.empty()) rt.pieces.push_back(std::move(sr.outside));
         }

@@ -79,6 +79,7 @@ struct ReplayedTriangle {
   bool opaque = true;
   std::vector<uint32_t> candidates;
   std::vector<geom::ConvexPolygon> pieces;
+  int64_t clips = 0;  // splits performed on its pieces
 };
 struct ReplayedJob {
   std::vector<vis::svgpu::Edge> edges;

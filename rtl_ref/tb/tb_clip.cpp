@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
 #include <memory>
 #include <random>
 #include <string>
@@ -154,6 +155,7 @@ class Bench {
 int main(int argc, char** argv) {
   uint64_t random = 0, seed = 1, job_stride = 1;
   std::vector<std::string> jobs;
+  std::string csv;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto val = [&]() -> std::string {
@@ -163,8 +165,9 @@ int main(int argc, char** argv) {
     if (a == "--random") random = std::stoull(val());
     else if (a == "--seed") seed = std::stoull(val());
     else if (a == "--jobs") jobs.push_back(val());
+    else if (a == "--csv") csv = val();
     else if (a == "--job-stride") job_stride = std::max<uint64_t>(1, std::stoull(val()));
-    else { std::fprintf(stderr, "usage: %s [--random N --seed S] [--jobs FILE [--job-stride K]]\n", argv[0]); return 2; }
+    else { std::fprintf(stderr, "usage: %s [--random N --seed S] [--jobs FILE [--job-stride K]] [--csv FILE]\n", argv[0]); return 2; }
   }
   Verilated::commandArgs(argc, argv);
   uint64_t bad = 0;
@@ -198,6 +201,14 @@ int main(int argc, char** argv) {
     std::printf("Clip random (seed %llu): %s; mismatches %llu\n", (unsigned long long)seed, cov.report().c_str(),
                 (unsigned long long)b.mismatches());
   }
+  // Per tile job: the RTL's clocks at one lane beside the SystemC EVU clip stage's cycles for
+  // the same work at one lane (EvuClip::cost: per triangle ceil(candidates + clips) x ii, or 1
+  // without any, plus the latency once; model defaults ii 4, latency 12).
+  std::ofstream out;
+  if (!csv.empty()) {
+    out.open(csv);
+    out << "source,tile,triangles,candidates,clips,parent_edges,rtl_clocks,model_cycles\n";
+  }
   for (const std::string& f : jobs) {
     Bench b;
     Coverage cov;
@@ -205,9 +216,19 @@ int main(int argc, char** argv) {
     vis::read_evu_jobs(f, [&](const vis::EvuJob& j) {
       if (seen++ % job_stride != 0) return;
       ++checked;
+      const uint64_t clocks0 = cov.clocks, edges0 = cov.edges_in;
       const ReplayedJob r = replay_job(j, [&](const geom::ConvexPolygon& piece, const vis::svgpu::Edge& e) {
         bad += !b.split(piece, e, cov);
       });
+      uint64_t model = 12, cand = 0;
+      for (const auto& t : r.triangles) {
+        const uint64_t ops = t.candidates.size() + uint64_t(t.clips);
+        model += ops ? ops * 4 : 1;
+        cand += t.candidates.size();
+      }
+      if (out.is_open())
+        out << f << ',' << j.tile << ',' << r.triangles.size() << ',' << cand << ',' << r.clips << ','
+            << cov.edges_in - edges0 << ',' << cov.clocks - clocks0 << ',' << model << '\n';
       const int64_t clips = r.clips;
       int64_t pieces = 0;
       for (const auto& t : r.triangles) pieces += int64_t(t.pieces.size());

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <deque>
+#include <fstream>
 #include <memory>
 #include <random>
 #include <string>
@@ -155,6 +156,7 @@ class Bench {
 int main(int argc, char** argv) {
   uint64_t random = 0, seed = 1, job_stride = 1;
   std::vector<std::string> jobs;
+  std::string csv;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto val = [&]() -> std::string {
@@ -164,8 +166,9 @@ int main(int argc, char** argv) {
     if (a == "--random") random = std::stoull(val());
     else if (a == "--seed") seed = std::stoull(val());
     else if (a == "--jobs") jobs.push_back(val());
+    else if (a == "--csv") csv = val();
     else if (a == "--job-stride") job_stride = std::max<uint64_t>(1, std::stoull(val()));
-    else { std::fprintf(stderr, "usage: %s [--random N --seed S] [--jobs FILE [--job-stride K]]\n", argv[0]); return 2; }
+    else { std::fprintf(stderr, "usage: %s [--random N --seed S] [--jobs FILE [--job-stride K]] [--csv FILE]\n", argv[0]); return 2; }
   }
   Verilated::commandArgs(argc, argv);
   uint64_t bad = 0;
@@ -203,6 +206,14 @@ int main(int argc, char** argv) {
                 (unsigned long long)b.mismatches());
     bad += b.mismatches();
   }
+  // Per tile job: the RTL's clocks at one lane beside the SystemC EVU occlude stage's cycles
+  // for the same work at one lane (EvuOcclude::cost: per triangle pieces + occlusion tests at
+  // ii 1, or 1 without any, plus the latency 10 once).
+  std::ofstream out;
+  if (!csv.empty()) {
+    out.open(csv);
+    out << "source,tile,triangles,pieces,occlusion_tests,rtl_clocks,model_cycles\n";
+  }
   for (const std::string& f : jobs) {
     Bench b;
     Coverage cov;
@@ -217,8 +228,12 @@ int main(int argc, char** argv) {
         if (r.triangles[i].opaque) occ_ix.push_back(i);
       std::stable_sort(occ_ix.begin(), occ_ix.end(),
                        [&](uint32_t a, uint32_t c) { return r.triangles[a].t.z_min < r.triangles[c].t.z_min; });
-      int64_t tests = 0, visible = 0;
-      for (const auto& rt : r.triangles)
+      int64_t tests = 0, visible = 0, pieces = 0;
+      const uint64_t clocks0 = cov.clocks;
+      uint64_t model = 10;
+      for (const auto& rt : r.triangles) {
+        const int64_t tests0 = tests;
+        int64_t tri_pieces = 0;
         for (const auto& piece : rt.pieces) {
           if (piece.empty()) continue;
           const geom::RationalPoint q = geom::interior_point(piece);
@@ -238,7 +253,15 @@ int main(int argc, char** argv) {
           const bool hidden = b.run(piece, rt.t, rt.id, occ, cov);
           tests += int64_t(cov.tests - before);
           visible += !hidden;
+          ++tri_pieces;
         }
+        pieces += tri_pieces;
+        const uint64_t ops = uint64_t(tri_pieces + tests - tests0);
+        model += ops ? ops : 1;
+      }
+      if (out.is_open())
+        out << f << ',' << j.tile << ',' << r.triangles.size() << ',' << pieces << ',' << tests << ','
+            << cov.clocks - clocks0 << ',' << model << '\n';
       if (tests != j.golden.occlusion_tests || visible != j.golden.visible_pieces) {
         if (counter_mismatch < 10)
           std::printf("COUNTER MISMATCH tile %u: occlusion tests %lld/%lld visible %lld/%lld (tb/golden)\n", j.tile,
