@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Bad sweep files end with one line naming the file, the JSON path and what was expected, a
 non-zero exit, and nothing written. Then a good one written out as a jobs file marks the points
-of an exclusive producer.
+of an exclusive producer, and the Slurm options are refused where they do not belong.
 
   sweep_rejects.py TILEVIS
 """
@@ -64,7 +64,30 @@ def main():
         print(f"{'ok  ' if ok else 'FAIL'} jobs file marks the exclusive producer's points: exit {p.returncode}, "
               f"{len(g1)} marked of {len(g1)}, {len(others)} others")
         failed += not ok
+        failed += check_slurm_options(binary, Path(tmp), f)
     sys.exit(1 if failed else 0)
+
+
+def check_slurm_options(binary, tmp, sweep):
+    """Slurm options without --slurm, and --slurm, --status, --cancel, --jobs-file together, are
+    refused before anything runs; --status on a folder never run prints counts and writes nothing."""
+    failed = 0
+    out = tmp / "slurm_opts"
+    for extra, expected in ((["--max-array", "4"], "--max-array requires --slurm"),
+                            (["--partition", "p"], "--partition requires --slurm"),
+                            (["--slurm", "--status"], "excludes"),
+                            (["--status", "--cancel"], "excludes"),
+                            (["--slurm", "--jobs-file", str(tmp / "j.sh")], "excludes")):
+        p = subprocess.run([binary, "sweep", str(sweep), "-o", str(out), *extra], capture_output=True, text=True,
+                           timeout=60)
+        ok = p.returncode not in (0, None) and expected in p.stderr and not out.exists()
+        print(f"{'ok  ' if ok else 'FAIL'} {' '.join(extra)}: exit {p.returncode}: {p.stderr.strip()[:120]}")
+        failed += not ok
+    p = subprocess.run([binary, "sweep", str(sweep), "-o", str(out), "--status"], capture_output=True, text=True,
+                       timeout=60)
+    ok = p.returncode == 0 and "0 of 4 points done" in p.stdout and "traces 0/1 done" in p.stdout and not out.exists()
+    print(f"{'ok  ' if ok else 'FAIL'} --status on a folder never run: exit {p.returncode}: {p.stdout.strip()[:160]}")
+    return failed + (not ok)
 
 
 if __name__ == "__main__":
