@@ -10,7 +10,7 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 OUT="${1:-$ROOT/reports/rtl/synthesis.md}"
 shift || true
 UNITS=("$@")
-[ ${#UNITS[@]} -gt 0 ] || UNITS=(PairReject Clip Occlude TileSequencer)
+[ ${#UNITS[@]} -gt 0 ] || UNITS=(PairReject DepthTest Clip Occlude TileSequencer)
 LANES=(${SYNTH_LANES:-1 2 4 8})
 JOBS="${JOBS:-$(nproc)}"
 YOSYS="${YOSYS:-yosys}"
@@ -20,7 +20,7 @@ mkdir -p "$LOGS"
 unit_file() {
   case "$1" in
     PairReject) echo pair_reject.sv ;; Clip) echo clip.sv ;; Occlude) echo occlude.sv ;;
-    TileSequencer) echo tile_sequencer.sv ;; *) echo "unknown unit $1" >&2; return 1 ;;
+    TileSequencer) echo tile_sequencer.sv ;; DepthTest) echo depth_test.sv ;; *) echo "unknown unit $1" >&2; return 1 ;;
   esac
 }
 run_point() { # unit lanes
