@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <deque>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -231,10 +232,15 @@ int main(int argc, char** argv) {
     b.keep_codes(true);
     JobCheck jc;
     uint64_t seen = 0;
-    vis::read_evu_jobs(f, [&](const vis::EvuJob& j) {
-      if (seen++ % job_stride != 0 || jc.jobs >= max_jobs) return;
-      run_job(b, j, jc);
-    });
+    try {
+      vis::read_evu_jobs(f, [&](const vis::EvuJob& j) {
+        if (seen++ % job_stride != 0 || jc.jobs >= max_jobs) return;
+        run_job(b, j, jc);
+      });
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "error: %s\n", e.what());
+      return 2;
+    }
     std::printf("PairReject x%d jobs %s: %llu of %llu tile jobs, %llu pairs; %s; mismatches %llu, tile counter "
                 "mismatches %llu\n",
                 kLanes, f.c_str(), (unsigned long long)jc.jobs, (unsigned long long)seen, (unsigned long long)jc.pairs,
