@@ -84,11 +84,10 @@ class Bench {
     cycle();
   }
   void cycle() {
-    if (m_pending.size() < size_t(m_cycles_since_issue_guard)) {}
     tick();
     ++m_cycles;
     if (m_dut->in_valid == 0) m_pending.push_back(Pending{});
-    if (m_pending.size() > size_t(kLatency)) std::abort();
+    if (m_pending.size() > size_t(kLatency)) std::printf("PairReject: more in flight than the latency\n"), std::exit(1);
     if (m_pending.size() == size_t(kLatency)) {
       const Pending& p = m_pending.front();
       for (int l = 0; l < kLanes; ++l) {
@@ -145,7 +144,6 @@ class Bench {
   int m_fill = 0;
   std::deque<Pending> m_pending;
   uint64_t m_cycles = 0, m_mismatches = 0, m_next_index = 0;
-  int m_cycles_since_issue_guard = 0;
   PairCoverage m_cov;
   bool m_keep = false;
   std::vector<int> m_codes;
