@@ -15,8 +15,10 @@ __extension__ typedef unsigned __int128 U128;
 template <class T>
 inline void put_bit(T& port, int bit, bool v) {
   if constexpr (std::is_integral_v<T>) {
-    if (v) port |= T(T(1) << bit);
-    else port &= T(~(T(1) << bit));
+    if (v)
+      port |= T(T(1) << bit);
+    else
+      port &= T(~(T(1) << bit));
   } else {
     uint32_t& w = port[bit / 32];
     const uint32_t m = uint32_t(1) << (bit % 32);
@@ -26,8 +28,10 @@ inline void put_bit(T& port, int bit, bool v) {
 
 template <class T>
 inline bool get_bit(const T& port, int bit) {
-  if constexpr (std::is_integral_v<T>) return (port >> bit) & 1;
-  else return (port[bit / 32] >> (bit % 32)) & 1;
+  if constexpr (std::is_integral_v<T>)
+    return (port >> bit) & 1;
+  else
+    return (port[bit / 32] >> (bit % 32)) & 1;
 }
 
 // Two's complement of v in `width` bits (width <= 128; bits above 127 copy the sign).

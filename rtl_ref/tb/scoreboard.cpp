@@ -43,17 +43,23 @@ std::string PairCoverage::report() const {
 
 int32_t PairSource::coord(int scale) {
   switch (scale) {
-    case 0: return int32_t(m_rng() % 9) * 16;                                   // lattice: ties everywhere
-    case 1: return int32_t(m_rng() % 4096);                                     // a few tiles
-    default: return int32_t(int64_t(m_rng() % ((1u << 24) - 1)) - ((1 << 23) - 1));  // the guard band
+    case 0:
+      return int32_t(m_rng() % 9) * 16;  // lattice: ties everywhere
+    case 1:
+      return int32_t(m_rng() % 4096);  // a few tiles
+    default:
+      return int32_t(int64_t(m_rng() % ((1u << 24) - 1)) - ((1 << 23) - 1));  // the guard band
   }
 }
 
 uint32_t PairSource::depth() {
   switch (m_rng() % 3) {
-    case 0: return uint32_t(m_rng() % 4) * 1000;  // equalities
-    case 1: return uint32_t(m_rng() % (1u << 24));
-    default: return uint32_t(m_rng());  // 32-bit depth
+    case 0:
+      return uint32_t(m_rng() % 4) * 1000;  // equalities
+    case 1:
+      return uint32_t(m_rng() % (1u << 24));
+    default:
+      return uint32_t(m_rng());  // 32-bit depth
   }
 }
 
@@ -88,7 +94,11 @@ PairVector PairSource::next() {
     Vertex a{coord(scale), coord(scale), depth()}, b{coord(scale), coord(scale), depth()};
     const int i = int(m_rng() % 3);
     switch (m_rng() % 8) {
-      case 0: a = v[i]; b = v[(i + 1) % 3]; if (m_rng() & 1) std::swap(a, b); break;  // a triangle edge
+      case 0:
+        a = v[i];
+        b = v[(i + 1) % 3];
+        if (m_rng() & 1) std::swap(a, b);
+        break;   // a triangle edge
       case 1: {  // collinear with a triangle edge, beyond or inside it
         const int64_t dx = int64_t(v[(i + 1) % 3].x) - v[i].x, dy = int64_t(v[(i + 1) % 3].y) - v[i].y;
         const int64_t k0 = int64_t(m_rng() % 5) - 2, k1 = int64_t(m_rng() % 5) - 1;
@@ -99,11 +109,23 @@ PairVector PairSource::next() {
         b = {int32_t(bx), int32_t(by), depth()};
         break;
       }
-      case 2: a = v[i]; break;                       // anchored at a vertex
-      case 3: a = v[i]; b.x = a.x; b.y = a.y; break;  // degenerate
-      case 4: a = {r.x0, r.y0, depth()}; b = {r.x1, r.y1, depth()}; break;  // the tile's diagonal
-      case 5: a.z = b.z = pv.t.z_max; break;        // depth tie with the triangle's farthest point
-      default: break;
+      case 2:
+        a = v[i];
+        break;  // anchored at a vertex
+      case 3:
+        a = v[i];
+        b.x = a.x;
+        b.y = a.y;
+        break;  // degenerate
+      case 4:
+        a = {r.x0, r.y0, depth()};
+        b = {r.x1, r.y1, depth()};
+        break;  // the tile's diagonal
+      case 5:
+        a.z = b.z = pv.t.z_max;
+        break;  // depth tie with the triangle's farthest point
+      default:
+        break;
     }
     pv.e = vis::svgpu::Edge::from(a, b);
     return pv;

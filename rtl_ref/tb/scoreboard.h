@@ -22,7 +22,8 @@ inline const char* pair_code_name(int c) {
 }
 
 // The tests in the order the analytic resolver applies them (analytic_resolver.cpp).
-inline int expected_pair_code(const geom::ConvexPolygon& poly, const vis::svgpu::Triangle& t, const vis::svgpu::Edge& e) {
+inline int expected_pair_code(const geom::ConvexPolygon& poly, const vis::svgpu::Triangle& t,
+                              const vis::svgpu::Edge& e) {
   if (vis::svgpu::edge_behind(e, t)) return kBehind;
   if (vis::svgpu::boxes_apart(e, t)) return kBoxes;
   if (vis::svgpu::shares_edge(e, t.tri)) return kShared;
@@ -89,6 +90,7 @@ struct ReplayedJob {
 }  // namespace tilevis::rtl
 
 #include <functional>
+
 #include "visibility/evu_jobs.h"
 
 namespace tilevis::rtl {

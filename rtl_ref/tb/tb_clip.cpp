@@ -128,15 +128,17 @@ class Bench {
   void collect(geom::ConvexPolygon& in, geom::ConvexPolygon& out) {
     for (int s = 0; s < 2; ++s) {
       if ((m_dut->o_in_valid >> s) & 1)
-        in.push_edge({int64_t(get_signed(m_dut->o_in_la, s * kLA, kLA)), int64_t(get_signed(m_dut->o_in_lb, s * kLA, kLA)),
-                      int64_t(get_signed(m_dut->o_in_lc, s * kLC, kLC))},
-                     {get_signed(m_dut->o_in_vx, s * kPX, kPX), get_signed(m_dut->o_in_vy, s * kPX, kPX),
-                      int64_t(get_signed(m_dut->o_in_vw, s * kPW, kPW))});
+        in.push_edge(
+            {int64_t(get_signed(m_dut->o_in_la, s * kLA, kLA)), int64_t(get_signed(m_dut->o_in_lb, s * kLA, kLA)),
+             int64_t(get_signed(m_dut->o_in_lc, s * kLC, kLC))},
+            {get_signed(m_dut->o_in_vx, s * kPX, kPX), get_signed(m_dut->o_in_vy, s * kPX, kPX),
+             int64_t(get_signed(m_dut->o_in_vw, s * kPW, kPW))});
       if ((m_dut->o_out_valid >> s) & 1)
-        out.push_edge({int64_t(get_signed(m_dut->o_out_la, s * kLA, kLA)), int64_t(get_signed(m_dut->o_out_lb, s * kLA, kLA)),
-                       int64_t(get_signed(m_dut->o_out_lc, s * kLC, kLC))},
-                      {get_signed(m_dut->o_out_vx, s * kPX, kPX), get_signed(m_dut->o_out_vy, s * kPX, kPX),
-                       int64_t(get_signed(m_dut->o_out_vw, s * kPW, kPW))});
+        out.push_edge(
+            {int64_t(get_signed(m_dut->o_out_la, s * kLA, kLA)), int64_t(get_signed(m_dut->o_out_lb, s * kLA, kLA)),
+             int64_t(get_signed(m_dut->o_out_lc, s * kLC, kLC))},
+            {get_signed(m_dut->o_out_vx, s * kPX, kPX), get_signed(m_dut->o_out_vy, s * kPX, kPX),
+             int64_t(get_signed(m_dut->o_out_vw, s * kPW, kPW))});
     }
   }
   void tick() {
@@ -159,15 +161,26 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto val = [&]() -> std::string {
-      if (i + 1 >= argc) { std::fprintf(stderr, "%s needs a value\n", a.c_str()); std::exit(2); }
+      if (i + 1 >= argc) {
+        std::fprintf(stderr, "%s needs a value\n", a.c_str());
+        std::exit(2);
+      }
       return argv[++i];
     };
-    if (a == "--random") random = std::stoull(val());
-    else if (a == "--seed") seed = std::stoull(val());
-    else if (a == "--jobs") jobs.push_back(val());
-    else if (a == "--csv") csv = val();
-    else if (a == "--job-stride") job_stride = std::max<uint64_t>(1, std::stoull(val()));
-    else { std::fprintf(stderr, "usage: %s [--random N --seed S] [--jobs FILE [--job-stride K]] [--csv FILE]\n", argv[0]); return 2; }
+    if (a == "--random")
+      random = std::stoull(val());
+    else if (a == "--seed")
+      seed = std::stoull(val());
+    else if (a == "--jobs")
+      jobs.push_back(val());
+    else if (a == "--csv")
+      csv = val();
+    else if (a == "--job-stride")
+      job_stride = std::max<uint64_t>(1, std::stoull(val()));
+    else {
+      std::fprintf(stderr, "usage: %s [--random N --seed S] [--jobs FILE [--job-stride K]] [--csv FILE]\n", argv[0]);
+      return 2;
+    }
   }
   Verilated::commandArgs(argc, argv);
   uint64_t bad = 0;
@@ -217,9 +230,8 @@ int main(int argc, char** argv) {
       if (seen++ % job_stride != 0) return;
       ++checked;
       const uint64_t clocks0 = cov.clocks, edges0 = cov.edges_in;
-      const ReplayedJob r = replay_job(j, [&](const geom::ConvexPolygon& piece, const vis::svgpu::Edge& e) {
-        bad += !b.split(piece, e, cov);
-      });
+      const ReplayedJob r = replay_job(
+          j, [&](const geom::ConvexPolygon& piece, const vis::svgpu::Edge& e) { bad += !b.split(piece, e, cov); });
       uint64_t model = 12, cand = 0;
       for (const auto& t : r.triangles) {
         const uint64_t ops = t.candidates.size() + uint64_t(t.clips);
@@ -234,8 +246,9 @@ int main(int argc, char** argv) {
       for (const auto& t : r.triangles) pieces += int64_t(t.pieces.size());
       if (clips != j.golden.clip_polygons || pieces != j.golden.pieces) {
         if (counter_mismatch < 10)
-          std::printf("COUNTER MISMATCH tile %u: clips %lld/%lld pieces %lld/%lld (tb/golden)\n", j.tile, (long long)clips,
-                      (long long)j.golden.clip_polygons, (long long)pieces, (long long)j.golden.pieces);
+          std::printf("COUNTER MISMATCH tile %u: clips %lld/%lld pieces %lld/%lld (tb/golden)\n", j.tile,
+                      (long long)clips, (long long)j.golden.clip_polygons, (long long)pieces,
+                      (long long)j.golden.pieces);
         ++counter_mismatch;
       }
     });

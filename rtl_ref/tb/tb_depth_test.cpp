@@ -102,14 +102,24 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto val = [&]() -> std::string {
-      if (i + 1 >= argc) { std::fprintf(stderr, "%s needs a value\n", a.c_str()); std::exit(2); }
+      if (i + 1 >= argc) {
+        std::fprintf(stderr, "%s needs a value\n", a.c_str());
+        std::exit(2);
+      }
       return argv[++i];
     };
-    if (a == "--random") random = std::stoull(val());
-    else if (a == "--seed") seed = std::stoull(val());
-    else if (a == "--jobs") jobs.push_back(val());
-    else if (a == "--job-stride") job_stride = std::max<uint64_t>(1, std::stoull(val()));
-    else { std::fprintf(stderr, "usage: %s [--random N --seed S] [--jobs FILE [--job-stride K]]\n", argv[0]); return 2; }
+    if (a == "--random")
+      random = std::stoull(val());
+    else if (a == "--seed")
+      seed = std::stoull(val());
+    else if (a == "--jobs")
+      jobs.push_back(val());
+    else if (a == "--job-stride")
+      job_stride = std::max<uint64_t>(1, std::stoull(val()));
+    else {
+      std::fprintf(stderr, "usage: %s [--random N --seed S] [--jobs FILE [--job-stride K]]\n", argv[0]);
+      return 2;
+    }
   }
   Verilated::commandArgs(argc, argv);
   uint64_t bad = 0;
@@ -125,10 +135,11 @@ int main(int argc, char** argv) {
       b.push(v, vis::svgpu::survives(v.poly, v.t, v.e));
     }
     b.flush();
-    std::printf("DepthTest random (seed %llu): %llu pairs past tests 1, 2, 4, 6 (of %llu drawn), %llu survive, %llu "
-                "with a level edge; mismatches %llu\n",
-                (unsigned long long)seed, (unsigned long long)b.vectors(), (unsigned long long)drawn,
-                (unsigned long long)b.survive(), (unsigned long long)level, (unsigned long long)b.mismatches());
+    std::printf(
+        "DepthTest random (seed %llu): %llu pairs past tests 1, 2, 4, 6 (of %llu drawn), %llu survive, %llu "
+        "with a level edge; mismatches %llu\n",
+        (unsigned long long)seed, (unsigned long long)b.vectors(), (unsigned long long)drawn,
+        (unsigned long long)b.survive(), (unsigned long long)level, (unsigned long long)b.mismatches());
     bad += b.mismatches();
   }
   for (const std::string& f : jobs) {
@@ -138,10 +149,12 @@ int main(int argc, char** argv) {
       if (seen++ % job_stride != 0) return;
       ++checked;
       std::vector<vis::svgpu::Edge> edges;
-      for (size_t k = 0; k < j.edges.size(); k += 2) edges.push_back(vis::svgpu::Edge::from(j.edges[k], j.edges[k + 1]));
+      for (size_t k = 0; k < j.edges.size(); k += 2)
+        edges.push_back(vis::svgpu::Edge::from(j.edges[k], j.edges[k + 1]));
       std::vector<uint32_t> order(edges.size());
       for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
-      std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t c) { return edges[a].z_min < edges[c].z_min; });
+      std::stable_sort(order.begin(), order.end(),
+                       [&](uint32_t a, uint32_t c) { return edges[a].z_min < edges[c].z_min; });
       int64_t candidates = 0;
       for (const auto& jt : j.triangles) {
         const auto t = vis::svgpu::Triangle::from(jt.v[0], jt.v[1], jt.v[2]);
@@ -158,10 +171,11 @@ int main(int argc, char** argv) {
       b.flush();
       if (candidates != j.golden.candidate_pairs) ++counter_mismatch;
     });
-    std::printf("DepthTest jobs %s: %llu of %llu tile jobs, %llu pairs past tests 1, 2, 4, 6, %llu survive; mismatches "
-                "%llu, tile counter mismatches %llu\n",
-                f.c_str(), (unsigned long long)checked, (unsigned long long)seen, (unsigned long long)b.vectors(),
-                (unsigned long long)b.survive(), (unsigned long long)b.mismatches(), (unsigned long long)counter_mismatch);
+    std::printf(
+        "DepthTest jobs %s: %llu of %llu tile jobs, %llu pairs past tests 1, 2, 4, 6, %llu survive; mismatches "
+        "%llu, tile counter mismatches %llu\n",
+        f.c_str(), (unsigned long long)checked, (unsigned long long)seen, (unsigned long long)b.vectors(),
+        (unsigned long long)b.survive(), (unsigned long long)b.mismatches(), (unsigned long long)counter_mismatch);
     bad += b.mismatches() + counter_mismatch;
   }
   return bad ? 1 : 0;

@@ -160,15 +160,26 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto val = [&]() -> std::string {
-      if (i + 1 >= argc) { std::fprintf(stderr, "%s needs a value\n", a.c_str()); std::exit(2); }
+      if (i + 1 >= argc) {
+        std::fprintf(stderr, "%s needs a value\n", a.c_str());
+        std::exit(2);
+      }
       return argv[++i];
     };
-    if (a == "--random") random = std::stoull(val());
-    else if (a == "--seed") seed = std::stoull(val());
-    else if (a == "--jobs") jobs.push_back(val());
-    else if (a == "--csv") csv = val();
-    else if (a == "--job-stride") job_stride = std::max<uint64_t>(1, std::stoull(val()));
-    else { std::fprintf(stderr, "usage: %s [--random N --seed S] [--jobs FILE [--job-stride K]] [--csv FILE]\n", argv[0]); return 2; }
+    if (a == "--random")
+      random = std::stoull(val());
+    else if (a == "--seed")
+      seed = std::stoull(val());
+    else if (a == "--jobs")
+      jobs.push_back(val());
+    else if (a == "--csv")
+      csv = val();
+    else if (a == "--job-stride")
+      job_stride = std::max<uint64_t>(1, std::stoull(val()));
+    else {
+      std::fprintf(stderr, "usage: %s [--random N --seed S] [--jobs FILE [--job-stride K]] [--csv FILE]\n", argv[0]);
+      return 2;
+    }
   }
   Verilated::commandArgs(argc, argv);
   uint64_t bad = 0;
@@ -187,7 +198,10 @@ int main(int argc, char** argv) {
       const int n = 1 + int(rng() % 4);
       for (int i = 0; i < n; ++i) {
         switch (rng() % 4) {
-          case 0: us.push_back(v.t); ids.push_back(uint32_t(rng() % 2001)); break;
+          case 0:
+            us.push_back(v.t);
+            ids.push_back(uint32_t(rng() % 2001));
+            break;
           case 1: {
             PairVector w = src.next();
             geom::Vertex a = v.t.tri.v[rng() % 3], b = v.t.tri.v[rng() % 3];
@@ -195,7 +209,10 @@ int main(int argc, char** argv) {
             ids.push_back(uint32_t(rng()));
             break;
           }
-          default: us.push_back(src.next().t); ids.push_back(uint32_t(rng())); break;
+          default:
+            us.push_back(src.next().t);
+            ids.push_back(uint32_t(rng()));
+            break;
         }
       }
       std::vector<Occluder> occ;

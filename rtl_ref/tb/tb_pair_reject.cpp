@@ -58,7 +58,10 @@ class Bench {
   const PairCoverage& coverage() const { return m_cov; }
   int last_code(uint64_t index) const { return m_codes.at(index); }
   void keep_codes(bool k) { m_keep = k; }
-  void clear_codes() { m_codes.clear(); m_next_index = 0; }
+  void clear_codes() {
+    m_codes.clear();
+    m_next_index = 0;
+  }
 
  private:
   void tick() {
@@ -200,15 +203,27 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto val = [&]() -> std::string {
-      if (i + 1 >= argc) { std::fprintf(stderr, "%s needs a value\n", a.c_str()); std::exit(2); }
+      if (i + 1 >= argc) {
+        std::fprintf(stderr, "%s needs a value\n", a.c_str());
+        std::exit(2);
+      }
       return argv[++i];
     };
-    if (a == "--random") random = std::stoull(val());
-    else if (a == "--seed") seed = std::stoull(val());
-    else if (a == "--jobs") jobs.push_back(val());
-    else if (a == "--job-stride") job_stride = std::max<uint64_t>(1, std::stoull(val()));
-    else if (a == "--max-jobs") max_jobs = std::stoull(val());
-    else { std::fprintf(stderr, "usage: %s [--random N --seed S] [--jobs FILE [--job-stride K] [--max-jobs M]]...\n", argv[0]); return 2; }
+    if (a == "--random")
+      random = std::stoull(val());
+    else if (a == "--seed")
+      seed = std::stoull(val());
+    else if (a == "--jobs")
+      jobs.push_back(val());
+    else if (a == "--job-stride")
+      job_stride = std::max<uint64_t>(1, std::stoull(val()));
+    else if (a == "--max-jobs")
+      max_jobs = std::stoull(val());
+    else {
+      std::fprintf(stderr, "usage: %s [--random N --seed S] [--jobs FILE [--job-stride K] [--max-jobs M]]...\n",
+                   argv[0]);
+      return 2;
+    }
   }
   Verilated::commandArgs(argc, argv);
   uint64_t bad = 0;
@@ -239,11 +254,11 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "error: %s\n", e.what());
       return 2;
     }
-    std::printf("PairReject x%d jobs %s: %llu of %llu tile jobs, %llu pairs; %s; mismatches %llu, tile counter "
-                "mismatches %llu\n",
-                kLanes, f.c_str(), (unsigned long long)jc.jobs, (unsigned long long)seen, (unsigned long long)jc.pairs,
-                b.coverage().report().c_str(), (unsigned long long)b.mismatches(),
-                (unsigned long long)jc.counter_mismatches);
+    std::printf(
+        "PairReject x%d jobs %s: %llu of %llu tile jobs, %llu pairs; %s; mismatches %llu, tile counter "
+        "mismatches %llu\n",
+        kLanes, f.c_str(), (unsigned long long)jc.jobs, (unsigned long long)seen, (unsigned long long)jc.pairs,
+        b.coverage().report().c_str(), (unsigned long long)b.mismatches(), (unsigned long long)jc.counter_mismatches);
     bad += b.mismatches() + jc.counter_mismatches;
   }
   return bad ? 1 : 0;

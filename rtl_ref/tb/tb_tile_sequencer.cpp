@@ -149,21 +149,33 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto val = [&]() -> std::string {
-      if (i + 1 >= argc) { std::fprintf(stderr, "%s needs a value\n", a.c_str()); std::exit(2); }
+      if (i + 1 >= argc) {
+        std::fprintf(stderr, "%s needs a value\n", a.c_str());
+        std::exit(2);
+      }
       return argv[++i];
     };
-    if (a == "--random") random = std::stoull(val());
-    else if (a == "--seed") seed = std::stoull(val());
-    else if (a == "--jobs") jobs.push_back(val());
-    else if (a == "--job-stride") job_stride = std::max<uint64_t>(1, std::stoull(val()));
-    else if (a == "--csv") csv = val();
-    else { std::fprintf(stderr, "usage: %s [--random N --seed S] [--jobs FILE [--job-stride K]] [--csv FILE]\n", argv[0]); return 2; }
+    if (a == "--random")
+      random = std::stoull(val());
+    else if (a == "--seed")
+      seed = std::stoull(val());
+    else if (a == "--jobs")
+      jobs.push_back(val());
+    else if (a == "--job-stride")
+      job_stride = std::max<uint64_t>(1, std::stoull(val()));
+    else if (a == "--csv")
+      csv = val();
+    else {
+      std::fprintf(stderr, "usage: %s [--random N --seed S] [--jobs FILE [--job-stride K]] [--csv FILE]\n", argv[0]);
+      return 2;
+    }
   }
   Verilated::commandArgs(argc, argv);
   std::ofstream out;
   if (!csv.empty()) {
     out.open(csv);
-    out << "source,tile,triangles,edges,pair_tests,passes,rtl_load_cycles,rtl_walk_cycles,rtl_cycles,model_reject_cycles\n";
+    out << "source,tile,triangles,edges,pair_tests,passes,rtl_load_cycles,rtl_walk_cycles,rtl_cycles,model_reject_"
+           "cycles\n";
   }
   uint64_t bad = 0;
   auto check = [&](Bench& b, const SeqJob& j, Result& r, const std::string& source) {
@@ -177,7 +189,8 @@ int main(int argc, char** argv) {
     r.pairs += want.size();
     r.cycles += clocks;
     r.load_cycles += load;
-    const uint64_t model = model_reject_cycles(per_tri, uint32_t(j.tri_zmax.size()), uint32_t(j.edge_zmin.size()), kLanes);
+    const uint64_t model =
+        model_reject_cycles(per_tri, uint32_t(j.tri_zmax.size()), uint32_t(j.edge_zmin.size()), kLanes);
     r.model_cycles += model;
     // One pass issues in the resolver's order; passes interleave triangles by edge chunk.
     if (passes > 1) {
@@ -185,19 +198,22 @@ int main(int argc, char** argv) {
       std::sort(want.begin(), want.end());
     }
     if (got != want) {
-      if (r.mismatches < 10) std::printf("MISMATCH %s tile %u: %zu pairs issued, model %zu\n", source.c_str(), j.tile, got.size(), want.size());
+      if (r.mismatches < 10)
+        std::printf("MISMATCH %s tile %u: %zu pairs issued, model %zu\n", source.c_str(), j.tile, got.size(),
+                    want.size());
       ++r.mismatches;
     }
     if (out.is_open())
-      out << source << ',' << j.tile << ',' << j.tri_zmax.size() << ',' << j.edge_zmin.size() << ',' << want.size() << ','
-          << passes << ',' << load << ',' << clocks - load << ',' << clocks << ',' << model << '\n';
+      out << source << ',' << j.tile << ',' << j.tri_zmax.size() << ',' << j.edge_zmin.size() << ',' << want.size()
+          << ',' << passes << ',' << load << ',' << clocks - load << ',' << clocks << ',' << model << '\n';
   };
   auto print = [&](const Result& r, const std::string& what) {
-    std::printf("TileSequencer x%u (lists %u/%u) %s: %llu jobs, %llu passes, %llu pairs, %llu triangles stopped by "
-                "test 6; %llu clocks (%llu loading); model reject stage %llu cycles; mismatches %llu\n",
-                kLanes, kTriCap, kEdgeCap, what.c_str(), (unsigned long long)r.jobs, (unsigned long long)r.passes,
-                (unsigned long long)r.pairs, (unsigned long long)r.stopped, (unsigned long long)r.cycles,
-                (unsigned long long)r.load_cycles, (unsigned long long)r.model_cycles, (unsigned long long)r.mismatches);
+    std::printf(
+        "TileSequencer x%u (lists %u/%u) %s: %llu jobs, %llu passes, %llu pairs, %llu triangles stopped by "
+        "test 6; %llu clocks (%llu loading); model reject stage %llu cycles; mismatches %llu\n",
+        kLanes, kTriCap, kEdgeCap, what.c_str(), (unsigned long long)r.jobs, (unsigned long long)r.passes,
+        (unsigned long long)r.pairs, (unsigned long long)r.stopped, (unsigned long long)r.cycles,
+        (unsigned long long)r.load_cycles, (unsigned long long)r.model_cycles, (unsigned long long)r.mismatches);
     bad += r.mismatches;
   };
   if (random) {
@@ -228,14 +244,16 @@ int main(int argc, char** argv) {
       SeqJob j;
       j.tile = job.tile;
       for (const auto& t : job.triangles) j.tri_zmax.push_back(std::max({t.v[0].z, t.v[1].z, t.v[2].z}));
-      for (size_t k = 0; k < job.edges.size(); k += 2) j.edge_zmin.push_back(std::min(job.edges[k].z, job.edges[k + 1].z));
+      for (size_t k = 0; k < job.edges.size(); k += 2)
+        j.edge_zmin.push_back(std::min(job.edges[k].z, job.edges[k + 1].z));
       std::stable_sort(j.edge_zmin.begin(), j.edge_zmin.end());
       std::vector<uint64_t> per_tri;
       if (int64_t(model_pairs(j, per_tri).size()) != job.golden.pair_tests) ++golden_mismatch;
       check(b, j, r, f);
     });
     print(r, f);
-    std::printf("  tile jobs whose pair count differs from golden's pair_tests: %llu\n", (unsigned long long)golden_mismatch);
+    std::printf("  tile jobs whose pair count differs from golden's pair_tests: %llu\n",
+                (unsigned long long)golden_mismatch);
     bad += golden_mismatch;
   }
   return bad ? 1 : 0;
