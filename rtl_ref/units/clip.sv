@@ -2,7 +2,7 @@
 // §3.2.2; model/geom/clip.h's geom::split, canonical order included). LANES independent
 // lanes; a lane takes a polygon of n <= MAXV edges, one edge a clock, then emits both children
 // one parent edge a clock, up to two child edges per side per clock:
-//   clocks per split = n (load, sides) + n (emit, only when the line crosses) + 1 (done).
+//   clocks per split = 1 (start) + n (load, sides) + n (emit, only when the line crosses) + 1 (done).
 // `status`: 0 the line crosses (both children emitted), 1 the polygon is inside (the inside
 // child is the parent unchanged, the outside one empty), 2 outside (the reverse); nothing is
 // emitted for 1 and 2. A new vertex is the parent line's crossing with the clip line,
