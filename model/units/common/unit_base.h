@@ -88,8 +88,8 @@ class UnitBase : public sc_core::sc_module {
   // where and how much). Returns the longest delay the target annotated; time the target
   // held the call (a full parameter buffer) counts as a stall. A read whose address was
   // known ahead (prefetched from a control stream) or whose latency the unit hides (shader
-  // threads waiting on texture) carries LatencyHidden (memory.h): it waits only for other
-  // traffic ahead of it.
+  // threads waiting on texture) carries LatencyHidden (memory.h): it waits only while the
+  // DRAM is behind.
   sc_core::sc_time transfer(tlm_utils::simple_initiator_socket<UnitBase>& socket, tlm::tlm_command cmd,
                             const Traffic& traffic, bool latency_hidden = false);
 

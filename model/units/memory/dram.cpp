@@ -27,12 +27,17 @@ Dram::Location Dram::locate(uint64_t a) const {
   l.channel = uint32_t(block % m_cfg.channels);
   const uint64_t local = (block / m_cfg.channels) * il + a % il;  // byte address within the channel
   const uint64_t row_index = local / m_cfg.row_bytes;
-  l.bank = uint32_t(row_index % m_cfg.banks);
   l.row = row_index / m_cfg.banks;
+  // Permutation-based bank interleaving (Zhang, Zhu and Zhang, MICRO 2000): the row's
+  // digits (base `banks`) are folded into the bank index, so that streams whose bases
+  // are far apart (the regions of traffic.h) do not all start in the same bank.
+  uint64_t fold = 0;
+  for (uint64_t r = l.row; r; r /= m_cfg.banks) fold += r % m_cfg.banks;
+  l.bank = uint32_t((row_index + fold) % m_cfg.banks);
   return l;
 }
 
-uint64_t Dram::burst(uint64_t t, uint64_t address, bool read, uint64_t& own_end, uint64_t& queued) {
+uint64_t Dram::burst(uint64_t t, uint64_t address, bool read) {
   const Location l = locate(address);
   Channel& ch = m_channels[l.channel];
   Bank& b = m_banks[size_t(l.channel) * m_cfg.banks + l.bank];
@@ -52,11 +57,9 @@ uint64_t Dram::burst(uint64_t t, uint64_t address, bool read, uint64_t& own_end,
   }
 
   uint64_t column = std::max(t, b.ready);
-  uint64_t ideal = t;  // the column command on an idle bank and bus
   if (b.open_row == int64_t(l.row)) {
     ++m_n.row_hits;
   } else {
-    ideal += uint64_t(m_cfg.rcd + (b.open_row >= 0 ? m_cfg.rp : 0)) * m_tck;
     uint64_t activate = column;
     if (b.open_row >= 0) {
       ++m_n.row_conflicts;
@@ -71,31 +74,28 @@ uint64_t Dram::burst(uint64_t t, uint64_t address, bool read, uint64_t& own_end,
   }
   const uint64_t latency = uint64_t(read ? m_cfg.rl : m_cfg.wl) * m_tck;
   const uint64_t data = std::max(column + latency, ch.bus_free);
-  // Waiting beyond an idle bank and bus and the request's own earlier bursts on this
-  // channel: other traffic (or a bank still in tRAS).
-  const uint64_t own = std::max(ideal + latency, own_end);
-  queued = std::max(queued, data > own ? data - own : 0);
-  own_end = data + m_burst_ps;
   ch.bus_free = data + m_burst_ps;
   b.ready = data - latency + m_burst_ps;  // the next column command to this bank
   m_n.bus_busy_ps += m_burst_ps;
   return read ? data + m_burst_ps : data - latency;
 }
 
-uint64_t Dram::access(uint64_t at, uint64_t address, uint64_t bytes, bool read, uint64_t* queued) {
-  if (queued) *queued = 0;
+uint64_t Dram::backlog(uint64_t at) const {
+  uint64_t behind = 0;
+  for (const Channel& ch : m_channels) behind += ch.bus_free > at ? ch.bus_free - at : 0;
+  return behind / m_cfg.channels;
+}
+
+uint64_t Dram::access(uint64_t at, uint64_t address, uint64_t bytes, bool read) {
   if (bytes == 0) return at;
-  std::vector<uint64_t> own_end(m_cfg.channels, 0);
-  uint64_t q = 0;
   const uint64_t bb = m_cfg.burst_bytes;
   uint64_t done = at;
   bool first = true;
   for (uint64_t a = address / bb * bb; a < address + bytes; a += bb) {
-    const uint64_t t = burst(at, a, read, own_end[locate(a).channel], q);
+    const uint64_t t = burst(at, a, read);
     if (read || first) done = std::max(done, t);
     first = false;
   }
-  if (queued) *queued = q;
   return done;
 }
 

@@ -59,14 +59,17 @@ class Dram {
   // A request of `bytes` at `address` arriving at time `at`. A read: the time its last
   // burst has left the data bus. A write: the time the DRAM takes its first burst's
   // column command.
-  // `queued`, when given, receives the longest time one of its bursts waited for other
-  // requests' bursts on its channel's bus (what a prefetched read waits for).
-  uint64_t access(uint64_t at, uint64_t address, uint64_t bytes, bool read, uint64_t* queued = nullptr);
+  uint64_t access(uint64_t at, uint64_t address, uint64_t bytes, bool read);
+  // How far the data buses are behind time `at`, averaged over the channels: what a reader
+  // that keeps many requests in flight over every channel (a prefetching stream) or a
+  // writer into the controller's buffer waits for. Zero while the DRAM keeps up.
+  uint64_t backlog(uint64_t at) const;
 
   const DramConfig& config() const { return m_cfg; }
   const DramCounters& counters() const { return m_n; }
 
-  // Where an address goes (row:bank:column within a channel, channels interleaved).
+  // Where an address goes (row:bank:column within a channel, channels interleaved, the
+  // bank permuted by the row).
   struct Location {
     uint32_t channel, bank;
     uint64_t row;
@@ -83,7 +86,7 @@ class Dram {
     uint64_t bus_free = 0;
     uint64_t refreshed = 0;  // refresh windows already applied (count)
   };
-  uint64_t burst(uint64_t at, uint64_t address, bool read, uint64_t& own_end, uint64_t& queued);
+  uint64_t burst(uint64_t at, uint64_t address, bool read);
 
   DramConfig m_cfg;
   uint64_t m_tck, m_burst_ps, m_refi, m_rfc;

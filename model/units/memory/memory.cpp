@@ -57,11 +57,10 @@ sc_core::sc_time Memory::occupy(const sc_core::sc_time& at, uint64_t address, ui
   const uint64_t ps = sc_core::sc_time(1, sc_core::SC_PS).value();
   const uint64_t at_ps = at.value() / ps;
   // Reads come back through the controller; writes are posted once the DRAM has them.
-  uint64_t queued = 0;
-  const uint64_t done = m_dram.access(at_ps, address, bytes, read, &queued) + (read ? m_controller_ps : 0);
+  const uint64_t done = m_dram.access(at_ps, address, bytes, read) + (read ? m_controller_ps : 0);
   // A write is posted into the controller's write buffer: like a prefetched read, its
-  // issuer waits only for other traffic ahead of it (the buffer drains behind).
-  return sc_core::sc_time::from_value((!read || hidden ? queued : done - at_ps) * ps);
+  // issuer waits only while the DRAM is behind (its own bytes included).
+  return sc_core::sc_time::from_value((!read || hidden ? m_dram.backlog(at_ps) : done - at_ps) * ps);
 }
 
 uint64_t Memory::service(uint64_t at, const Traffic& traffic, bool read, int stream) {

@@ -24,9 +24,9 @@ class UnitBase;
 
 // On a read whose address was known ahead (prefetched from a control stream or an index
 // stream) or whose latency the unit hides (shader threads waiting on texture): the reader
-// waits only for other traffic ahead of it on the DRAM's buses, not for the latency, its
-// own bursts or a refresh (those the prefetch covers; the bandwidth they cost still
-// delays everyone behind them).
+// keeps requests in flight over every channel, so it waits only while the DRAM as a whole
+// is behind (Dram::backlog, its own bytes included), not for the latency of each request;
+// row conflicts and refresh still cost it the bus time they take.
 struct LatencyHidden : tlm::tlm_extension<LatencyHidden> {
   tlm::tlm_extension_base* clone() const override { return new LatencyHidden; }
   void copy_from(const tlm::tlm_extension_base&) override {}
