@@ -23,12 +23,15 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from matplotlib.colors import LogNorm  # noqa: E402
+from matplotlib.colors import LogNorm, TwoSlopeNorm  # noqa: E402
 
 TOTALS = ["triangles_in", "triangles_front", "silhouette_edges", "pair_tests", "candidate_pairs", "clip_polygons",
           "pieces", "visible_pieces", "occlusion_tests", "samples_covered", "fragments_generated",
           "fragments_shaded", "cycles", "param_buffer_bytes", "param_buffer_peak_bytes", "dram_bytes",
-          "partial_renders", "evu_busy_cycles", "depth_tests", "tiles_rendered"]
+          "partial_renders", "evu_busy_cycles", "depth_tests", "tiles_rendered", "samples_tested",
+          "memory_bound_share", "dram_utilisation"]
+ENERGY = ["total_uj", "dram_uj", "shader_uj", "evu_uj", "depth_test_uj"]  # stats.json totals.energy (the model)
+EVU_MODES = ["analytic", "hybrid"]  # the early-visibility unit alone, and with per-pixel fallback tiles
 TRUTH_MODES = ["none", "early_z", "early_z_sorted", "prepass", "hsr", "hsr_depth_tests"]
 COMPARE_FIELDS = ["sample_agreement", "mismatched_samples", "samples_compared", "max_area_rel_error",
                   "tile_counter_mismatches"]
@@ -78,6 +81,9 @@ def collect(out):
         for k in TOTALS:
             if k in totals:
                 r[k] = totals[k]
+        for k in ENERGY:
+            if k in totals.get("energy", {}):
+                r["energy_" + k] = totals["energy"][k]
         for k in TRUTH_MODES:
             if k in stats.get("modes", {}):
                 r["mode_" + k] = stats["modes"][k]
@@ -683,6 +689,203 @@ def section_speed_accuracy(rep, rows):
     rep.table(["error", "producer", "points", "median s / frame", "mean error", "worst error"], table, numeric_from=2)
 
 
+# ------------------------------------------------------------------ crossover: the EVU against per-pixel HSR
+
+def saving(evu, hsr, col="cycles"):
+    """What the EVU saves over per-pixel HSR at the same setting: 1 - EVU / HSR (negative: it costs more)."""
+    a, b = (evu or {}).get(col), (hsr or {}).get(col)
+    return (1 - a / b) if a is not None and b else None
+
+
+def fmt_saving(x):
+    return "–" if x is None else f"{100 * x:+.1f} %"
+
+
+def crossover_settings(rows):
+    """Every setting (scene, resolution, spp, tile, config) the model ran in mode hsr and in an EVU mode, at the
+    most detailed-per-second producer available (SIM_PREFERENCE): {setting: {mode: point}}."""
+    by = defaultdict(lambda: defaultdict(dict))
+    for r in rows:
+        if r.get("status") == "done" and r.get("kind") == "timing" and r.get("cycles") and r.get("mode"):
+            key = (r["scene"], r["resolution"], int(r["samples"]), r["tile"], r.get("config", "default"))
+            by[key][r["producer"]][r["mode"]] = r
+    out = {}
+    for key, prods in by.items():
+        for prod in SIM_PREFERENCE + sorted(prods):
+            modes = prods.get(prod, {})
+            if "hsr" in modes and any(m in modes for m in EVU_MODES):
+                out[key] = modes
+                break
+    return out
+
+
+def crossover_heatmaps(rep, settings, scenes):
+    """Scenes x (resolution, samples) at the default configuration and the preferred tile: the EVU's saving
+    over HSR in cycles and in the energy proxy."""
+    tile = preferred_tile([{"tile": k[3]} for k in settings])
+    combos = sorted({(k[1], k[2]) for k in settings if k[3] == tile and k[4] == "default"},
+                    key=lambda c: (res_key(c[0]), c[1]))
+    names = [s for s in scenes if any(k[0] == s and k[3] == tile and k[4] == "default" for k in settings)]
+    if not combos or not names:
+        return []
+    panels = [("cycles", "frame cycles"), ("energy_total_uj", "energy proxy (DRAM + shader + EVU + depth tests)")]
+    fig, axes = plt.subplots(1, 2, figsize=(max(9, 1.2 * len(combos) * 2 + 4), 0.42 * len(names) + 2.2),
+                             squeeze=False)
+    used = []
+    for ax, (col, title) in zip(axes[0], panels):
+        m = np.full((len(names), len(combos)), np.nan)
+        for i, s in enumerate(names):
+            for j, (res, spp) in enumerate(combos):
+                modes = settings.get((s, res, spp, tile, "default"), {})
+                v = saving(modes.get("analytic"), modes.get("hsr"), col)
+                if v is not None:
+                    m[i, j] = v
+                    used += [modes["analytic"], modes["hsr"]]
+        finite = m[np.isfinite(m)]
+        lo = min(-0.05, float(finite.min())) if finite.size else -1
+        hi = max(0.05, float(finite.max())) if finite.size else 1
+        im = ax.imshow(m, cmap="RdYlGn", norm=TwoSlopeNorm(vcenter=0.0, vmin=lo, vmax=hi), aspect="auto")
+        for i in range(len(names)):
+            for j in range(len(combos)):
+                if np.isfinite(m[i, j]):
+                    ax.text(j, i, f"{100 * m[i, j]:+.0f}", ha="center", va="center", fontsize=7)
+        ax.set_xticks(range(len(combos)))
+        ax.set_xticklabels([f"{res_name(r)}\n{n} spp" for r, n in combos], fontsize=8)
+        ax.set_yticks(range(len(names)))
+        ax.set_yticklabels(names, fontsize=8)
+        ax.set_title(f"EVU saving over HSR: {title}", fontsize=10)
+        fig.colorbar(im, ax=ax, fraction=0.04, format=lambda x, _: f"{100 * x:+.0f} %")
+    fig.tight_layout()
+    rep.figure(fig, "crossover", f"Where the EVU wins: 1 − EVU / HSR in frame cycles and in energy, per scene and "
+               f"resolution × samples (green: the EVU is cheaper; numbers in %; mode analytic against mode hsr, "
+               f"tiles {tile}, default configuration)", provenance(used))
+    return used
+
+
+def crossover_params(rep, settings, scenes):
+    """One unit parameter at a time: the EVU's saving per configuration at the operating point with the most
+    configurations, with the share of the frame bound by memory."""
+    counts = defaultdict(set)
+    for k in settings:
+        counts[(k[1], k[2], k[3])].add(k[4])
+    point = max(counts, key=lambda c: (len(counts[c]), c[2] == "32x32"), default=None)
+    if point is None or len(counts[point]) < 3:
+        return []
+    res, spp, tile = point
+    configs = ["default"] + sorted(c for c in counts[point] if c != "default")
+    names = [s for s in scenes if (s, res, spp, tile, "default") in settings]
+    fig, ax = plt.subplots(figsize=(max(8, 0.7 * len(configs) + 3), 4.4))
+    colors = plt.get_cmap("tab20").colors
+    table, used = [], []
+    for i, s in enumerate(names):
+        ys = []
+        for c in configs:
+            modes = settings.get((s, res, spp, tile, c), {})
+            evu, hsr = modes.get("analytic"), modes.get("hsr")
+            v = saving(evu, hsr)
+            ys.append(np.nan if v is None else 100 * v)
+            if v is None:
+                continue
+            used += [evu, hsr]
+            table.append([s, c, fmt_int(evu["cycles"]), fmt_int(hsr["cycles"]), fmt_saving(v),
+                          fmt_pct(evu.get("memory_bound_share")), fmt_pct(hsr.get("memory_bound_share")),
+                          fmt_bytes(evu.get("dram_bytes")), fmt_bytes(hsr.get("dram_bytes")),
+                          fmt_saving(saving(evu, hsr, "energy_total_uj"))])
+        ax.plot(range(len(configs)), ys, "o-", lw=0.8, ms=4, color=colors[i % len(colors)], label=s)
+    ax.axhline(0, color="k", lw=0.8)
+    ax.set_xticks(range(len(configs)))
+    ax.set_xticklabels(configs, rotation=30, ha="right", fontsize=8)
+    ax.set_yscale("symlog", linthresh=10)
+    ax.set_ylabel("EVU saving over HSR, frame cycles (%)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, ncol=2, loc="center left", bbox_to_anchor=(1.01, 0.5))
+    fig.tight_layout()
+    params = {r["config"]: r.get("params", "") for r in used}
+    rep.figure(fig, "crossover_params", f"The EVU's saving over HSR as one unit parameter changes ({res_name(res)}, "
+               f"{spp} spp, tiles {tile}; above 0: the EVU is faster). Configurations: " +
+               "; ".join(f"{c}: {params.get(c) or 'defaults'}" for c in configs), provenance(used))
+    rep.para("Per scene and configuration: frame cycles of each, the EVU's saving, the share of the frame bound by "
+             "memory (time a unit waited for the memory system / frame time) and DRAM traffic of each, and the "
+             "saving in the energy proxy.")
+    rep.table(["scene", "configuration", "cycles (EVU)", "cycles (HSR)", "EVU saving", "memory-bound (EVU)",
+               "memory-bound (HSR)", "DRAM (EVU)", "DRAM (HSR)", "energy saving"], table, numeric_from=2)
+    return used
+
+
+def crossover_best(settings, scenes):
+    """Per scene and resolution x samples with the most settings: the fastest setting of all (any EVU mode or
+    hsr, tile, configuration), the fastest of the other kind, and where the EVU saves most over HSR."""
+    best = {}
+    for s in scenes:
+        groups = defaultdict(list)
+        for k, modes in settings.items():
+            if k[0] == s:
+                groups[(k[1], k[2])].append((k, modes))
+        if not groups:
+            continue
+        (res, spp), cands = max(groups.items(), key=lambda g: (len(g[1]), -res_key(g[0][0])[0], g[0][1]))
+        evus = [(m[mode]["cycles"], k[3], k[4], mode) for k, m in cands for mode in EVU_MODES if mode in m]
+        hsrs = [(m["hsr"]["cycles"], k[3], k[4], "hsr") for k, m in cands]
+        e, h = min(evus), min(hsrs)
+        win = min(e, h)
+        other = h if win is e else e
+        widest = max(((saving(m.get("analytic"), m["hsr"]), k[3], k[4]) for k, m in cands if "analytic" in m),
+                     key=lambda x: x[0])
+        best[s] = {"resolution": res, "samples": spp, "settings": len(cands),
+                   "best": {"cycles": win[0], "tile": win[1], "config": win[2], "mode": win[3]},
+                   "runner_up_of_other_kind": {"cycles": other[0], "tile": other[1], "config": other[2],
+                                               "mode": other[3]},
+                   "margin": 1 - win[0] / other[0],
+                   "evu_widest_saving": {"saving": widest[0], "tile": widest[1], "config": widest[2]}}
+    return best
+
+
+def section_crossover(rep, out, rows, scenes):
+    settings = crossover_settings(rows)
+    for stale in ("crossover.txt", "best_configs.json"):
+        (out / stale).unlink(missing_ok=True)
+    if not settings:
+        return {}
+    rep.heading("Crossover: where the EVU pays off against per-pixel HSR", 2, "crossover")
+    rep.para("The same frame through the SystemC model twice, once with the early-visibility unit (mode analytic; "
+             "hybrid adds per-pixel fallback tiles) and once with the per-pixel HSR unit (mode hsr), at the same "
+             "tile size and unit configuration. Both shade the same visible fragments, so the difference is the "
+             "visibility work (the EVU's grows with triangle pairs per tile, HSR's with samples × depth "
+             "complexity) and the memory traffic each needs (the EVU reads silhouette edges too). Saving = 1 − "
+             "EVU / HSR: above 0 the EVU is cheaper. The energy proxy multiplies DRAM bytes, shader lane-cycles, "
+             "EVU tests and depth tests by per-access energies (model/top/config.h cites them).")
+    used = crossover_heatmaps(rep, settings, scenes)
+    used += crossover_params(rep, settings, scenes)
+    best = crossover_best(settings, scenes)
+    if best:
+        rep.heading("Best setting per scene", 3, "crossover_best")
+        rep.para("Per scene, at the resolution and sample count with the most settings in this sweep: the fastest "
+                 "setting of all (mode, tile, configuration; configurations differ in area, so read the fastest "
+                 "against its configuration), the fastest of the other kind (EVU or HSR) and the margin between "
+                 "them, and the setting where the EVU saves most over HSR with the same tile and configuration.")
+        rep.table(["scene", "resolution", "spp", "settings", "fastest", "cycles", "fastest of the other kind",
+                   "cycles", "margin", "EVU's widest saving over HSR"],
+                  [[s, res_name(b["resolution"]), b["samples"], b["settings"],
+                    f"{b['best']['mode']}, {b['best']['tile']}, {b['best']['config']}", fmt_int(b["best"]["cycles"]),
+                    f"{b['runner_up_of_other_kind']['mode']}, {b['runner_up_of_other_kind']['tile']}, "
+                    f"{b['runner_up_of_other_kind']['config']}", fmt_int(b["runner_up_of_other_kind"]["cycles"]),
+                    fmt_saving(b["margin"]),
+                    f"{fmt_saving(b['evu_widest_saving']['saving'])} ({b['evu_widest_saving']['tile']}, "
+                    f"{b['evu_widest_saving']['config']})"] for s, b in best.items()], numeric_from=1)
+    wins = [(saving(m.get("analytic"), m["hsr"]), k) for k, m in settings.items() if "analytic" in m]
+    ev = [w for w in wins if w[0] > 0]
+    top, bottom = max(wins), min(wins)
+    where = lambda k: f"{k[0]} {res_name(k[1])} {k[2]} spp tiles {k[3]} {k[4]}"  # noqa: E731
+    line = (f"crossover: the EVU beats per-pixel HSR in frame cycles at {len(ev)} of {len(wins)} settings "
+            f"(scene x resolution x samples x tile x configuration); its best setting {where(top[1])} "
+            f"(saving {fmt_saving(top[0])}), its worst {where(bottom[1])} ({fmt_saving(bottom[0])})")
+    rep.para(line[0].upper() + line[1:] + ".")
+    rep.para(provenance(used), "*" + provenance(used) + "*")
+    (out / "crossover.txt").write_text(line + "\n")
+    (out / "best_configs.json").write_text(json.dumps(best, indent=2) + "\n")
+    return best
+
+
 def per_pixel_tiles(out, point):
     """Tiles the hybrid sent per pixel, from the point's stats.json (None if it has none)."""
     try:
@@ -829,10 +1032,12 @@ def main():
                   numeric_from=3)
     rep.html.append('<nav><a href="#savings">savings</a><a href="#tiles">tile size</a><a href="#best">best tile</a>'
                     '<a href="#heatmaps">heatmaps</a><a href="#crosscheck">cross-check</a>'
-                    '<a href="#speed">speed vs accuracy</a><a href="#configs">configurations</a></nav>')
+                    '<a href="#speed">speed vs accuracy</a><a href="#configs">configurations</a>'
+                    '<a href="#crossover">crossover</a></nav>')
     section_savings(rep, rows, scenes, out)
     best = section_tiles(rep, rows, scenes)
     section_configs(rep, rows)
+    section_crossover(rep, out, rows, scenes)
     section_heatmaps(rep, out, rows, scenes)
     section_crosscheck(rep, rows, manifest)
     section_stability(rep, out, rows, scenes)

@@ -77,6 +77,25 @@ def open_in_chromium(a, page, screenshot):
         driver.quit()
 
 
+def check_crossover(out):
+    """The crossover line counts what the points say: recount from their stats.json."""
+    wins = total = 0
+    for evu in out.glob("points/*/*/sim_tile-analytic/*/stats.json"):
+        hsr = evu.parents[2] / "sim_tile-hsr" / evu.parent.name / "stats.json"
+        if hsr.exists():
+            total += 1
+            cycles = [json.loads(p.read_text())["totals"]["cycles"] for p in (evu, hsr)]
+            wins += cycles[0] < cycles[1]
+    line = (out / "crossover.txt").read_text() if (out / "crossover.txt").exists() else ""
+    want = f"at {wins} of {total} settings"
+    if total == 0 or want not in line:
+        fail(f"crossover.txt should say the EVU wins {want} (from the points' stats.json): {line!r}")
+    best = json.loads((out / "best_configs.json").read_text())
+    if sorted(best) != sorted({p.parts[-5] for p in out.glob("points/*/*/sim_tile-hsr/*/stats.json")}):
+        fail(f"best_configs.json should hold every scene the model ran in both modes: {sorted(best)}")
+    print(f"check_report: crossover {want}")
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--tilevis", required=True)
@@ -116,9 +135,11 @@ def main():
     if external or "<script" in text:
         fail(f"the report must be self-contained: external references {external}, scripts: {'<script' in text}")
     figures = sorted(p.name for p in (out / "figures").glob("*.png"))
-    for kind in ("savings", "tiles_", "heatmap_", "speed_accuracy"):
+    for kind in ("savings", "tiles_", "heatmap_", "speed_accuracy", "crossover", "crossover_params"):
         if not any(f.startswith(kind) for f in figures):
             fail(f"no {kind} chart in {out / 'figures'}: {figures}")
+
+    check_crossover(out)
 
     title, images, errors, requests = open_in_chromium(a, index, out / "screenshot.png")
     if errors:
