@@ -4,9 +4,11 @@
 # matplotlib; no SystemC, OpenEXR, assimp, meshes or network). The binary built here travels
 # with the shared libraries it needs and the meshes the scenes read.
 #
-#   bash cuda_ref/sweep_on_gpu.sh prepare          HERE, after a full build (./tilevis demo or test):
-#                                                  fills .gpusweep/ (git-ignored): bin/tilevis, lib/,
-#                                                  meshes/{glmark2,cgal}/, commit.txt
+#   bash cuda_ref/sweep_on_gpu.sh prepare [--tests] HERE, after a full build (./tilevis demo or test):
+#                                                  fills .gpusweep/ (git-ignored): bin/tilevis, lib/, the
+#                                                  meshes the built-in scenes name (meshes/{glmark2,cgal}/,
+#                                                  meshes/root/ for absolute paths), commit.txt; --tests adds
+#                                                  cuda_gpu_tests (for bench; 11 MB of the 64 MiB a call carries)
 #   bash cuda_ref/sweep_on_gpu.sh run SWEEP NAME   THERE, from the repository root with .gpusweep
 #                                                  carried: tilevis sweep SWEEP -o reports/NAME -j nproc,
 #                                                  stopped cleanly (SIGINT) after TILEVIS_SWEEP_SECONDS
@@ -41,7 +43,9 @@ prepare() {
   "$bin" cuda --help >/dev/null 2>&1 || die "$bin has no CUDA reference (configure with nvcc on PATH)"
   rm -rf "$CARRY" && mkdir -p "$CARRY/bin" "$CARRY/lib" "$CARRY/meshes"
   cp "$bin" "$CARRY/bin/"
-  [ -x build/tests/cuda/cuda_gpu_tests ] && cp build/tests/cuda/cuda_gpu_tests "$CARRY/bin/"
+  if [ "${1:-}" = --tests ]; then
+    cp build/tests/cuda/cuda_gpu_tests "$CARRY/bin/" || die "build/tests/cuda/cuda_gpu_tests missing: build the tests"
+  fi
   # Every shared library but the C runtime and libstdc++/libgcc (the target's are newer and compatible).
   ldd "$bin" | awk '$3 ~ /^\// {print $3}' | while read -r lib; do
     case "$(basename "$lib")" in
@@ -49,15 +53,32 @@ prepare() {
       *) cp -L "$lib" "$CARRY/lib/" ;;
     esac
   done
-  local glmark=/usr/share/glmark2/models cgal=build/data/cgal  # traces/gen/CMakeLists.txt
-  [ -d "$glmark" ] && [ -d "$cgal" ] || die "meshes missing ($glmark, $cgal): build first"
-  cp -r "$glmark" "$CARRY/meshes/glmark2"
-  cp -r "$cgal" "$CARRY/meshes/cgal"
+  # The meshes the built-in scenes name: glmark2/ and cgal/ are found through TILEVIS_GLMARK2_MODELS and
+  # TILEVIS_CGAL_MESHES (traces/gen/CMakeLists.txt); an absolute path goes under meshes/root/, which
+  # `run` links into place.
+  local glmark=/usr/share/glmark2/models cgal=build/data/cgal mesh
+  grep -ho '"mesh": *"[^"]*"' traces/scenes/*.json | sed 's/.*: *"\(.*\)"/\1/' | sort -u | while read -r mesh; do
+    case "$mesh" in
+      glmark2/*) install -D -m 644 "$glmark/${mesh#glmark2/}" "$CARRY/meshes/$mesh" ;;
+      cgal/*) install -D -m 644 "$cgal/${mesh#cgal/}" "$CARRY/meshes/$mesh" ;;
+      /*) install -D -m 644 "$mesh" "$CARRY/meshes/root$mesh" ;;
+      *) ;;  # beside the scene file: travels with the working tree
+    esac || die "mesh $mesh missing: build first (./tilevis demo)"
+  done
   git rev-parse --short HEAD >"$CARRY/commit.txt"
   [ -z "$(git status --porcelain --untracked-files=no)" ] || sed -i 's/$/-dirty/' "$CARRY/commit.txt"
   grep -qx "/$CARRY/" .git/info/exclude 2>/dev/null || grep -qx "/$CARRY/" .gitignore ||
     echo "/$CARRY/" >>.git/info/exclude
   say "$(du -sh "$CARRY" | cut -f1) in $CARRY/ (commit $(cat "$CARRY/commit.txt")): carry [\"$CARRY\"]"
+}
+
+# Meshes the scenes name by absolute path (Debian's assimp-testmodels), linked into place where missing.
+link_absolute_meshes() {
+  [ -d "$CARRY/meshes/root" ] || return 0
+  (cd "$CARRY/meshes/root" && find . -type f) | while read -r f; do
+    [ -e "/${f#./}" ] || { mkdir -p "$(dirname "/${f#./}")" && ln -s "$ROOT/$CARRY/meshes/root/${f#./}" "/${f#./}"; } ||
+      say "could not link /${f#./}: scenes that name it will fail"
+  done
 }
 
 run() {
@@ -68,6 +89,7 @@ run() {
   export LD_LIBRARY_PATH="$ROOT/$CARRY/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
   export TILEVIS_SOURCE_DIR="$ROOT" TILEVIS_COMMIT="$(cat "$CARRY/commit.txt")"
   export TILEVIS_GLMARK2_MODELS="$ROOT/$CARRY/meshes/glmark2" TILEVIS_CGAL_MESHES="$ROOT/$CARRY/meshes/cgal"
+  link_absolute_meshes
   export TILEVIS_PYTHON="${TILEVIS_PYTHON:-$(command -v python3)}"
   "$TILEVIS_PYTHON" -c "import matplotlib, numpy" || die "$TILEVIS_PYTHON lacks matplotlib or numpy"
   nvidia-smi -L || say "no nvidia-smi: the CUDA points will be reported unavailable"
@@ -93,6 +115,7 @@ bench() {
   export LD_LIBRARY_PATH="$ROOT/$CARRY/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
   export TILEVIS_SOURCE_DIR="$ROOT" TILEVIS_COMMIT="$(cat "$CARRY/commit.txt")"
   export TILEVIS_GLMARK2_MODELS="$ROOT/$CARRY/meshes/glmark2" TILEVIS_CGAL_MESHES="$ROOT/$CARRY/meshes/cgal"
+  link_absolute_meshes
   export PATH="/usr/local/cuda/bin:$PATH"
   nvidia-smi -L || die "no GPU here"
   if [ -x "$CARRY/bin/cuda_gpu_tests" ]; then
@@ -144,7 +167,7 @@ PY
 }
 
 case "${1:-}" in
-  prepare) prepare ;;
+  prepare) shift; prepare "$@" ;;
   run) shift; run "$@" ;;
   bench) shift; bench "$@" ;;
   *) die "usage: sweep_on_gpu.sh prepare | run SWEEP NAME | bench SCENE..." ;;
