@@ -125,17 +125,17 @@ Registry::Registry() {
   TV_UINT("memory.burst_bytes", memory.dram.burst_bytes, "bytes", 1, 4096, "bytes per burst (BL16 x 16 bits: 32)");
   TV_UINT("memory.interleave_bytes", memory.dram.interleave_bytes, "bytes", 1, 1u << 20, "consecutive bytes per channel (assumption)");
   TV_UINT("memory.tck_ps", memory.dram.tck_ps, "ps", 1, 100000, "DRAM clock period (LPDDR4-4266: 469)");
-  TV_UINT("memory.ccd", memory.dram.ccd, "tCK", 1, 1000, "column to column (one burst on the bus)");
-  TV_UINT("memory.rcd", memory.dram.rcd, "tCK", 0, 10000, "activate to column command");
-  TV_UINT("memory.rp", memory.dram.rp, "tCK", 0, 10000, "precharge");
-  TV_UINT("memory.ras", memory.dram.ras, "tCK", 0, 10000, "activate to precharge");
-  TV_UINT("memory.rl", memory.dram.rl, "tCK", 0, 10000, "read latency");
-  TV_UINT("memory.wl", memory.dram.wl, "tCK", 0, 10000, "write latency");
-  TV_UINT("memory.refi", memory.dram.refi, "tCK", 1, 1u << 30, "all-bank refresh interval");
-  TV_UINT("memory.rfc", memory.dram.rfc, "tCK", 0, 1u << 30, "all-bank refresh cycle time");
+  TV_UINT("memory.ccd", memory.dram.ccd, "tCK", 1, 1000, "column to column (one burst on the bus) (JESD209-4 LPDDR4-4266, as DRAMSys's JEDEC memspec gives it)");
+  TV_UINT("memory.rcd", memory.dram.rcd, "tCK", 0, 10000, "activate to column command (JESD209-4 LPDDR4-4266, as DRAMSys's JEDEC memspec gives it)");
+  TV_UINT("memory.rp", memory.dram.rp, "tCK", 0, 10000, "precharge (JESD209-4 LPDDR4-4266, as DRAMSys's JEDEC memspec gives it)");
+  TV_UINT("memory.ras", memory.dram.ras, "tCK", 0, 10000, "activate to precharge (JESD209-4 LPDDR4-4266, as DRAMSys's JEDEC memspec gives it)");
+  TV_UINT("memory.rl", memory.dram.rl, "tCK", 0, 10000, "read latency (JESD209-4 LPDDR4-4266, as DRAMSys's JEDEC memspec gives it)");
+  TV_UINT("memory.wl", memory.dram.wl, "tCK", 0, 10000, "write latency (JESD209-4 LPDDR4-4266, as DRAMSys's JEDEC memspec gives it)");
+  TV_UINT("memory.refi", memory.dram.refi, "tCK", 1, 1u << 30, "all-bank refresh interval (JESD209-4 LPDDR4-4266, as DRAMSys's JEDEC memspec gives it)");
+  TV_UINT("memory.rfc", memory.dram.rfc, "tCK", 0, 1u << 30, "all-bank refresh cycle time (JESD209-4 LPDDR4-4266, as DRAMSys's JEDEC memspec gives it)");
   TV_UINT("memory.controller_latency_ns", memory.controller_latency_ns, "ns", 0, 100000, "fabric and controller latency of a read (assumption)");
-  TV_UINT("framebuffer.colour_bytes", framebuffer.colour_bytes, "bytes", 1, 16, "colour per sample");
-  TV_UINT("framebuffer.depth_bytes", framebuffer.depth_bytes, "bytes", 1, 8, "depth/stencil per sample");
+  TV_UINT("framebuffer.colour_bytes", framebuffer.colour_bytes, "bytes", 1, 16, "colour per sample (assumption: RGBA8)");
+  TV_UINT("framebuffer.depth_bytes", framebuffer.depth_bytes, "bytes", 1, 8, "depth/stencil per sample (assumption: D24S8)");
 
   TV_UINT("front_end.vertex_cache_entries", front_end.vertex_cache_entries, "vertices", 1, 1u << 20, "post-transform vertex cache (FIFO)");
   TV_UINT("front_end.index_bytes", front_end.index_bytes, "bytes", 1, 8, "bytes per index");
@@ -155,18 +155,18 @@ Registry::Registry() {
   TV_UINT("tiling.tile_tests_per_clock", tiling.tile_tests_per_clock, "tests/cycle", 1, 1024, "exact primitive/tile overlap tests");
   TV_UINT("tiling.latency_cycles", tiling.latency_cycles, "cycles", 0, 100000, "pipeline depth, once per segment");
 
-  TV_UINT("pb.capacity_bytes", pb.capacity_bytes, "bytes", 1, uint64_t(1) << 40, "parameter buffer size; a full buffer forces a partial render");
-  TV_UINT("pb.triangle_bytes", pb.triangle_bytes, "bytes", 1, 1024, "primitive block entry per triangle");
-  TV_UINT("pb.vertex_bytes", pb.vertex_bytes, "bytes", 1, 1024, "screen-space vertex (plus the draw's varyings)");
-  TV_UINT("pb.reference_bytes", pb.reference_bytes, "bytes", 1, 64, "control-stream entry per tile per primitive");
-  TV_UINT("pb.edge_bytes", pb.edge_bytes, "bytes", 1, 1024, "silhouette edge record");
+  TV_UINT("pb.capacity_bytes", pb.capacity_bytes, "bytes", 1, uint64_t(1) << 40, "parameter buffer size; a full buffer forces a partial render (assumption)");
+  TV_UINT("pb.triangle_bytes", pb.triangle_bytes, "bytes", 1, 1024, "primitive block entry per triangle (assumption)");
+  TV_UINT("pb.vertex_bytes", pb.vertex_bytes, "bytes", 1, 1024, "screen-space vertex (plus the draw's varyings) (assumption)");
+  TV_UINT("pb.reference_bytes", pb.reference_bytes, "bytes", 1, 64, "control-stream entry per tile per primitive (assumption)");
+  TV_UINT("pb.edge_bytes", pb.edge_bytes, "bytes", 1, 1024, "silhouette edge record (assumption)");
 
   TV_UINT("fetch.primitives_per_clock", fetch.primitives_per_clock, "primitives/cycle", 1, 64, "records parsed per clock");
   TV_UINT("fetch.edges_per_clock", fetch.edges_per_clock, "edges/cycle", 1, 64, "edge records per clock");
   TV_UINT("fetch.latency_cycles", fetch.latency_cycles, "cycles", 0, 100000, "per tile");
   TV_UINT("fetch.cache_bytes", fetch.cache.bytes, "bytes", 1, 1u << 30, "parameter cache for primitive records (per core; assumption)");
-  TV_UINT("fetch.cache_line_bytes", fetch.cache.line_bytes, "bytes", 1, 4096, "its line");
-  TV_UINT("fetch.cache_ways", fetch.cache.ways, "ways", 1, 1024, "its associativity (LRU)");
+  TV_UINT("fetch.cache_line_bytes", fetch.cache.line_bytes, "bytes", 1, 4096, "its line (assumption)");
+  TV_UINT("fetch.cache_ways", fetch.cache.ways, "ways", 1, 1024, "its associativity, LRU (assumption)");
 
   TV_UINT("evu.reject.lanes", evu.reject.lanes, "lanes", 1, 1024, "pair tests issued together");
   TV_UINT("evu.reject.ii", evu.reject.ii, "cycles", 1, 1024, "initiation interval");
@@ -193,19 +193,19 @@ Registry::Registry() {
   TV_UINT("fragment.raster_samples_per_clock", fragment.raster_samples_per_clock, "samples/cycle", 1, 4096, "rasteriser output");
   TV_UINT("fragment.depth_tests_per_clock", fragment.depth_tests_per_clock, "samples/cycle", 1, 4096, "early depth tests");
   TV_UINT("fragment.shader_lanes", fragment.shader_lanes, "lanes", 1, 65536, "shader ALU lanes (trace cycles per fragment are per lane)");
-  TV_REAL("fragment.texels_per_pixel", fragment.texels_per_pixel, "texels", 0.0, 1024.0, "texture footprint per shaded pixel (mip-mapping: about 1)");
+  TV_REAL("fragment.texels_per_pixel", fragment.texels_per_pixel, "texels", 0.0, 1024.0, "texture footprint per shaded pixel (assumption: about 1 with mip-mapping)");
   TV_UINT("fragment.texel_bytes", fragment.texel_bytes, "bytes", 1, 64, "bytes per texel (assumption: RGBA8)");
   TV_UINT("fragment.texture_line_bytes", fragment.texture_line_bytes, "bytes", 1, 4096, "texture cache line (assumption)");
   TV_UINT("fragment.latency_cycles", fragment.latency_cycles, "cycles", 0, 100000, "per tile");
 
   TV_UINT("writer.pixels_per_clock", writer.pixels_per_clock, "pixels/cycle", 1, 4096, "tile write-out rate");
   TV_UINT("writer.latency_cycles", writer.latency_cycles, "cycles", 0, 100000, "per tile");
-  TV_REAL("writer.colour_compression", writer.colour_compression, "ratio", 0.01, 1.0, "colour bytes written / bytes of the tile (1: no compression)");
+  TV_REAL("writer.colour_compression", writer.colour_compression, "ratio", 0.01, 1.0, "colour bytes written / bytes of the tile (assumption: 1, no compression)");
 
   TV_REAL("energy.dram_pj_per_byte", energy.dram_pj_per_byte, "pJ", 0.0, 1e6, "DRAM energy per byte (Horowitz, ISSCC 2014)");
-  TV_REAL("energy.shader_pj_per_lane_cycle", energy.shader_pj_per_lane_cycle, "pJ", 0.0, 1e6, "shader lane-cycle (an fp32 multiply-add)");
-  TV_REAL("energy.evu_pj_per_test", energy.evu_pj_per_test, "pJ", 0.0, 1e6, "one EVU pair, clip or occlusion test");
-  TV_REAL("energy.depth_test_pj", energy.depth_test_pj, "pJ", 0.0, 1e6, "one per-sample depth test (HSR, early-Z)");
+  TV_REAL("energy.shader_pj_per_lane_cycle", energy.shader_pj_per_lane_cycle, "pJ", 0.0, 1e6, "shader lane-cycle: one fp32 multiply-add (Horowitz, ISSCC 2014: 3.7 + 0.9 pJ)");
+  TV_REAL("energy.evu_pj_per_test", energy.evu_pj_per_test, "pJ", 0.0, 1e6, "one EVU pair, clip or occlusion test (assumption: ~4 integer multiply-adds at Horowitz, ISSCC 2014)");
+  TV_REAL("energy.depth_test_pj", energy.depth_test_pj, "pJ", 0.0, 1e6, "one per-sample depth test, HSR or early-Z (assumption: a multiply-add, a compare and an SRAM read at Horowitz, ISSCC 2014)");
 }
 
 #undef TV_UINT

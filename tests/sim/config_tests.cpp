@@ -3,6 +3,7 @@
 // effective config reads back to itself; --list-params covers every parameter.
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -83,6 +84,27 @@ TEST(Config, ListParamsNamesEveryParameterWithDefaultAndUnit) {
   EXPECT_NE(list.find("memory.rcd"), std::string::npos);
   EXPECT_NE(list.find("tCK"), std::string::npos);
   EXPECT_GT(param_names().size(), 50u);
+}
+
+TEST(Config, EveryMemorySystemDefaultCitesItsSourceOrSaysItIsAnAssumption) {
+  // Issue 12: the memory system's defaults decide most frames, so a user must see where each
+  // comes from. One line of --list-params per parameter: name, default, unit, help.
+  const std::vector<std::string> prefixes = {"memory.", "framebuffer.", "pb.", "fetch.cache", "fragment.tex",
+                                             "writer.colour", "energy."};
+  const std::vector<std::string> sources = {"assumption", "JESD209-4", "LPDDR4-4266", "BL16", "Horowitz"};
+  std::istringstream list(list_params());
+  size_t checked = 0;
+  for (std::string line; std::getline(list, line);) {
+    const std::string name = line.substr(0, line.find(' '));
+    bool memory = false;
+    for (const std::string& p : prefixes) memory = memory || name.rfind(p, 0) == 0;
+    if (!memory) continue;
+    ++checked;
+    bool cited = false;
+    for (const std::string& src : sources) cited = cited || line.find(src) != std::string::npos;
+    EXPECT_TRUE(cited) << line;
+  }
+  EXPECT_GE(checked, 30u);
 }
 
 TEST(Config, RulesBetweenParametersAreCheckedWithTheirNames) {
