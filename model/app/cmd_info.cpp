@@ -23,6 +23,7 @@ std::string flag_names(uint32_t flags) {
   add(trace::kShaderWritesDepth, "writes_depth");
   add(trace::kShaderDiscards, "discards");
   add(trace::kTriangleSoup, "soup");
+  add(trace::kSampleRateShading, "sample_rate");
   return s.empty() ? "opaque" : s;
 }
 

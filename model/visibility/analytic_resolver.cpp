@@ -115,7 +115,7 @@ class AnalyticResolver final : public TileResolver {
             if (owns) out.ids[(size_t(py) * s.width + size_t(px)) * n_samples + k] = int32_t(tt.t->id);
             if (visible) {
               uint64_t& stamp = m_stamp[size_t(py - ty * g.tile_h) * g.tile_w + size_t(px - tx * g.tile_w)];
-              shaded += stamp != m_serial;
+              shaded += stamp != m_serial || tt.t->sample_rate;  // sample rate: every sample
               stamp = m_serial;
             }
           }

@@ -61,17 +61,20 @@ class PerPixelResolver final : public TileResolver {
           if (per_triangle) ++(*per_triangle)[first_record + size_t(o)].counters.samples_covered;
         }
         // Each owner of the pixel's samples shades it once.
-        zbuffer::for_distinct(&m_owner[local(px, py, 0)], ns, int32_t(-1), [&](int32_t o) {
-          ++out.shader_invocations;
-          if (per_triangle) ++(*per_triangle)[first_record + size_t(o)].shader_invocations;
-        });
+        zbuffer::for_invocations(
+            &m_owner[local(px, py, 0)], ns, int32_t(-1),
+            [&](int32_t o) { return f.triangles()[tris[size_t(o)]].t->sample_rate; },
+            [&](int32_t o) {
+              ++out.shader_invocations;
+              if (per_triangle) ++(*per_triangle)[first_record + size_t(o)].shader_invocations;
+            });
       }
     // Non-opaque triangles own nothing but are shaded (blended over the result) in each pixel
     // where some covered sample is in front of the final opaque surface: the truth's hsr rule.
     for (size_t n = 0; n < tris.size(); ++n) {
       const FrontTriangle& t = f.triangles()[tris[n]];
       if (t.t->opaque) continue;
-      zbuffer::PixelShades shaded;
+      zbuffer::PixelShades shaded(t.t->sample_rate);
       zbuffer::for_covered_samples(s, t, region, [&](uint32_t px, uint32_t py, uint32_t k, geom::Point p) {
         const int32_t o = m_owner[local(px, py, k)];
         if (o < 0 || zbuffer::passes(t.plane, f.triangles()[tris[size_t(o)]].plane, p)) shaded.add(px, py, s.width);

@@ -212,6 +212,7 @@ Setup primitive_setup(const trace::Frame& frame, const SetupConfig& config) {
         st.id = id;
         st.draw = di;
         st.opaque = opaque;
+        st.sample_rate = d.sample_rate();
         st.clipped = cut;
         int64_t area = geom::orient2d(st.v[0].xy(), st.v[1].xy(), st.v[2].xy());
         // Counter-clockwise in NDC is clockwise in y-down window space: negative area. A piece

@@ -27,6 +27,7 @@ struct SetupTriangle {
   bool front = false;     // counter-clockwise in NDC (clockwise in y-down window space) in clip space
                           // (geom/homogeneous.h), and so after the snap, with non-zero area
   bool opaque = true;     // may occlude (opaque draw, no shader depth/discard)
+  bool sample_rate = false;  // its draw shades once per covered sample (trace::kSampleRateShading)
   bool clipped = false;   // produced by clipping (its edges are treated as boundaries)
 };
 

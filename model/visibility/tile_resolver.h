@@ -65,7 +65,7 @@ class TileFrame {
 struct TileTriangleWork {
   uint32_t triangle = 0;  // index into Setup::triangles
   TileCounters counters;
-  uint64_t shader_invocations = 0;  // pixels where it shades a sample (zbuffer::PixelShades)
+  uint64_t shader_invocations = 0;  // pixels where it shades a sample, or samples at sample rate (zbuffer::PixelShades)
 };
 
 // Where a resolver writes: frame-sized outputs shared by all tiles.

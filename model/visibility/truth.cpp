@@ -78,7 +78,7 @@ TruthResult zbuffer_truth(const Setup& s, const TruthConfig& cfg) {
     const bool opaque = src[i]->opaque;
     any_translucent = any_translucent || !opaque;
     const auto t = int32_t(i);
-    zbuffer::PixelShades covered, passed;
+    zbuffer::PixelShades covered(src[i]->sample_rate), passed(src[i]->sample_rate);
     zb.raster(tris[i], [&](size_t k, uint32_t px, uint32_t py, geom::Point p) {
       ++r.fragments_generated;
       r.overdraw[k / r.samples] += 1.0f;
@@ -106,7 +106,9 @@ TruthResult zbuffer_truth(const Setup& s, const TruthConfig& cfg) {
   }
   // HSR and pre-pass shade each pixel once per triangle owning any of its samples.
   for (size_t pixel = 0; pixel < size_t(s.width) * s.height; ++pixel)
-    zbuffer::for_distinct(owner.data() + pixel * r.samples, r.samples, int32_t(-1), [&](int32_t) { ++r.modes.hsr; });
+    zbuffer::for_invocations(
+        owner.data() + pixel * r.samples, r.samples, int32_t(-1),
+        [&](int32_t o) { return src[size_t(o)]->sample_rate; }, [&](int32_t) { ++r.modes.hsr; });
   r.modes.prepass = r.modes.hsr;
 
   // Translucent fragments after a pre-pass: shaded where in front of the final opaque depth.
@@ -114,7 +116,7 @@ TruthResult zbuffer_truth(const Setup& s, const TruthConfig& cfg) {
     std::vector<int32_t> final_owner = owner;
     for (size_t i = 0; i < tris.size(); ++i) {
       if (src[i]->opaque) continue;
-      zbuffer::PixelShades shaded;
+      zbuffer::PixelShades shaded(src[i]->sample_rate);
       zb.raster(tris[i], [&](size_t k, uint32_t px, uint32_t py, geom::Point p) {
         if (zb.passes(int32_t(i), p, final_owner[k])) shaded.add(px, py, s.width);
       });
@@ -136,7 +138,7 @@ TruthResult zbuffer_truth(const Setup& s, const TruthConfig& cfg) {
   zb.reset();
   for (size_t i : order) {
     const bool opaque = src[i]->opaque;
-    zbuffer::PixelShades passed;
+    zbuffer::PixelShades passed(src[i]->sample_rate);
     zb.raster(tris[i], [&](size_t k, uint32_t px, uint32_t py, geom::Point p) {
       if (zb.passes(int32_t(i), p, owner[k])) {
         passed.add(px, py, s.width);

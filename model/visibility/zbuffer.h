@@ -62,22 +62,26 @@ void for_covered_samples(const Setup& s, const svgpu::Triangle& t, PixelRect reg
 // hardware does. Counts the distinct pixels of one triangle's samples visited pixel by pixel
 // (for_covered_samples' order); start a new count for every triangle.
 struct PixelShades {
+  explicit PixelShades(bool sample_rate = false) : per_sample(sample_rate) {}
+  bool per_sample;  // a draw shading at sample rate (trace::kSampleRateShading) runs per sample
   uint64_t count = 0;
   size_t last = SIZE_MAX;
   void add(uint32_t px, uint32_t py, uint32_t width) {
     const size_t pixel = size_t(py) * width + px;
-    if (pixel != last) ++count, last = pixel;
+    if (per_sample || pixel != last) ++count, last = pixel;
   }
 };
 
-// Distinct values among the first n entries of a pixel's samples (n <= 16), skipping `none`:
-// the shader invocations a pixel's owners cost. Calls fn(value) once per distinct value.
-template <typename T, typename Fn>
-void for_distinct(const T* samples, uint32_t n, T none, Fn&& fn) {
+// The shader invocations a pixel's owners cost, from the first n entries of its samples
+// (n <= 16), skipping `none`: fn(owner) once per distinct owner, or once per sample it owns
+// where sample_rate(owner) (its draw shades at sample rate).
+template <typename T, typename Rate, typename Fn>
+void for_invocations(const T* samples, uint32_t n, T none, Rate&& sample_rate, Fn&& fn) {
   for (uint32_t k = 0; k < n; ++k) {
     if (samples[k] == none) continue;
     bool seen = false;
-    for (uint32_t j = 0; j < k && !seen; ++j) seen = samples[j] == samples[k];
+    if (!sample_rate(samples[k]))
+      for (uint32_t j = 0; j < k && !seen; ++j) seen = samples[j] == samples[k];
     if (!seen) fn(samples[k]);
   }
 }

@@ -57,6 +57,7 @@ nlohmann::json run(const trace::Frame& frame, const std::vector<std::string>& pa
       r["tile_cells_differing"] = differing;
       r["areas_equal"] = out.result.visible_area == g.visible_area;
       r["golden_samples_covered"] = g.samples_covered;
+      r["golden_shader_invocations"] = g.shader_invocations;
     } else {
       vis::TruthConfig tc;
       tc.tile_w = cfg.sim.tile_width;
@@ -152,6 +153,28 @@ TEST_P(ModesVsTruth, IdsAndShadedFragmentsEqualTheTruth) {
   EXPECT_EQ(r["totals"]["fragments_shaded"], r["truth"][mode]);
   EXPECT_EQ(r["totals"]["fragments_generated"], r["truth"]["generated"]);
   EXPECT_EQ(r["totals"]["silhouette_edges"].get<uint64_t>(), 0u);  // no EVU, no silhouette work
+}
+
+// Sample-rate shading: the cards of the cubes scene flagged trace::kSampleRateShading run their
+// shader once per sample they shade, in every mode of the model, as in golden and the truth.
+TEST(Msaa, SampleRateDrawsShadeEverySampleInEveryMode) {
+  const trace::Frame pixel_rate = simtest::frame_of("cubes", simtest::kCubes, 4);
+  trace::Frame sample_rate = pixel_rate;
+  sample_rate.draws.back().flags |= trace::kSampleRateShading;
+  for (const std::string mode : {"hsr", "early_z", "none"}) {
+    const auto r = run(sample_rate, {"sim.mode=" + mode});
+    expect_clean(r);
+    if (r.contains("error")) return;
+    EXPECT_EQ(r["totals"]["fragments_shaded"], r["truth"][mode]) << mode;
+    EXPECT_GT(r["totals"]["fragments_shaded"].get<uint64_t>(),
+              run(pixel_rate, {"sim.mode=" + mode})["totals"]["fragments_shaded"].get<uint64_t>())
+        << mode;
+  }
+  const auto a = run(sample_rate, {});
+  expect_golden(a);
+  EXPECT_EQ(a["totals"]["fragments_shaded"], a["golden_shader_invocations"]);
+  EXPECT_GT(a["totals"]["fragments_shaded"].get<uint64_t>(),
+            run(pixel_rate, {})["totals"]["fragments_shaded"].get<uint64_t>());
 }
 
 INSTANTIATE_TEST_SUITE_P(Modes, ModesVsTruth,

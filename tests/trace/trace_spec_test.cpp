@@ -74,7 +74,7 @@ TEST(TraceSpec, LaterMinorStillRejectsUnknownFlags) {
   SpecOptions later;
   later.minor = kVersionMinor + 1;
   Trace trace = test::triangle_trace();
-  trace.frames[0].draws[0].flags = 1u << 5;
+  trace.frames[0].draws[0].flags = 1u << 6;  // unknown in every major
   const test::SpecFile file = spec_encode(trace, later);
   try {
     decode(file.bytes.data(), file.bytes.size());
@@ -103,7 +103,7 @@ TEST(TraceSpec, SameMinorRejectsUnknownFileLevelChunk) {
   EXPECT_EQ(e.offset(), file.at("xtra.f0"));
   EXPECT_STREQ(e.what(),
                ("x.tvt: offset " + std::to_string(file.at("xtra.f0")) +
-                ": unknown chunk tag 'XTRA' in a version 1.0 file, expected FRAM")
+                ": unknown chunk tag 'XTRA' in a version 2.0 file, expected FRAM")  // the seed shades at sample rate
                    .c_str());
 }
 
@@ -113,7 +113,7 @@ TEST(TraceSpec, SameMinorRejectsUnknownChunkInFrame) {
   const test::SpecFile file = spec_encode(test::multi_frame_trace(), same);
   const FormatError e = catch_format_error([&] { decode(file.bytes.data(), file.bytes.size()); });
   EXPECT_EQ(e.offset(), file.at("xtra.f0.d0"));
-  EXPECT_NE(std::string(e.what()).find("frame 0: unknown chunk tag 'XTRA' in a version 1.0 file, expected DRAW"),
+  EXPECT_NE(std::string(e.what()).find("frame 0: unknown chunk tag 'XTRA' in a version 2.0 file, expected DRAW"),
             std::string::npos)
       << e.what();
 }

@@ -51,10 +51,34 @@ TEST(TraceHeader, MagicPrefixIsTruncated) {
 
 TEST(TraceHeader, UnsupportedMajorVersion) {
   SpecFile f = triangle();
-  put_u16(f.bytes, 8, 2);
-  expect_rejected(f.bytes, 8, "major version 2, expected 1");
+  put_u16(f.bytes, 8, 3);
+  expect_rejected(f.bytes, 8, "major version 3, expected 1 to 2");
   put_u16(f.bytes, 8, 0);
-  expect_rejected(f.bytes, 8, "major version 0, expected 1");
+  expect_rejected(f.bytes, 8, "major version 0, expected 1 to 2");
+}
+
+// Major 2 adds one flag, sample-rate shading (bit 5); a file is of the lowest major that
+// holds it, so each trace keeps one encoding and readers of major 1 keep reading every
+// trace without that flag.
+TEST(TraceHeader, SampleRateShadingIsMajorTwoAndOnlyThere) {
+  Trace trace = test::triangle_trace();
+  std::vector<uint8_t> bytes = encode(trace);
+  EXPECT_EQ(bytes[8], 1);
+  trace.frames[0].draws[0].flags |= kSampleRateShading;
+  bytes = encode(trace);
+  EXPECT_EQ(bytes[8], 2);
+  EXPECT_EQ(bytes, test::spec_encode(trace).bytes);
+  EXPECT_EQ(decode(bytes.data(), bytes.size()), trace);
+  EXPECT_TRUE(decode(bytes.data(), bytes.size()).frames[0].draws[0].sample_rate());
+
+  test::SpecOptions major1;
+  major1.major = 1;
+  SpecFile old = test::spec_encode(trace, major1);  // the flag in a version 1 file: unknown there
+  expect_rejected(old.bytes, old.at("f0.d0.flags"), "frame 0, draw 0: flags 0x20 set unknown bits 0x20, expected only bits of 0x1f (version 1)");
+
+  SpecFile plain = triangle();  // major 2 without the flag: not the trace's one encoding
+  put_u16(plain.bytes, 8, 2);
+  expect_rejected(plain.bytes, 8, "major version 2 but no draw shades at sample rate, expected 1");
 }
 
 TEST(TraceHeader, BigEndianByteOrderMark) {
@@ -249,7 +273,7 @@ TEST(TraceChunks, DrawBeyondDrawCount) {
 TEST(TraceChunks, UnknownTagWhereDrawExpected) {
   SpecFile f = multi();
   f.bytes[f.at("f1.d2") + 3] = 'X';
-  expect_rejected(f.bytes, f.at("f1.d2"), "frame 1: unknown chunk tag 'DRAX' in a version 1.0 file, expected DRAW");
+  expect_rejected(f.bytes, f.at("f1.d2"), "frame 1: unknown chunk tag 'DRAX' in a version 2.0 file, expected DRAW");
 }
 
 TEST(TraceChunks, NonPrintableTagShownInHex) {

@@ -64,8 +64,15 @@ SpecFile spec_encode(const Trace& trace, const SpecOptions& options) {
   SpecWriter w(file);
   w.mark("magic");
   w.raw(std::vector<uint8_t>{0x89, 'T', 'V', 'T', 0x0D, 0x0A, 0x1A, 0x0A});
+  uint16_t major = options.major;
+  if (major == 0) {
+    major = 1;
+    for (const Frame& frame : trace.frames)
+      for (const Draw& draw : frame.draws)
+        if (draw.flags & 0x20u) major = 2;
+  }
   w.mark("major");
-  w.u16(options.major);
+  w.u16(major);
   w.mark("minor");
   w.u16(options.minor);
   w.mark("bom");

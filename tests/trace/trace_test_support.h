@@ -13,7 +13,7 @@
 namespace tilevis::trace::test {
 
 struct SpecOptions {
-  uint16_t major = 1;
+  uint16_t major = 0;  // 0: the lowest that holds the trace (2 where a draw sets flag bit 5, else 1)
   uint16_t minor = 0;
   bool unknown_chunk_in_file = false;   // an "XTRA" chunk before each FRAM chunk
   bool unknown_chunk_in_frame = false;  // an "XTRA" chunk before each DRAW chunk

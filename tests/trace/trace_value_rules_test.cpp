@@ -76,7 +76,7 @@ std::vector<RuleCase> rule_cases() {
       {"NameAboveUnicode", [](Trace& t) { screen(t).name = "xy\xF4\x90\x80\x80"; }, "f1.d1.name", 2,
        "frame 1, draw 1: name byte 2 breaks UTF-8"},
       {"UnknownFlagBit", [](Trace& t) { screen(t).flags = kKnownDrawFlags + 1; }, "f1.d1.flags", 0,
-       "frame 1, draw 1: flags 0x20 set unknown bits 0x20, expected only bits of 0x1f"},
+       "frame 1, draw 1: flags 0x40 set unknown bits 0x40, expected only bits of 0x"},
       {"UnknownHighFlagBit", [](Trace& t) { screen(t).flags = 0x80000001u; }, "f1.d1.flags", 0,
        "flags 0x80000001 set unknown bits 0x80000000"},
       {"ShaderCostNegative", [](Trace& t) { screen(t).shader_cycles_per_fragment = -1.0f; }, "f1.d1.shader_cost", 0,

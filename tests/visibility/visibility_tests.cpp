@@ -298,3 +298,31 @@ TEST(Msaa, ShadesOncePerPixelAndTriangle) {
   EXPECT_GT(tg.modes.hsr, vis::golden_visibility(sg, pp).samples_covered / 4);  // the cards are shaded
   EXPECT_EQ(vis::golden_visibility(sg, pp).shader_invocations, tg.modes.hsr);
 }
+
+// Sample-rate shading (trace::kSampleRateShading, a draw whose shader reads the sample):
+// that draw's triangles run once per sample they shade, the others once per pixel, in
+// every producer and mode.
+TEST(Msaa, SampleRateDrawsShadeEverySample) {
+  auto all = frame_of("cubes4_sample_rate", kCubes, 4);
+  for (trace::Draw& d : all.draws) d.flags |= trace::kSampleRateShading;
+  const auto sa = vis::primitive_setup(all, {});
+  const vis::GoldenResult ga = vis::golden_visibility(sa, {});
+  const vis::TruthResult ta = vis::zbuffer_truth(sa, {});
+  EXPECT_EQ(ga.shader_invocations, ga.samples_covered);  // every visible sample is an invocation
+  EXPECT_EQ(ta.modes.hsr, ta.samples_covered);
+  EXPECT_EQ(ta.modes.none, ta.fragments_generated);
+  vis::GoldenConfig pp;
+  pp.mode = "per_pixel";
+  EXPECT_EQ(vis::golden_visibility(sa, pp).shader_invocations, ta.modes.hsr);
+
+  // Only the last draw at sample rate: between the pixel rate and the all-sample count.
+  auto one = frame_of("cubes4_last_sample_rate", kCubes, 4);
+  one.draws.back().flags |= trace::kSampleRateShading;
+  const auto so = vis::primitive_setup(one, {});
+  const vis::GoldenResult go = vis::golden_visibility(so, {});
+  const vis::GoldenResult gp = vis::golden_visibility(vis::primitive_setup(frame_of("cubes4", kCubes, 4), {}), {});
+  EXPECT_GT(go.shader_invocations, gp.shader_invocations);
+  EXPECT_LT(go.shader_invocations, ga.shader_invocations);
+  EXPECT_EQ(go.shader_invocations, vis::zbuffer_truth(so, {}).modes.hsr);
+  EXPECT_EQ(vis::golden_visibility(so, pp).shader_invocations, vis::zbuffer_truth(so, {}).modes.hsr);
+}

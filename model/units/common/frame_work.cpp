@@ -404,7 +404,9 @@ void FrameWork::resolve_analytic(TileWork& w) {
         m_owner[idx] = fan;
         taken[k] = uint32_t(ti);
       }
-      vis::zbuffer::for_distinct(taken, ns, kNone, [&](uint32_t ti) { ++w.tris[ti].fragments_shaded; });
+      vis::zbuffer::for_invocations(
+          taken, ns, kNone, [&](uint32_t ti) { return m_frame.draws[w.tris[ti].draw].sample_rate(); },
+          [&](uint32_t ti) { ++w.tris[ti].fragments_shaded; });
     }
 }
 
@@ -427,7 +429,7 @@ void FrameWork::resolve_pixels(TileWork& w) {
   for (size_t i = 0; i < list.size(); ++i) {
     TriangleWork& tw = w.tris[i];
     const vis::FrontTriangle& t = raster(list[i]);
-    vis::zbuffer::PixelShades shaded;
+    vis::zbuffer::PixelShades shaded(t.t->sample_rate);
     vis::zbuffer::for_covered_samples(m_setup, t, region, [&](uint32_t px, uint32_t py, uint32_t k, geom::Point p) {
       ++tw.fragments_generated;
       uint32_t& owner = m_owner[vis::zbuffer::sample_index(m_setup, px, py, k)];
@@ -453,13 +455,15 @@ void FrameWork::resolve_pixels(TileWork& w) {
         owned[k] = uint32_t(it->second);
       }
       if (m_cfg.mode == Mode::hsr)
-        vis::zbuffer::for_distinct(owned, ns, kNone, [&](uint32_t i) { ++w.tris[i].fragments_shaded; });
+        vis::zbuffer::for_invocations(
+            owned, ns, kNone, [&](uint32_t i) { return m_frame.draws[w.tris[i].draw].sample_rate(); },
+            [&](uint32_t i) { ++w.tris[i].fragments_shaded; });
     }
   if (m_cfg.mode == Mode::hsr)
     for (size_t i = 0; i < list.size(); ++i) {
       const vis::FrontTriangle& t = raster(list[i]);
       if (t.t->opaque) continue;
-      vis::zbuffer::PixelShades shaded;
+      vis::zbuffer::PixelShades shaded(t.t->sample_rate);
       vis::zbuffer::for_covered_samples(m_setup, t, region, [&](uint32_t px, uint32_t py, uint32_t k, geom::Point p) {
         const uint32_t o = m_owner[vis::zbuffer::sample_index(m_setup, px, py, k)];
         if (o == kNone || vis::zbuffer::passes(t.plane, raster(o).plane, p)) shaded.add(px, py, m_frame.width);

@@ -96,7 +96,8 @@ uint32_t parse_flags(const Node& n) {
       {"blended", trace::kBlended},
       {"writes_depth", trace::kShaderWritesDepth},
       {"discards", trace::kShaderDiscards},
-      {"soup", trace::kTriangleSoup}};
+      {"soup", trace::kTriangleSoup},
+      {"sample_rate", trace::kSampleRateShading}};
   uint32_t flags = 0;
   for (size_t i = 0; i < n.array_size(); ++i) {
     Node f = n.at(i);

@@ -84,7 +84,7 @@ class Reader {
   uint64_t m_end = 0;                 // end of the enclosing scope: file or chunk payload
   const char* m_scope = "file";
   std::string m_context;              // "frame F: " prefix of messages
-  uint16_t m_minor = 0;
+  uint16_t m_major = 0, m_minor = 0;
 };
 
 std::string Reader::read_string(const char* field, uint64_t length) {
@@ -127,7 +127,7 @@ void Reader::skip_or_reject_unknown(const ChunkHeader& chunk, const char* expect
     return;
   }
   fail(chunk.offset, m_context + "unknown chunk tag " + tag_text(chunk.tag) + " in a version " +
-                         std::to_string(kVersionMajor) + "." + std::to_string(m_minor) + " file, expected " + expected);
+                         std::to_string(m_major) + "." + std::to_string(m_minor) + " file, expected " + expected);
 }
 
 void Reader::reject_trailing_bytes(const char* after) {
@@ -148,10 +148,10 @@ Trace Reader::read_trace() {
   need(detail::kMagic.size(), "magic");
   m_pos = detail::kMagic.size();
 
-  const uint16_t major = u16("major version");
-  if (major != kVersionMajor)
-    fail(detail::kOffsetMajor, "major version " + std::to_string(major) + ", expected " +
-                                   std::to_string(kVersionMajor));
+  m_major = u16("major version");
+  if (m_major < kOldestMajor || m_major > kVersionMajor)
+    fail(detail::kOffsetMajor, "major version " + std::to_string(m_major) + ", expected " +
+                                   std::to_string(kOldestMajor) + " to " + std::to_string(kVersionMajor));
   m_minor = u16("minor version");
   const uint32_t byte_order = u32("byte-order mark");
   if (byte_order != detail::kByteOrderMark)
@@ -196,6 +196,11 @@ Trace Reader::read_trace() {
   if (trace.frames.size() != frame_count)
     fail(m_pos, "file ends after " + std::to_string(trace.frames.size()) + " of " + std::to_string(frame_count) +
                     " frames");
+  // One encoding per trace: a file is of the lowest major that holds it.
+  if (m_major != detail::major_for(trace))
+    fail(detail::kOffsetMajor, "major version " + std::to_string(m_major) + " but no draw shades at sample rate, " +
+                                   "expected " + std::to_string(detail::major_for(trace)) +
+                                   " (the lowest major that holds the trace)");
   return trace;
 }
 
@@ -270,7 +275,7 @@ Draw Reader::read_draw(size_t frame_index, size_t draw_index) {
   draw.name = read_string("name", name_length);
   at = m_pos;
   draw.flags = u32("flags");
-  check(at, detail::check_flags(draw.flags));
+  check(at, detail::check_flags(draw.flags, m_major));
   at = m_pos;
   draw.shader_cycles_per_fragment = f32("shader cycles per fragment");
   check(at, detail::check_shader_cost(draw.shader_cycles_per_fragment));

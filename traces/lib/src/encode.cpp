@@ -29,7 +29,8 @@ namespace {
 
 class Validator {
  public:
-  explicit Validator(const std::string& name) : m_name(name) {}
+  // `major`: the file the trace would be (detail::major_for), whose flags the reader checks.
+  Validator(const std::string& name, uint16_t major) : m_name(name), m_major(major) {}
 
   void check(const std::string& context, const std::string& error) const {
     if (!error.empty()) throw FormatError(m_name, 0, context + error);
@@ -55,7 +56,7 @@ class Validator {
     const std::string context = detail::draw_context(f, d);
     check(context, detail::check_name_length(draw.name.size()));
     check(context, detail::check_utf8("name", draw.name));
-    check(context, detail::check_flags(draw.flags));
+    check(context, detail::check_flags(draw.flags, m_major));
     check(context, detail::check_shader_cost(draw.shader_cycles_per_fragment));
     check(context, detail::check_count_fits("vertex count", draw.vertices.size()));
     check(context, detail::check_index_count(draw.indices.size()));
@@ -73,6 +74,7 @@ class Validator {
 
  private:
   const std::string& m_name;
+  uint16_t m_major;
 };
 
 class ByteWriter {
@@ -126,7 +128,7 @@ uint64_t encoded_size(const Trace& trace) {
 }  // namespace
 
 void validate(const Trace& trace, const std::string& name) {
-  const Validator validator(name);
+  const Validator validator(name, detail::major_for(trace));
   validator.check({}, detail::check_frame_count(trace.frames.size()));
   validator.check({}, detail::check_source_length(trace.source.size()));
   validator.check({}, detail::check_utf8("source", trace.source));
@@ -140,7 +142,7 @@ std::vector<uint8_t> encode_valid(const Trace& trace) {
   out.reserve(encoded_size(trace));
   ByteWriter w(out);
   w.bytes(kMagic.data(), kMagic.size());
-  w.u16(kVersionMajor);
+  w.u16(major_for(trace));
   w.u16(kVersionMinor);
   w.u32(kByteOrderMark);
   w.u64(0);  // file size, patched below

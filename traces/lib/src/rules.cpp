@@ -132,11 +132,19 @@ std::string check_name_length(uint64_t length) {
   return {};
 }
 
-std::string check_flags(uint32_t flags) {
-  if ((flags & ~kKnownDrawFlags) != 0)
-    return "flags " + hex(flags) + " set unknown bits " + hex(flags & ~kKnownDrawFlags) + ", expected only bits of " +
-           hex(kKnownDrawFlags);
+std::string check_flags(uint32_t flags, uint16_t major) {
+  const uint32_t known = known_draw_flags(major);
+  if ((flags & ~known) != 0)
+    return "flags " + hex(flags) + " set unknown bits " + hex(flags & ~known) + ", expected only bits of " + hex(known) +
+           " (version " + std::to_string(major) + ")";
   return {};
+}
+
+uint16_t major_for(const Trace& trace) {
+  for (const Frame& frame : trace.frames)
+    for (const Draw& draw : frame.draws)
+      if (draw.sample_rate()) return 2;
+  return kOldestMajor;
 }
 
 std::string check_shader_cost(float cycles) {

@@ -9,6 +9,10 @@
 #include <string>
 #include <string_view>
 
+namespace tilevis::trace {
+struct Trace;
+}
+
 namespace tilevis::trace::detail {
 
 inline constexpr size_t kValidUtf8 = static_cast<size_t>(-1);
@@ -30,7 +34,9 @@ std::string check_sample_count(uint64_t count);
 std::string check_sample_coordinate(size_t sample, const char* axis, uint32_t value, uint32_t subpixel_bits);
 std::string check_count_fits(const char* field, uint64_t count);
 std::string check_name_length(uint64_t length);
-std::string check_flags(uint32_t flags);
+std::string check_flags(uint32_t flags, uint16_t major);
+// The lowest major that holds the trace (FORMAT.md "Compatibility"): what the writer writes.
+uint16_t major_for(const Trace& trace);
 std::string check_shader_cost(float cycles);
 std::string check_index_count(uint64_t count);
 std::string check_vertex_component(size_t vertex, const char* component, float value);

@@ -9,7 +9,10 @@
 
 namespace tilevis::trace {
 
-inline constexpr uint16_t kVersionMajor = 1;
+// FORMAT.md "Compatibility": this library reads majors 1 and 2 and writes the lowest that
+// holds a trace (2 only where a draw shades at sample rate, a flag major 1 lacks).
+inline constexpr uint16_t kVersionMajor = 2;  // the newest major
+inline constexpr uint16_t kOldestMajor = 1;
 inline constexpr uint16_t kVersionMinor = 0;
 
 // Limits the reader enforces (FORMAT.md, "Validation").
@@ -26,8 +29,11 @@ enum DrawFlag : uint32_t {
   kShaderWritesDepth = 1u << 2,
   kShaderDiscards = 1u << 3,
   kTriangleSoup = 1u << 4,  // no shared indices: silhouettes are keyed by position
+  kSampleRateShading = 1u << 5,  // major 2: the shader runs once per covered sample, not per pixel
 };
-inline constexpr uint32_t kKnownDrawFlags = 0x1f;
+inline constexpr uint32_t kKnownDrawFlags = 0x3f;  // of the newest major
+// The flags a file of `major` may set.
+constexpr uint32_t known_draw_flags(uint16_t major) { return major >= 2 ? kKnownDrawFlags : 0x1fu; }
 
 struct Vec4 {
   float x = 0, y = 0, z = 0, w = 1;
@@ -52,6 +58,7 @@ struct Draw {
 
   bool opaque() const { return (flags & (kAlphaTested | kBlended)) == 0; }
   bool per_pixel_only() const { return (flags & (kShaderWritesDepth | kShaderDiscards)) != 0; }
+  bool sample_rate() const { return (flags & kSampleRateShading) != 0; }
   size_t triangle_count() const { return indices.size() / 3; }
   bool operator==(const Draw&) const = default;
 };
