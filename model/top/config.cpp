@@ -119,20 +119,21 @@ Registry::Registry() {
                      +[](TilerConfig& c) -> Schedule& { return c.scheduler.policy; });
 
   // DRAM: JEDEC LPDDR4-4266 timings (units/memory/dram.h says where each comes from).
+#define JEDEC " (JESD209-4 LPDDR4-4266, as DRAMSys's JEDEC memspec gives it)"
   TV_UINT("memory.channels", memory.dram.channels, "channels", 1, 64, "x16 DRAM channels (4: a 64-bit interface; assumption)");
   TV_UINT("memory.banks", memory.dram.banks, "banks", 1, 64, "banks per channel (JESD209-4: 8)");
   TV_UINT("memory.row_bytes", memory.dram.row_bytes, "bytes", 32, 1u << 20, "row (page) per bank (JESD209-4 x16: 2048)");
   TV_UINT("memory.burst_bytes", memory.dram.burst_bytes, "bytes", 1, 4096, "bytes per burst (BL16 x 16 bits: 32)");
   TV_UINT("memory.interleave_bytes", memory.dram.interleave_bytes, "bytes", 1, 1u << 20, "consecutive bytes per channel (assumption)");
   TV_UINT("memory.tck_ps", memory.dram.tck_ps, "ps", 1, 100000, "DRAM clock period (LPDDR4-4266: 469)");
-  TV_UINT("memory.ccd", memory.dram.ccd, "tCK", 1, 1000, "column to column (one burst on the bus) (JESD209-4 LPDDR4-4266, as DRAMSys's JEDEC memspec gives it)");
-  TV_UINT("memory.rcd", memory.dram.rcd, "tCK", 0, 10000, "activate to column command (JESD209-4 LPDDR4-4266, as DRAMSys's JEDEC memspec gives it)");
-  TV_UINT("memory.rp", memory.dram.rp, "tCK", 0, 10000, "precharge (JESD209-4 LPDDR4-4266, as DRAMSys's JEDEC memspec gives it)");
-  TV_UINT("memory.ras", memory.dram.ras, "tCK", 0, 10000, "activate to precharge (JESD209-4 LPDDR4-4266, as DRAMSys's JEDEC memspec gives it)");
-  TV_UINT("memory.rl", memory.dram.rl, "tCK", 0, 10000, "read latency (JESD209-4 LPDDR4-4266, as DRAMSys's JEDEC memspec gives it)");
-  TV_UINT("memory.wl", memory.dram.wl, "tCK", 0, 10000, "write latency (JESD209-4 LPDDR4-4266, as DRAMSys's JEDEC memspec gives it)");
-  TV_UINT("memory.refi", memory.dram.refi, "tCK", 1, 1u << 30, "all-bank refresh interval (JESD209-4 LPDDR4-4266, as DRAMSys's JEDEC memspec gives it)");
-  TV_UINT("memory.rfc", memory.dram.rfc, "tCK", 0, 1u << 30, "all-bank refresh cycle time (JESD209-4 LPDDR4-4266, as DRAMSys's JEDEC memspec gives it)");
+  TV_UINT("memory.ccd", memory.dram.ccd, "tCK", 1, 1000, "column to column, one burst on the bus" JEDEC);
+  TV_UINT("memory.rcd", memory.dram.rcd, "tCK", 0, 10000, "activate to column command" JEDEC);
+  TV_UINT("memory.rp", memory.dram.rp, "tCK", 0, 10000, "precharge" JEDEC);
+  TV_UINT("memory.ras", memory.dram.ras, "tCK", 0, 10000, "activate to precharge" JEDEC);
+  TV_UINT("memory.rl", memory.dram.rl, "tCK", 0, 10000, "read latency" JEDEC);
+  TV_UINT("memory.wl", memory.dram.wl, "tCK", 0, 10000, "write latency" JEDEC);
+  TV_UINT("memory.refi", memory.dram.refi, "tCK", 1, 1u << 30, "all-bank refresh interval" JEDEC);
+  TV_UINT("memory.rfc", memory.dram.rfc, "tCK", 0, 1u << 30, "all-bank refresh cycle time" JEDEC);
   TV_UINT("memory.controller_latency_ns", memory.controller_latency_ns, "ns", 0, 100000, "fabric and controller latency of a read (assumption)");
   TV_UINT("framebuffer.colour_bytes", framebuffer.colour_bytes, "bytes", 1, 16, "colour per sample (assumption: RGBA8)");
   TV_UINT("framebuffer.depth_bytes", framebuffer.depth_bytes, "bytes", 1, 8, "depth/stencil per sample (assumption: D24S8)");
@@ -208,6 +209,7 @@ Registry::Registry() {
   TV_REAL("energy.depth_test_pj", energy.depth_test_pj, "pJ", 0.0, 1e6, "one per-sample depth test, HSR or early-Z (assumption: a multiply-add, a compare and an SRAM read at Horowitz, ISSCC 2014)");
 }
 
+#undef JEDEC
 #undef TV_UINT
 #undef TV_REAL
 

@@ -405,7 +405,7 @@ void FrameWork::resolve_analytic(TileWork& w) {
         taken[k] = uint32_t(ti);
       }
       vis::zbuffer::for_invocations(
-          taken, ns, kNone, [&](uint32_t ti) { return m_frame.draws[w.tris[ti].draw].sample_rate(); },
+          taken, ns, kNone, [&](uint32_t ti) { return sample_rate(w.tris[ti]); },
           [&](uint32_t ti) { ++w.tris[ti].fragments_shaded; });
     }
 }
@@ -456,7 +456,7 @@ void FrameWork::resolve_pixels(TileWork& w) {
       }
       if (m_cfg.mode == Mode::hsr)
         vis::zbuffer::for_invocations(
-            owned, ns, kNone, [&](uint32_t i) { return m_frame.draws[w.tris[i].draw].sample_rate(); },
+            owned, ns, kNone, [&](uint32_t i) { return sample_rate(w.tris[i]); },
             [&](uint32_t i) { ++w.tris[i].fragments_shaded; });
     }
   if (m_cfg.mode == Mode::hsr)

@@ -112,6 +112,8 @@ class FrameWork {
   struct Segment;
   // A front-facing setup triangle's coverage and depth plane (the frame's binning has them).
   const vis::FrontTriangle& raster(uint32_t setup_triangle) const;
+  // Does the triangle's draw shade once per sample (trace::kSampleRateShading)?
+  bool sample_rate(const TriangleWork& t) const { return m_frame.draws[t.draw].sample_rate(); }
   uint32_t covering_fan(uint32_t id, geom::Point p);
   void resolve_analytic(TileWork& w);
   void resolve_pixels(TileWork& w);

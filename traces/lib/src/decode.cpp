@@ -197,10 +197,9 @@ Trace Reader::read_trace() {
     fail(m_pos, "file ends after " + std::to_string(trace.frames.size()) + " of " + std::to_string(frame_count) +
                     " frames");
   // One encoding per trace: a file is of the lowest major that holds it.
-  if (m_major != detail::major_for(trace))
+  if (const uint16_t lowest = detail::major_for(trace); m_major != lowest)
     fail(detail::kOffsetMajor, "major version " + std::to_string(m_major) + " but no draw shades at sample rate, " +
-                                   "expected " + std::to_string(detail::major_for(trace)) +
-                                   " (the lowest major that holds the trace)");
+                                   "expected " + std::to_string(lowest) + " (the lowest major that holds the trace)");
   return trace;
 }
 
