@@ -77,13 +77,16 @@ int run_side_command(const SweepArgs& a, const sweep::Sweep& sw, const sweep::Pl
 }
 
 int run_sweep(const SweepArgs& a) {
-  const sweep::Sweep sw = sweep::load_sweep(a.file);
-  const sweep::Plan plan = sweep::make_plan(sw);
   sweep::RunOptions opt;
   opt.out = fs::absolute(a.out).lexically_normal();
   opt.tilevis = self_path();
   opt.jobs = a.jobs ? a.jobs : std::max(1u, std::thread::hardware_concurrency());
+  const sweep::Sweep sw = sweep::load_sweep(a.file, opt.out);  // {out} in a trace set's path is opt.out
+  const sweep::Plan plan = sweep::make_plan(sw);
   if (int rc = run_side_command(a, sw, plan, opt); rc >= 0) return rc;
+  // Optional trace sets not found here (e.g. captured workloads where nothing can capture):
+  // said before anything runs, recorded in sweep.json and in the report.
+  for (const std::string& line : sweep::missing_trace_lines(sw)) fmt::print(stderr, "tilevis sweep: {}\n", line);
   auto availability = sweep::probe_producers(sw, plan, opt.tilevis);
   sweep::check_params(sw, plan, availability);
   for (const auto& [name, av] : availability)

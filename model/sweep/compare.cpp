@@ -11,14 +11,16 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// The point of rule.b with a's scene, resolution and samples, preferring the same tile, mode
+// The point of rule.b with a's scene (or workload and frame), resolution and samples, preferring the same tile, mode
 // and configuration.
 std::optional<size_t> partner(const Plan& plan, const CompareRule& r, const Point& a) {
   std::optional<size_t> best;
   int best_score = -1;
   for (size_t j = 0; j < plan.points.size(); ++j) {
     const Point& b = plan.points[j];
-    if (b.producer != r.b || b.scene != a.scene || b.resolution != a.resolution || b.samples != a.samples) continue;
+    if (b.producer != r.b || b.scene != a.scene || b.frame != a.frame || b.resolution != a.resolution ||
+        b.samples != a.samples)
+      continue;
     int score = 4 * (b.tile == a.tile) + 2 * (b.mode == a.mode || b.mode.empty()) + (b.config == a.config);
     if (score > best_score) best_score = score, best = j;
   }

@@ -61,7 +61,8 @@ std::vector<Job> make_jobs(const Sweep& sw, const Plan& plan, const fs::path& ou
   for (size_t i = 0; i < plan.points.size(); ++i) {
     const Point& p = plan.points[i];
     Job j = make_job(Job::Kind::point, i, p.dir.string(), point_label(p), p.producer,
-                     point_command(sw, p, tilevis, out), out / p.dir / "run.log", {trace_job.at(p.trace)},
+                     point_command(sw, p, tilevis, out), out / p.dir / "run.log",
+                     p.frame < 0 ? std::vector<size_t>{trace_job.at(p.trace)} : std::vector<size_t>{},
                      megasamples(p.resolution, p.samples));
     j.exclusive = sw.producer(p.producer).exclusive;
     if (point_done(p, out)) j.state = JobState::done;

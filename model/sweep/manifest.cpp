@@ -42,7 +42,7 @@ nlohmann::json point_record(const Sweep& sw, const Point& p, const RunOptions& o
   nlohmann::json params = nlohmann::json::object();
   if (sw.producer(p.producer).uses_params())
     for (const auto& [k, v] : sw.configs.at(p.config)) params[k] = v;
-  return {{"dir", p.dir.string()},
+  nlohmann::json r = {{"dir", p.dir.string()},
           {"scene", p.scene},
           {"resolution", p.resolution.text()},
           {"width", p.resolution.width},
@@ -59,6 +59,8 @@ nlohmann::json point_record(const Sweep& sw, const Point& p, const RunOptions& o
           {"grid", p.grid},
           {"trace", p.trace.string()},
           {"command", c.shell()}};
+  if (p.frame >= 0) r["frame"] = p.frame;  // a workload's trace frame (scene points have none)
+  return r;
 }
 
 nlohmann::json run_record(const RunSummary& s, const RunOptions& opt) {
@@ -98,8 +100,33 @@ void describe_sweep(const Sweep& sw, const std::map<std::string, Availability>& 
   nlohmann::json scenes = nlohmann::json::object();
   for (const auto& [name, s] : sw.scenes) scenes[name] = fs::absolute(s.file).string();
   m["scenes"] = scenes;
+  // Workloads given as traces: what the sweep read of each (per frame), and the sets that were
+  // missing (their points are not in the plan; the report says so).
+  nlohmann::json workloads = nlohmann::json::object();
+  for (const auto& [name, w] : sw.workloads) {
+    nlohmann::json frames = nlohmann::json::array();
+    for (const TraceFrame& f : w.frames)
+      frames.push_back({{"resolution", f.viewport.text()},
+                        {"width", f.viewport.width},
+                        {"height", f.viewport.height},
+                        {"samples", f.samples},
+                        {"draws", f.draws},
+                        {"triangles", f.triangles},
+                        {"non_occluding_triangles", f.non_occluding_triangles},
+                        {"per_pixel_triangles", f.per_pixel_triangles}});
+    workloads[name] = {{"file", w.file.string()}, {"set", w.set}, {"source", w.source}, {"frames", frames}};
+  }
+  m["workloads"] = workloads;
+  nlohmann::json sets = nlohmann::json::object();
+  for (const auto& [name, s] : sw.trace_sets)
+    sets[name] = {{"path", s.path_text},        {"resolved", fs::absolute(s.path).lexically_normal().string()},
+                  {"optional", s.optional},     {"make", s.make},
+                  {"description", s.description}, {"workloads", s.workloads},
+                  {"grids", s.grids},           {"missing", s.missing}};
+  m["trace_sets"] = sets;
   nlohmann::json grids = nlohmann::json::array();
-  for (const Grid& g : sw.grids) grids.push_back({{"name", g.name}, {"description", g.description}});
+  for (const Grid& g : sw.grids)
+    grids.push_back({{"name", g.name}, {"description", g.description}, {"trace_sets", g.trace_sets}});
   m["grids"] = grids;
 }
 

@@ -1,5 +1,6 @@
 // The plan: the cross product of every grid as points (each once, keyed by its directory),
 // the traces they read, the command lines of traces and points, and their done markers.
+#include <algorithm>
 #include <set>
 
 #include <fmt/format.h>
@@ -17,17 +18,21 @@ std::string trace_file_name(const std::string& scene, Size r, uint32_t samples) 
   return fmt::format("{}-{}-s{}.tvt", scene, r.text(), samples);
 }
 
+// points/SCENE/WxH-sS/... for a scene; points/WORKLOAD/fK-WxH-sS/... for frame K of a workload's trace.
 fs::path point_dir(const std::string& scene, Size res, uint32_t samples, const std::string& producer,
-                   const std::string& mode, Size tile, const std::string& config) {
-  return fs::path("points") / scene / fmt::format("{}-s{}", res.text(), samples) /
+                   const std::string& mode, Size tile, const std::string& config, int frame = -1) {
+  return fs::path("points") / scene /
+         (frame < 0 ? fmt::format("{}-s{}", res.text(), samples) : fmt::format("f{}-{}-s{}", frame, res.text(), samples)) /
          (mode.empty() ? producer : producer + "-" + mode) /
          (config == "default" ? "t" + tile.text() : "t" + tile.text() + "-" + config);
 }
 
-// The points of one grid at one scene x resolution x samples, appended unless already there.
+// The points of one grid at one scene x resolution x samples (or one frame of a workload's
+// trace, frame >= 0), appended unless already there.
 void add_points(const Sweep& sw, const Grid& g, const std::string& scene, Size res, uint32_t samples, Plan& plan,
-                std::map<fs::path, size_t>& by_dir, std::set<fs::path>& traces) {
-  const fs::path trace = fs::path("traces") / trace_file_name(scene, res, samples);
+                std::map<fs::path, size_t>& by_dir, std::set<fs::path>& traces, int frame = -1) {
+  const fs::path trace =
+      frame < 0 ? fs::path("traces") / trace_file_name(scene, res, samples) : sw.workloads.at(scene).file;
   for (const std::string& pname : g.producers) {
     const Producer& pr = sw.producer(pname);
     std::vector<std::string> modes = pr.uses_mode() ? g.modes : std::vector<std::string>{""};
@@ -35,12 +40,12 @@ void add_points(const Sweep& sw, const Grid& g, const std::string& scene, Size r
     for (Size tile : g.tiles)
       for (const std::string& mode : modes)
         for (const std::string& config : configs) {
-          Point p{scene, pname, mode, config, g.name, res, tile, samples, {}, trace};
-          p.dir = point_dir(scene, res, samples, pname, mode, tile, config);
+          Point p{scene, pname, mode, config, g.name, res, tile, samples, {}, trace, frame};
+          p.dir = point_dir(scene, res, samples, pname, mode, tile, config, frame);
           if (by_dir.contains(p.dir)) continue;
           by_dir[p.dir] = plan.points.size();
           plan.points.push_back(p);
-          if (traces.insert(trace).second) plan.traces.push_back({scene, res, samples, trace});
+          if (frame < 0 && traces.insert(trace).second) plan.traces.push_back({scene, res, samples, trace});
         }
   }
 }
@@ -55,6 +60,13 @@ Plan make_plan(const Sweep& sw) {
     for (const std::string& scene : g.scenes)
       for (Size res : g.resolutions)
         for (uint32_t samples : g.samples) add_points(sw, g, scene, res, samples, plan, by_dir, traces);
+  // Workloads given as traces: every frame (pass) a point of its own, at its viewport and samples.
+  for (const Grid& g : sw.grids)
+    for (const std::string& name : g.traces) {
+      const Workload& w = sw.workloads.at(name);
+      for (size_t k = 0; k < w.frames.size(); ++k)
+        add_points(sw, g, name, w.frames[k].viewport, w.frames[k].samples, plan, by_dir, traces, static_cast<int>(k));
+    }
   plan_compares(sw, plan);
   return plan;
 }
@@ -96,6 +108,7 @@ Command point_command(const Sweep& sw, const Point& p, const std::string& tilevi
     s = replace_all(s, "{mode}", p.mode);
     s = replace_all(s, "{scene}", p.scene);
     s = replace_all(s, "{resolution}", p.resolution.text());
+    s = replace_all(s, "{frame}", std::to_string(std::max(p.frame, 0)));
     c.argv.push_back(s);
   }
   return c;

@@ -9,7 +9,10 @@
 //
 // with {tilevis} the running binary, {trace} the trace built once per scene x resolution x
 // samples, {tile} "WxH", {out} the point's directory, {mode} the visibility mode and
-// {params} the unit configuration as "-p key=value" words. A point is done when its
+// {params} the unit configuration as "-p key=value" words, {frame} the trace frame. A
+// workload may also be given as trace files (captured programs, "traces" in the sweep file):
+// every frame of such a trace is a point of its own at the frame's viewport and samples. A
+// point is done when its
 // DIR/stats.json exists (every producer writes it last, atomically), so an interrupted
 // sweep, run again, runs only what is missing.
 #pragma once
@@ -58,6 +61,7 @@ struct Producer {
                                     // so that their timings do not include each other's work
   bool uses_mode() const;           // the command has {mode}
   bool uses_params() const;         // the command has {params}
+  bool uses_frame() const;          // the command has {frame}
 };
 
 // The built-in producers: golden, truth, truth_q16, truth_q24, sim_analytic, sim_tile,
@@ -69,9 +73,41 @@ struct Scene {
   std::filesystem::path file;
 };
 
+// One frame of a workload given as a trace: a pass of a captured program (a shadow map, a
+// render-to-texture pass, the window), with what the sweep read from the trace.
+struct TraceFrame {
+  Size viewport;
+  uint32_t samples = 1, draws = 0;
+  uint64_t triangles = 0;
+  uint64_t non_occluding_triangles = 0;  // alpha-tested or blended: shaded, never occluding
+  uint64_t per_pixel_triangles = 0;      // the shader discards or writes depth
+};
+
+// A workload given as a trace file; its name is the file's stem.
+struct Workload {
+  std::string name, set;             // set: the key of Sweep::trace_sets that found it
+  std::filesystem::path file;        // absolute
+  std::string source;                // the trace's source string
+  std::vector<TraceFrame> frames;
+};
+
+// A named group of trace files in the sweep file's "traces": one .tvt file or every .tvt of a
+// folder. An optional set that is missing leaves its points out, and says so (missing).
+struct TraceSet {
+  std::string name, description, make;   // make: how to make the traces ({out} expanded)
+  std::string path_text;                 // as written
+  std::filesystem::path path;            // {out} expanded, relative to the sweep file's folder
+  bool optional = false;
+  std::vector<std::string> workloads;    // names, keys of Sweep::workloads
+  std::string missing;                   // why it was left out (empty: found)
+  std::vector<std::string> grids;        // the grids that name it
+};
+
 struct Grid {
   std::string name, description;
   std::vector<std::string> scenes;   // names, keys of Sweep::scenes
+  std::vector<std::string> traces;   // workload names, keys of Sweep::workloads (a grid has scenes or traces)
+  std::vector<std::string> trace_sets;  // the sets the grid names (found or missing)
   std::vector<Size> resolutions, tiles;
   std::vector<uint32_t> samples;
   std::vector<std::string> producers, modes, configs;
@@ -89,6 +125,8 @@ struct Sweep {
   nlohmann::json source;                             // the file as read
   std::string description;
   std::map<std::string, Scene> scenes;               // every scene some grid uses
+  std::map<std::string, TraceSet> trace_sets;        // the file's "traces"
+  std::map<std::string, Workload> workloads;         // every trace file found through them
   std::vector<Producer> producers;                   // built-ins, then the file's (same name replaces)
   std::map<std::string, std::vector<std::pair<std::string, std::string>>> configs;  // name -> key=value
   std::vector<Grid> grids;
@@ -101,14 +139,20 @@ std::filesystem::path default_scenes_dir();
 // The source tree this binary was built from (reports/make_report.py lives there).
 std::filesystem::path source_dir();
 
-// Reads and validates a sweep file. Throws SweepError naming the file and JSON path.
-Sweep load_sweep(const std::filesystem::path& file);
+// Reads and validates a sweep file, and every trace file it names (the placeholder {out} in
+// a trace set's path is `out`, the sweep's output folder). Throws SweepError naming the file
+// and JSON path: also for a trace that is missing (unless its set is optional) or unreadable.
+Sweep load_sweep(const std::filesystem::path& file, const std::filesystem::path& out = {});
+
+// One line per optional trace set that was not found: what is left out, why, how to make it.
+std::vector<std::string> missing_trace_lines(const Sweep& sweep);
 
 struct Point {
   std::string scene, producer, mode, config, grid;
   Size resolution, tile;
   uint32_t samples = 1;
-  std::filesystem::path dir, trace;  // dir relative to the sweep output; trace likewise
+  std::filesystem::path dir, trace;  // dir relative to the sweep output; trace likewise (absolute for a workload's trace)
+  int frame = -1;                    // a workload's trace frame; -1: a scene's trace, made by the sweep (frame 0)
 };
 
 struct CompareJob {

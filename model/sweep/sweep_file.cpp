@@ -12,6 +12,7 @@
 
 #include "sweep/detail.h"
 #include "tilevis/json_node.h"
+#include "tilevis/trace.h"
 
 namespace tilevis::sweep {
 
@@ -89,8 +90,8 @@ std::vector<T> list_of(const Node& n, F f) {
 }
 
 const std::vector<std::string>& placeholders() {
-  static const std::vector<std::string> names = {"tilevis", "trace", "out",   "tile",      "samples",
-                                                 "mode",    "params", "scene", "resolution"};
+  static const std::vector<std::string> names = {"tilevis", "trace", "out",   "tile",       "samples",
+                                                 "mode",    "params", "scene", "resolution", "frame"};
   return names;
 }
 
@@ -105,7 +106,7 @@ void check_template(const Node& n, const std::string& text, bool is_probe) {
     if (is_probe ? name != "tilevis" : std::find(known.begin(), known.end(), name) == known.end())
       n.fail(fmt::format("unknown placeholder {{{}}} (expected {})", name,
                          is_probe ? "{tilevis}" : "{tilevis}, {trace}, {out}, {tile}, {samples}, {mode}, {params}, "
-                                                  "{scene}, {resolution}"));
+                                                  "{scene}, {resolution}, {frame}"));
     pos = end + 1;
   }
   if (!is_probe && (text.find("{out}") == std::string::npos || text.find("{trace}") == std::string::npos))
@@ -134,11 +135,13 @@ const char* to_string(ProducerKind kind) {
 
 bool Producer::uses_mode() const { return command.find("{mode}") != std::string::npos; }
 bool Producer::uses_params() const { return command.find("{params}") != std::string::npos; }
+bool Producer::uses_frame() const { return command.find("{frame}") != std::string::npos; }
 
 std::vector<Producer> builtin_producers() {
-  const std::string golden = "{tilevis} golden {trace} --tile {tile} --samples {samples}";
-  const std::string sim = "{tilevis} sim {trace} --tile {tile} --samples {samples} -p sim.mode={mode} -p sim.fidelity=";
-  const std::string cuda = "{tilevis} cuda {trace} --tile {tile} --samples {samples} --precision ";
+  const std::string golden = "{tilevis} golden {trace} --frame {frame} --tile {tile} --samples {samples}";
+  const std::string sim =
+      "{tilevis} sim {trace} --frame {frame} --tile {tile} --samples {samples} -p sim.mode={mode} -p sim.fidelity=";
+  const std::string cuda = "{tilevis} cuda {trace} --frame {frame} --tile {tile} --samples {samples} --precision ";
   const std::string sim_probe = "{tilevis} sim --list-params";  // fails where the build has no SystemC model
   std::vector<Producer> p = {
       {"golden", golden + " -o {out}", "", "untimed SVGPU pipeline (exact)", ProducerKind::visibility, false, ""},
@@ -226,16 +229,19 @@ std::vector<std::pair<std::string, std::string>> params_of(const Node& c) {
 // Reads one sweep file into `sw`, part by part, in the order the parts depend on each other.
 class Loader {
  public:
-  Loader(Sweep& sw, const Node& root) : m_sw(sw), m_root(root), m_base(sw.file.parent_path()) {}
+  Loader(Sweep& sw, const Node& root, fs::path out)
+      : m_sw(sw), m_root(root), m_base(sw.file.parent_path()), m_out(std::move(out)) {}
 
   void load() {
     m_root.allow_only({"description", "scenes_dir", "scenes", "resolutions", "samples", "tiles", "modes", "producers",
-                       "configs", "grids", "compare"});
+                       "configs", "traces", "grids", "compare"});
     m_sw.description = m_root.string_or("description", "");
     find_scenes_dir();
     read_producers();
     read_configs();
+    read_trace_sets();
     read_grids(read_defaults());
+    check_workloads();
     read_compares();
   }
 
@@ -320,6 +326,143 @@ class Loader {
     return names;
   }
 
+  // ---- Workloads given as traces ("traces": {"NAME": {"path": ..., "optional": ..., "make": ...}})
+
+  // {out} in a trace set's text: the sweep's output folder.
+  std::string expand_out(const Node& at, const std::string& text) const {
+    if (text.find("{out}") == std::string::npos) return text;
+    if (m_out.empty()) at.fail("{out} needs the sweep's output folder");
+    return detail::replace_all(text, "{out}", m_out.string());
+  }
+
+  void read_trace_sets() {
+    if (!m_root.has("traces")) return;
+    Node sets = m_root.at("traces");
+    sets.expect_object();
+    for (const std::string& name : sets.keys()) {
+      Node t = sets.at(name.c_str());
+      if (!is_name(name)) t.fail(fmt::format("expected a trace set name of {}", kNameRule));
+      t.allow_only({"path", "optional", "make", "description"});
+      TraceSet set;
+      set.name = name;
+      set.description = t.string_or("description", "");
+      set.optional = t.boolean_or("optional", false);
+      set.path_text = t.at("path").string();
+      if (set.path_text.empty()) t.at("path").fail("expected a .tvt file or a folder of them");
+      for (const char* key : {"path", "make"})
+        if (t.has(key) && detail::replace_all(t.at(key).string(), "{out}", "").find('{') != std::string::npos)
+          t.at(key).fail("unknown placeholder (expected only {out})");
+      set.path = m_base / expand_out(t.at("path"), set.path_text);
+      set.make = t.has("make") ? expand_out(t.at("make"), t.at("make").string()) : "";
+      find_traces(t, set);
+      m_sw.trace_sets[name] = set;
+    }
+  }
+
+  // The trace files of a set: the file, or every .tvt in the folder (sorted). Missing: an
+  // error naming how to make them, or (optional) the set is recorded as missing.
+  void find_traces(const Node& t, TraceSet& set) {
+    std::error_code ec;
+    std::vector<fs::path> files;
+    std::string missing;
+    if (fs::is_directory(set.path, ec)) {
+      for (const auto& e : fs::directory_iterator(set.path, ec))
+        if (e.path().extension() == ".tvt" && e.is_regular_file(ec)) files.push_back(e.path());
+      std::sort(files.begin(), files.end());
+      if (files.empty()) missing = fmt::format("the folder {} holds no .tvt file", set.path.string());
+    } else if (fs::is_regular_file(set.path, ec)) {
+      files.push_back(set.path);
+    } else {
+      missing = fmt::format("no trace file or folder {}", set.path.string());
+    }
+    const std::string how = set.make.empty() ? "make traces with `tilevis capture` (traces/capture/README.md)"
+                                             : "make them with: " + set.make;
+    if (!missing.empty()) {
+      if (!set.optional) t.at("path").fail(fmt::format("{}; {}", missing, how));
+      set.missing = missing;
+      return;
+    }
+    for (const fs::path& f : files) {
+      Workload w;
+      w.name = f.stem().string();
+      w.set = set.name;
+      w.file = fs::absolute(f).lexically_normal();
+      if (!is_name(w.name))
+        t.at("path").fail(fmt::format("trace {}: expected a file name of {} (it names the workload)", f.string(),
+                                      kNameRule));
+      if (auto it = m_sw.workloads.find(w.name); it != m_sw.workloads.end())
+        t.at("path").fail(fmt::format("two traces named {}: {} and {}", w.name, it->second.file.string(),
+                                      w.file.string()));
+      read_trace(t, w, how);
+      set.workloads.push_back(w.name);
+      m_sw.workloads[w.name] = std::move(w);
+    }
+  }
+
+  // What a sweep needs of a trace: its frames' viewports, samples and triangle counts. The
+  // reader rejects every malformed file with its offset and expectation.
+  static void read_trace(const Node& t, Workload& w, const std::string& how) {
+    trace::Trace tr;
+    try {
+      tr = trace::read(w.file.string());
+    } catch (const std::exception& e) {
+      t.at("path").fail(fmt::format("not a valid trace: {}; {}", e.what(), how));
+    }
+    w.source = tr.source;
+    for (const trace::Frame& f : tr.frames) {
+      TraceFrame tf;
+      tf.viewport = {f.width, f.height};
+      tf.samples = static_cast<uint32_t>(f.samples.size());
+      tf.draws = static_cast<uint32_t>(f.draws.size());
+      for (const trace::Draw& d : f.draws) {
+        tf.triangles += d.triangle_count();
+        if (!d.opaque()) tf.non_occluding_triangles += d.triangle_count();
+        if (d.per_pixel_only()) tf.per_pixel_triangles += d.triangle_count();
+      }
+      w.frames.push_back(tf);
+    }
+  }
+
+  // A grid's "traces": names of trace sets (their workloads, each once).
+  std::vector<std::string> trace_list(const Node& n, Grid& g) {
+    std::vector<std::string> names;
+    g.trace_sets = list_of<std::string>(n, [&](const Node& e) {
+      std::string s = e.string();
+      if (!m_sw.trace_sets.contains(s)) e.fail(fmt::format("unknown trace set \"{}\" (define it in $.traces)", s));
+      return s;
+    });
+    for (const std::string& s : g.trace_sets) {
+      TraceSet& set = m_sw.trace_sets.at(s);
+      set.grids.push_back(g.name);
+      for (const std::string& w : set.workloads)
+        if (std::find(names.begin(), names.end(), w) == names.end()) names.push_back(w);
+    }
+    return names;
+  }
+
+  // A workload's name is its points' folder: no scene may have it. A trace of several frames
+  // needs producers that take {frame}.
+  void check_workloads() const {
+    for (const auto& [name, w] : m_sw.workloads) {
+      const Node at = m_root.at("traces").at(w.set.c_str()).at("path");
+      if (m_sw.scenes.contains(name))
+        at.fail(fmt::format("trace {} has the name of scene {} ({}): rename one", w.file.string(), name,
+                            m_sw.scenes.at(name).file.string()));
+    }
+    for (size_t i = 0; i < m_sw.grids.size(); ++i) {
+      const Grid& g = m_sw.grids[i];
+      for (const std::string& wname : g.traces) {
+        const Workload& w = m_sw.workloads.at(wname);
+        if (w.frames.size() < 2) continue;
+        for (const std::string& p : g.producers)
+          if (!m_sw.producer(p).uses_frame())
+            m_root.at("grids").at(i).at("producers").fail(
+                fmt::format("producer {} has no {{frame}}, so it cannot run frames 1 to {} of trace {}", p,
+                            w.frames.size() - 1, w.file.string()));
+      }
+    }
+  }
+
   // The axes besides scenes a grid may set; at the top level they are the defaults of every grid.
   void read_axes(const Node& n, Grid& g) {
     if (n.has("resolutions")) g.resolutions = list_of<Size>(n.at("resolutions"), resolution_of);
@@ -341,13 +484,25 @@ class Loader {
   }
 
   Grid read_grid(const Node& g, const Grid& defaults) {
-    g.allow_only({"name", "description", "scenes", "resolutions", "samples", "tiles", "producers", "modes", "configs"});
+    g.allow_only({"name", "description", "scenes", "traces", "resolutions", "samples", "tiles", "producers", "modes",
+                  "configs"});
     Grid grid = defaults;
     grid.name = name_of(g.at("name"));
     if (!m_grid_names.insert(grid.name).second) g.at("name").fail("duplicate grid name");
     grid.description = g.string_or("description", "");
-    if (g.has("scenes")) grid.scenes = scene_list(g.at("scenes"));
-    if (grid.scenes.empty()) g.fail("missing required member \"scenes\" (here or at the top level)");
+    if (g.has("traces")) {
+      // A trace keeps its own viewport and samples: a grid of traces has no scenes and no such axes.
+      for (const char* key : {"scenes", "resolutions", "samples"})
+        if (g.has(key))
+          g.at(key).fail(fmt::format("expected no {} in a grid of traces (each trace frame keeps its own viewport and "
+                                     "samples)", key));
+      grid.scenes.clear();
+      grid.traces = trace_list(g.at("traces"), grid);
+    } else {
+      if (g.has("scenes")) grid.scenes = scene_list(g.at("scenes"));
+      if (grid.scenes.empty())
+        g.fail("missing required member \"scenes\" (here or at the top level) or \"traces\"");
+    }
     read_axes(g, grid);
     grid.producers = list_of<std::string>(g.at("producers"), [&](const Node& n) { return producer_name(n); });
     if (g.has("configs"))
@@ -390,20 +545,33 @@ class Loader {
 
   Sweep& m_sw;
   Node m_root;
-  fs::path m_base, m_scenes_dir;
+  fs::path m_base, m_scenes_dir, m_out;
   std::set<std::string> m_grid_names;
 };
 
 }  // namespace
 
-Sweep load_sweep(const fs::path& file) {
+Sweep load_sweep(const fs::path& file, const fs::path& out) {
   Sweep sw;
   sw.file = file;
   const std::string file_name = file.string();
   sw.source = tilevis::json::parse_file(file_name, &raise_sweep_error);
   const Node root(sw.source, "$", file_name, &raise_sweep_error);
-  Loader(sw, root).load();
+  Loader(sw, root, out).load();
   return sw;
+}
+
+std::vector<std::string> missing_trace_lines(const Sweep& sw) {
+  std::vector<std::string> lines;
+  for (const auto& [name, set] : sw.trace_sets) {
+    if (set.missing.empty()) continue;
+    std::string grids;
+    for (const std::string& g : set.grids) grids += (grids.empty() ? "" : ", ") + g;
+    lines.push_back(fmt::format("traces \"{}\" ({}) are missing: {}; their points{} are left out{}", name,
+                                set.path_text, set.missing, grids.empty() ? "" : " (grids " + grids + ")",
+                                set.make.empty() ? "" : ". To make them: " + set.make));
+  }
+  return lines;
 }
 
 }  // namespace tilevis::sweep
