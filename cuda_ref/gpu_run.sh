@@ -14,7 +14,9 @@
 #   cross     every scene at tiles 16, 32, 64: golden on the CPU (in parallel, first), then
 #             tilevis cuda exact and float on the GPU one at a time (--runs 20 after warm-up),
 #             tilevis compare of each against golden and of float against exact
-#   orbit     the 8-frame bunny orbit: GL, z-buffers and analytic (32x32, both precisions) per frame
+#   orbit     the 8-frame bunny orbit: GL, z-buffers and analytic (32x32, both precisions) per frame,
+#             and the orbit as one sequence through one pipeline (tilevis cuda --laps: first sight,
+#             new frame right after another frame, the known frame's graph)
 #   sanitize  compute-sanitizer memcheck and racecheck on a small trace, both precisions
 #   report    $OUT/<device>.json and .md (reports/cuda/ without $OUT), the table printed last
 #
@@ -96,6 +98,8 @@ phase_build() {
 phase_test() {
   say "ctest: cuda_ref GPU and host tests"
   local log="$LOGS/ctest.log" rc=0
+  # The built-in scenes' traces (GpuBuiltInScenes: exact hybrid = golden hybrid, float signs).
+  export TILEVIS_GPU_TRACES="$TRACES"
   ctest --test-dir "$BUILD" -L "${TILEVIS_TEST_LABEL:-gpu|cuda}" -j 4 --output-on-failure >"$log" 2>&1 || rc=$?
   local summary skipped
   summary="$(grep -E "tests passed|tests failed" "$log" | tail -n 1 || true)"
@@ -222,6 +226,12 @@ phase_orbit() {
       [ -f "$d/$p/stats.json" ] || "$BIN" cuda "$t" --frame "$k" --tile 32 --precision "$p" --runs "$RUNS" \
         ${hw:+--hw-raster-ms "$hw"} -o "$d/$p" >"$LOGS/orbit_${p}_$k.log" 2>&1 || say "orbit frame $k $p failed"
     done
+  done
+  for p in exact float; do
+    local q="$WORK/orbit/bunny/seq_$p"
+    [ -f "$q/sequence.json" ] || "$BIN" cuda "$t" --laps "${TILEVIS_GPU_LAPS:-5}" --tile 32 --precision "$p" \
+      --runs "$RUNS" -o "$q" >"$LOGS/orbit_seq_$p.log" 2>&1 || say "orbit sequence $p failed: $(tail -n 1 "$LOGS/orbit_seq_$p.log")"
+    [ -f "$q/sequence.json" ] && cat "$LOGS/orbit_seq_$p.log" >&2
   done
   say "orbit done ($(elapsed))"
 }

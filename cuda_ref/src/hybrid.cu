@@ -418,9 +418,13 @@ __global__ void __launch_bounds__(kPixBlock) k_per_pixel(HybArgs<P> a, uint64_t 
 
 // The visible areas again, per original id over its items in canonical order: an analytic
 // tile's item adds its visible pieces (fold_area), a per-pixel tile's item its owned samples,
-// one sample's share at a time.
+// one sample's share at a time. The totals visible_triangles and max_tile_pieces are counted
+// again here over the analytic tiles' items only: golden's per-pixel resolver adds nothing to
+// them (FrameOutput: "per-pixel tiles: none"), while the analytic stages ran on every tile.
 template <class P>
 struct HFoldArgs {
+  PieceSource<P> src;
+  uint64_t* counters;
   const uint64_t* area_key;
   const uint32_t* area_item;
   const uint64_t* item_key;
@@ -441,6 +445,7 @@ TV_HD void hybrid_fold(const HFoldArgs<P>& a, uint64_t q) {
   const uint64_t id = a.area_key[q];
   if (q > 0 && a.area_key[q - 1] == id) return;
   double sum = 0;
+  uint32_t vis_tris = 0, most_pieces = 0;
   for (uint64_t r = q; a.area_key[r] == id; ++r) {
     const uint32_t j = a.area_item[r];
     if (a.cause[a.item_key[j]] != 0) {
@@ -449,12 +454,19 @@ TV_HD void hybrid_fold(const HFoldArgs<P>& a, uint64_t q) {
     }
     const uint32_t n = a.piece_count[j];
     const bool clipped = a.cand_count[j] != 0;
+    // As clip.cu (clipped items) and count_unclipped (an unclipped item's one piece) count it.
+    most_pieces = tmax(most_pieces, clipped ? n : n != 0 ? 1u : 0u);
     for (uint32_t k = 0; k < n; ++k) {
       const uint64_t p = clipped ? a.n_items + a.item_slot[j] + k : j;
-      if (a.visible[p]) sum = dadd(sum, a.piece_area[p]);
+      if (!a.visible[p]) continue;
+      sum = dadd(sum, a.piece_area[p]);
+      PEdge<P> local[kTileCap];
+      vis_tris += piece_at<P>(a.src, p, local).n - 2;  // as occ_finish counts a visible piece
     }
   }
   a.area[id] = sum;
+  count_add(&a.counters[kVisibleTriangles], vis_tris);
+  count_max(&a.counters[kMaxTilePieces], most_pieces);
 }
 
 template <class P>
@@ -511,6 +523,11 @@ void stage_hybrid(Pipeline<P>& p) {
     ++ex.queued;
   }
   HFoldArgs<P> f{};
+  f.src = piece_source(p);
+  f.counters = p.counters.get();
+  // The two totals are counted again by the fold over the analytic tiles only.
+  static_assert(kMaxTilePieces == kVisibleTriangles + 1, "adjacent counters");
+  ex.zero(p.counters.get() + kVisibleTriangles, 2 * sizeof(uint64_t));
   f.area_key = p.area_key_sorted.get();
   f.area_item = p.area_item_sorted.get();
   f.item_key = p.item_key_sorted.get();

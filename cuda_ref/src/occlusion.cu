@@ -111,11 +111,20 @@ TV_HD void occ_finish(const OccArgs<P>& a, uint64_t p, const PieceView<P>& v, bo
   count_add(&row[kColVisiblePieces], hidden ? 0 : 1);
   count_add(&a.counters[kVisibleTriangles], hidden ? 0 : v.n - 2);
   if (!hidden) {
-    // A piece's area is positive; float vertices of a sliver can turn its computed area
-    // negative: it counts as 0 (and is counted), so no area changes sign.
-    const double area = ddiv(doubled_area<P>(v.e, v.n), a.area_scale);
-    if constexpr (!P::kExact) count_add(&a.counters[kFloatNegativeAreas], area < 0 ? 1u : 0u);
-    a.area[p] = P::kExact || area >= 0 ? area : 0.0;
+    double area = ddiv(doubled_area<P>(v.e, v.n), a.area_scale);
+    if constexpr (!P::kExact) {
+      // Float: the vertices' area where its sign is proven, else the exact area of the region
+      // the piece's lines bound (poly.cuh); a negative area is counted (it cannot occur).
+      if (!certified_convex(v.e, v.n)) {
+        bool overflow = false;
+        const double x = exact_region_doubled_area<P>(v.e, v.n, a.src.tris[v.tri], a.src.grid.rect(v.tile), overflow);
+        if (!overflow) area = ddiv(x, a.area_scale);
+        count_add(&a.counters[kFloatAnomalies], overflow ? 1u : 0u);
+        count_add(&a.counters[kFloatExactAreas], 1u);
+      }
+      count_add(&a.counters[kFloatNegativeAreas], area < 0 ? 1u : 0u);
+    }
+    a.area[p] = area;
   }
 }
 

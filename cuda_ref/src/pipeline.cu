@@ -543,8 +543,10 @@ CudaResult run(const trace::Frame& frame, const CudaConfig& cfg) {
     }
     total_ms = median(total);
   };
-  // The stream: each stage's work queued as it comes, the host reading sizes between stages.
+  // The stream: each stage's work queued as it comes, the host reading sizes between stages
+  // (a new frame: the headline total_ms).
   timed([&] { return run_once(p, timer); }, r.stream_stage_ms, r.stream_total_ms);
+  r.total_ms = r.stream_total_ms;
   r.queued_operations = ex.queued;
   r.host_syncs = ex.syncs;
   r.runs = runs;
@@ -558,12 +560,12 @@ CudaResult run(const trace::Frame& frame, const CudaConfig& cfg) {
     r.graph_nodes = lean.nodes();
     probed.replay();  // warm-up
     lean.replay();
-    timed([&] { lean.replay(); return true; }, r.stage_ms, r.total_ms);  // no stages: all is off
+    timed([&] { lean.replay(); return true; }, r.stage_ms, r.graph_total_ms);  // no stages: all is off
     timer.all = true;
     timed([&] { probed.replay(); return true; }, r.stage_ms, r.probed_total_ms);
   } else {
     r.stage_ms = r.stream_stage_ms;
-    r.total_ms = r.stream_total_ms;
+    r.graph_total_ms = r.stream_total_ms;
   }
   ex.reads = Exec::Reads::direct;
 
@@ -627,6 +629,7 @@ CudaResult run(const trace::Frame& frame, const CudaConfig& cfg) {
   r.float_anomalies = c[kFloatAnomalies];
   r.float_regularized = c[kFloatRegularized];
   r.float_negative_areas = c[kFloatNegativeAreas];
+  r.float_exact_areas = c[kFloatExactAreas];
   r.deep_pairs = c[kDeepPairs];
   r.peak_device_bytes = ex.peak_bytes();
   r.min_dram_bytes = p.f.n_vertices * 16 + p.f.n_triangles * 12 + n_samples * 4;
@@ -640,7 +643,103 @@ CudaResult run(const trace::Frame& frame, const CudaConfig& cfg) {
   return r;
 }
 
+template <class P>
+std::vector<FrameTime> run_frames(const std::vector<trace::Frame>& frames, const CudaConfig& cfg, uint32_t laps) {
+  Exec ex(cfg.device == Device::cpu ? Where::cpu : Where::gpu, cfg.shuffle_cpu);
+  Pipeline<P> p(ex);
+  p.cfg = cfg;
+  p.counters.need(kCounterCount);
+  Timer timer(ex);
+  std::vector<FrameTime> out(frames.size());
+  std::vector<std::vector<double>> lap_ms(frames.size());
+  using clock = std::chrono::steady_clock;
+  auto upload = [&](size_t k) {
+    upload_frame_common(ex, frames[k], cfg.depth_bits, p.f, p.draws_host, p.vertices, p.indices, p.tri_draw, p.draws,
+                        p.sample_xy);
+    ex.sync();
+  };
+  // One new frame: run until no pool overflows; its time from the events, or the host clock
+  // around every try when it had to grow.
+  auto new_frame = [&](uint32_t& retries) {
+    ex.reads = Exec::Reads::log;
+    const auto t0 = clock::now();
+    uint32_t tries = 0;
+    while (!run_once(p, timer))
+      if (++tries > 32) throw std::runtime_error("cuda: buffers still overflow after 32 retries");
+    retries += tries;
+    return tries ? std::chrono::duration<double, std::milli>(clock::now() - t0).count() : timer.ms(0, kStageCount);
+  };
+  for (uint32_t lap = 0; lap <= laps; ++lap)
+    for (size_t k = 0; k < frames.size(); ++k) {
+      upload(k);
+      if (lap == 0) {
+        const auto t0 = clock::now();
+        new_frame(out[k].first_retries);
+        out[k].first_ms = std::chrono::duration<double, std::milli>(clock::now() - t0).count();
+        out[k].frame = uint32_t(k);
+        uint64_t front = 0;
+        ex.download(&front, p.counters.get() + kFrontFacing, 8);
+        out[k].triangles_front = front;
+      } else {
+        lap_ms[k].push_back(new_frame(out[k].retries));
+      }
+      if (lap == laps) {
+        std::vector<int32_t> ids(uint64_t(p.f.width) * p.f.height * p.f.n_samples);
+        ex.download(ids.data(), p.ids.get(), ids.size() * 4);
+        out[k].ids_hash = ids_hash(ids);
+      }
+    }
+  for (size_t k = 0; k < frames.size(); ++k) out[k].new_frame_ms = median(lap_ms[k]);
+  if (ex.where == Where::gpu) {
+    // A known frame: its own graph (recorded from a run of it), replayed.
+    const bool all = timer.all;
+    for (size_t k = 0; k < frames.size(); ++k) {
+      upload(k);
+      uint32_t unused = 0;
+      timer.all = true;
+      new_frame(unused);  // the read log of this frame
+      timer.all = false;
+      FrameGraph g(ex);
+      g.capture([&] { return run_once(p, timer); });
+      g.replay();
+      std::vector<double> ms;
+      for (uint32_t r = 0; r < std::max<uint32_t>(cfg.runs, 1); ++r) {
+        g.replay();
+        ms.push_back(timer.ms(0, kStageCount));
+      }
+      out[k].graph_ms = median(ms);
+    }
+    timer.all = all;
+  } else {
+    for (auto& f : out) f.graph_ms = f.new_frame_ms;
+  }
+  ex.reads = Exec::Reads::direct;
+  return out;
+}
+
 }  // namespace
+
+uint64_t ids_hash(const std::vector<int32_t>& ids) {
+  uint64_t h = 1469598103934665603ull;
+  for (int32_t v : ids) {
+    for (int b = 0; b < 4; ++b) {
+      h ^= (uint32_t(v) >> (8 * b)) & 0xffu;
+      h *= 1099511628211ull;
+    }
+  }
+  return h;
+}
+
+std::vector<FrameTime> run_cuda_frames(const std::vector<trace::Frame>& frames, const CudaConfig& cfg, uint32_t laps) {
+  if (frames.empty()) return {};
+  if (!geom::TileGrid::valid_tile(cfg.tile_w) || !geom::TileGrid::valid_tile(cfg.tile_h))
+    throw std::runtime_error("cuda: bad tile size");
+  if (cfg.device == Device::gpu) {
+    std::string why;
+    if (!cuda_available(&why)) throw std::runtime_error("cuda: no usable GPU (" + why + ")");
+  }
+  return cfg.precision == Precision::exact ? run_frames<ExactP>(frames, cfg, laps) : run_frames<FloatP>(frames, cfg, laps);
+}
 
 bool cuda_available(std::string* why) {
   int count = 0;

@@ -45,7 +45,8 @@ enum Counter : uint32_t {
   kMaxTilePieces,
   kHeavyPieces,     // occlusion of unclipped pieces with finer bins: pieces queued for a warp each
   kFloatRegularized,  // float: splits whose vertex sides were made those of a convex polygon
-  kFloatNegativeAreas,  // float: visible pieces whose float area came out negative (counted as 0)
+  kFloatNegativeAreas,  // float: visible pieces whose area came out negative (none: poly.cuh)
+  kFloatExactAreas,     // float: visible pieces whose area sign was not proven: the exact region's area
   kCounterCount
 };
 

@@ -442,4 +442,98 @@ TV_HD inline double doubled_area(const PEdge<P>* poly, uint32_t n) {
   return sum;
 }
 
+// ---- float areas that never lie about sign ----------------------------------------------------
+//
+// A float piece's vertices are meets of its lines rounded to float. On a sliver the rounding
+// can move a vertex across the piece's opposite side: the vertex chain folds over, and the
+// shoelace of the float vertices comes out negative (or positive for a region that is empty).
+// The lines themselves are exact (integer a, b and an integer anchor, each exact in float), so
+// the region a float piece bounds, the intersection of its half-planes within its triangle's
+// tile polygon, has an exact area. The float area is used where its sign is proven: the float
+// vertices (as doubles) form a convex polygon in positive order, every turn and every fan
+// triangle from vertex 0 certified positive by Shewchuk's orient2d filter. Elsewhere the area is
+// that of the exact region (exact clipping, ExactP), which is never negative.
+
+// Shewchuk's ccwerrboundA, (3 + 16 eps) eps with eps = 2^-53: |det| above it times the sum of
+// the magnitudes of its two products has the sign of the exact determinant of double inputs.
+inline constexpr double kOrientErrBound = 3.3306690738754716e-16;
+
+TV_HD inline bool orient_positive(double ax, double ay, double bx, double by, double cx, double cy) {
+  const double t1 = (bx - ax) * (cy - ay), t2 = (by - ay) * (cx - ax);
+  const double det = t1 - t2;
+  return det > kOrientErrBound * (fabs(t1) + fabs(t2));
+}
+
+// Whether the float vertices are proven to form a convex polygon in positive order (repeated
+// vertices, whose area terms are exactly 0, are passed over). Then every fan term of
+// doubled_area is positive, and so is the float area.
+TV_HD inline bool certified_convex(const PEdge<FloatP>* poly, uint32_t n) {
+  if (n < 3 || n > kSideCap) return false;
+  double x[kSideCap], y[kSideCap];
+  uint32_t m = 0;
+  for (uint32_t i = 0; i < n; ++i) {
+    const double vx = poly[i].start.x, vy = poly[i].start.y;
+    if (m > 0 && vx == x[m - 1] && vy == y[m - 1]) continue;
+    x[m] = vx;
+    y[m] = vy;
+    ++m;
+  }
+  while (m > 1 && x[m - 1] == x[0] && y[m - 1] == y[0]) --m;
+  if (m < 3) return false;
+  for (uint32_t i = 0; i < m; ++i) {
+    const uint32_t h = i == 0 ? m - 1 : i - 1, j = i + 1 == m ? 0 : i + 1;
+    if (!orient_positive(x[h], y[h], x[i], y[i], x[j], y[j])) return false;
+  }
+  for (uint32_t i = 1; i + 1 < m; ++i)
+    if (!orient_positive(x[0], y[0], x[i], y[i], x[i + 1], y[i + 1])) return false;
+  return true;
+}
+
+// The exact line a float line stands for: a (x - ox) + b (y - oy) with integer a, b, ox, oy.
+TV_HD inline exact::Line exact_line(const approx::Line& l) {
+  const int64_t a = int64_t(l.a), b = int64_t(l.b);
+  return {a, b, -(a * int64_t(l.ox) + b * int64_t(l.oy))};
+}
+
+// The doubled area of the region a float piece bounds: its triangle's tile polygon (exact)
+// clipped by each of the piece's lines, exactly; >= 0 (a convex polygon's fan terms are >= 0
+// and keep their sign when rounded). `overflow`: the region outgrew the buffers (a piece of
+// more than kRegionCap - kTileCap lines), nothing computed.
+inline constexpr uint32_t kRegionCap = 24;
+template <class FP>  // FloatP
+#if defined(__CUDACC__)
+__noinline__
+#endif
+TV_HD double exact_region_doubled_area(const PEdge<FP>* poly, uint32_t n, const TileTri<FP>& t, const Rect& r,
+                                       bool& overflow) {
+  if (n + kTileCap > kRegionCap) {
+    overflow = true;
+    return 0;
+  }
+  const TileTri<ExactP> xt = make_tile_tri<ExactP>(t.v[0], t.v[1], t.v[2], t.id, t.opaque != 0);
+  PEdge<ExactP> a[kRegionCap], b[kRegionCap];
+  bool unused = false;
+  uint32_t m = tile_polygon<ExactP>(xt, r, a, unused);
+  PEdge<ExactP>* cur = a;
+  PEdge<ExactP>* next = b;
+  for (uint32_t i = 0; i < n && m > 0; ++i) {
+    const exact::Line l = exact_line(poly[i].line);
+    bool pos, neg;
+    line_sides<ExactP>(cur, m, l, pos, neg);
+    if (!neg) continue;
+    if (!pos) return 0;  // the region is empty (at most a segment)
+    PolyOut<ExactP> in{next, 0, kRegionCap, false}, out{nullptr, 0, 0, false};
+    split<ExactP>(cur, m, l, in, out);
+    if (in.overflow) {
+      overflow = true;
+      return 0;
+    }
+    m = in.n;
+    PEdge<ExactP>* s = cur;
+    cur = next;
+    next = s;
+  }
+  return m >= 3 ? doubled_area<ExactP>(cur, m) : 0.0;
+}
+
 }  // namespace tilevis::cuda

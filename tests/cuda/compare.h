@@ -79,24 +79,32 @@ inline Diff diff(const vis::GoldenResult& g, const cuda::CudaResult& c) {
   both("clip_polygons", g.clip_polygons, c.clip_polygons);
   both("pieces", g.pieces_total, c.pieces);
   both("visible_pieces", g.visible_pieces, c.visible_pieces);
-  if (c.per_pixel_cause.empty()) both("visible_triangles", g.visible_triangles, c.visible_triangles);
+  both("visible_triangles", g.visible_triangles, c.visible_triangles);
   both("occlusion_tests", g.occlusion_tests, c.occlusion_tests);
   both("samples_covered", g.samples_covered, c.samples_covered);
   both("fragments_generated", g.fragments_generated, c.fragments_generated);
   both("max_tile_triangles", g.max_tile_triangles, c.max_tile_triangles);
   both("max_tile_edges", g.max_tile_edges, c.max_tile_edges);
-  // Hybrid: CUDA's visible_triangles and max_tile_pieces still count the analytic work of the
-  // per-pixel tiles too (golden's leave those tiles out); every per-tile counter is compared.
-  if (c.per_pixel_cause.empty()) both("max_tile_pieces", g.max_tile_pieces, c.max_tile_pieces);
+  both("max_tile_pieces", g.max_tile_pieces, c.max_tile_pieces);
   if (!c.per_pixel_cause.empty()) {
-    uint64_t tiles = 0, crossing = 0, screens = 0, tests = 0;
+    uint64_t tiles = 0, crossing = 0, screens = 0, tests = 0, by_cause[4] = {0, 0, 0, 0}, samples = 0, triangles = 0;
     for (size_t t = 0; t < c.per_pixel_cause.size(); ++t) {
       tiles += c.per_pixel_cause[t] != 0;
+      if (c.per_pixel_cause[t] != 0 && c.per_pixel_cause[t] < 4) ++by_cause[c.per_pixel_cause[t]];
+      if (c.per_pixel_cause[t] != 0 && t < c.tiles.size()) {
+        samples += uint64_t(c.tiles[t].samples_covered);
+        triangles += uint64_t(c.tiles[t].triangles);
+      }
       crossing += c.crossing_triangles[t];
       screens += c.detection_screens[t];
       tests += c.detection_tests[t];
     }
     both("fallback_tiles", g.fallback_tiles, tiles);
+    both("fallback_interpenetration", g.fallback_interpenetration, by_cause[vis::kPerPixelInterpenetration]);
+    both("fallback_non_opaque", g.fallback_non_opaque, by_cause[vis::kPerPixelNonOpaque]);
+    both("fallback_budget", g.fallback_budget, by_cause[vis::kPerPixelBudget]);
+    both("fallback_samples", g.fallback_samples, samples);
+    both("fallback_triangles", g.fallback_triangles, triangles);
     both("fallback_crossing_triangles", g.fallback_crossing_triangles, crossing);
     both("detection_screens", g.detection_screens, screens);
     both("detection_tests", g.detection_tests, tests);

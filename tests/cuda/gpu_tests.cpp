@@ -2,6 +2,10 @@
 // Every test skips, saying why, where no CUDA device is usable (CI, build machines).
 #include <gtest/gtest.h>
 
+#include <cstdlib>
+#include <filesystem>
+#include <future>
+
 #include "compare.h"
 #include "scenes.h"
 
@@ -177,5 +181,78 @@ TEST_P(HybridGpu, BitIdenticalToGoldenHybrid) {
 INSTANTIATE_TEST_SUITE_P(Scenes, HybridGpu,
                          ::testing::Combine(::testing::ValuesIn(ct::scene_names()), ::testing::Values(8u, 32u),
                                             ::testing::Values(1u, 4u)));
+
+
+// The built-in scenes (traces/scenes/*.json as traces: gpu_run.sh sets TILEVIS_GPU_TRACES to
+// the folder prepare_gpu_run.sh's traces were unpacked into), failure scenes included, at 32x32:
+// exact hybrid against golden --mode hybrid, every total, ids, areas (bitwise), every per-tile
+// counter and verdict column and the fallback totals; float analytic never reports a negative
+// area or an anomaly.
+TEST(GpuBuiltInScenes, HybridEqualsGoldenHybridAndFloatKeepsSigns) {
+  REQUIRE_GPU();
+  const char* dir = std::getenv("TILEVIS_GPU_TRACES");
+  if (!dir || !*dir) GTEST_SKIP() << "TILEVIS_GPU_TRACES not set (gpu_run.sh sets it to the built-in scenes' traces)";
+  std::vector<std::filesystem::path> traces;
+  for (const auto& e : std::filesystem::directory_iterator(dir))
+    if (e.path().extension() == ".tvt") traces.push_back(e.path());
+  std::sort(traces.begin(), traces.end());
+  ASSERT_GE(traces.size(), 15u) << "expected every traces/scenes/*.json as a trace in " << dir;
+  std::vector<trace::Frame> frames;
+  for (const auto& t : traces) frames.push_back(std::move(trace::read(t.string()).frames.at(0)));
+  // Golden (CPU) for every scene at once, then the GPU runs one at a time.
+  std::vector<std::future<vis::GoldenResult>> golden;
+  for (const auto& f : frames)
+    golden.push_back(std::async(std::launch::async, [&f] { return ct::golden_of(f, 32, 32, "hybrid"); }));
+  for (size_t k = 0; k < frames.size(); ++k) {
+    const std::string name = traces[k].stem().string();
+    SCOPED_TRACE(name);
+    auto cfg = ct::config(cuda::Device::gpu, cuda::Precision::floating, 32, 32);
+    cfg.runs = 1;
+    const auto fl = cuda::run_cuda(frames[k], cfg);
+    EXPECT_EQ(fl.float_anomalies, 0u);
+    EXPECT_EQ(fl.float_negative_areas, 0u);
+    uint64_t negative = 0;
+    for (double a : fl.visible_area) negative += a < 0 ? 1 : 0;
+    EXPECT_EQ(negative, 0u);
+    cfg.precision = cuda::Precision::exact;
+    cfg.hybrid = true;
+    const auto r = cuda::run_cuda(frames[k], cfg);
+    const vis::GoldenResult g = golden[k].get();
+    const auto d = ct::diff(g, r);
+    EXPECT_GT(d.samples_compared, 0u);
+    EXPECT_EQ(d.id_mismatches, 0u);
+    EXPECT_EQ(d.tile_cell_mismatches, 0u) << d.first_tile_mismatch;
+    EXPECT_EQ(d.area_bit_mismatches, 0u);
+    EXPECT_TRUE(d.totals_equal) << d.totals;
+    std::printf("%-18s hybrid: %llu samples, %llu id / %llu tile-cell / %llu area mismatches, totals %s; "
+                "%llu per-pixel tiles; float: %llu exact-region areas, %llu negative, %llu anomalies\n",
+                name.c_str(), (unsigned long long)d.samples_compared, (unsigned long long)d.id_mismatches,
+                (unsigned long long)d.tile_cell_mismatches, (unsigned long long)d.area_bit_mismatches,
+                d.totals_equal ? "equal" : d.totals.c_str(), (unsigned long long)g.fallback_tiles,
+                (unsigned long long)fl.float_exact_areas, (unsigned long long)fl.float_negative_areas,
+                (unsigned long long)fl.float_anomalies);
+  }
+}
+
+// A sequence of frames through one pipeline (run_cuda_frames, the orbit's timing) gives each
+// frame the ids a run of that frame alone gives.
+TEST(Gpu, FrameSequenceGivesEachFramesIds) {
+  REQUIRE_GPU();
+  const std::vector<std::string> names = {"cubes", "mixed", "cubes"};
+  std::vector<trace::Frame> frames;
+  for (const auto& n : names) frames.push_back(ct::scene(n));
+  for (auto prec : {cuda::Precision::exact, cuda::Precision::floating}) {
+    auto cfg = ct::config(cuda::Device::gpu, prec, 32, 32);
+    cfg.runs = 2;
+    const auto seq = cuda::run_cuda_frames(frames, cfg, 2);
+    ASSERT_EQ(seq.size(), frames.size());
+    for (size_t k = 0; k < frames.size(); ++k) {
+      EXPECT_EQ(seq[k].ids_hash, cuda::ids_hash(cuda::run_cuda(frames[k], cfg).ids)) << names[k];
+      EXPECT_GT(seq[k].new_frame_ms, 0.0);
+      EXPECT_GT(seq[k].graph_ms, 0.0);
+      EXPECT_GT(seq[k].first_ms, 0.0);
+    }
+  }
+}
 
 }  // namespace
