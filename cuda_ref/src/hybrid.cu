@@ -48,6 +48,7 @@ struct HybArgs {
   uint32_t n_samples, width, height;
   int32_t* ids;
   uint32_t* owned;  // per item: samples it owns in a per-pixel tile
+  uint64_t* shaded;  // per per-pixel tile at 1 sample: pixels shaded (owners, and non-opaque triangles in front)
 };
 
 template <class P>
@@ -332,7 +333,7 @@ TV_HD void per_pixel_tile(const HybArgs<P>& a, uint64_t tile) {
   if (a.cause[tile] == 0) return;
   int64_t* row = a.rows + tile * kTileColumns;
   const uint32_t begin = a.item_begin[tile], n = uint32_t(row[kColTriangles]);
-  uint64_t covered = 0, generated = 0;
+  uint64_t covered = 0, generated = 0, shaded = 0;
   int64_t px, py;
   uint32_t k;
   for (uint32_t u = 0; tile_sample(a, uint32_t(tile), u, px, py, k); ++u) {
@@ -352,11 +353,18 @@ TV_HD void per_pixel_tile(const HybArgs<P>& a, uint64_t tile) {
     }
     generated += g;
     covered += o.item >= 0 ? 1 : 0;
+    // Non-opaque triangles are shaded where they cover the sample in front of its owner
+    // (per_pixel_resolver.cpp; at 1 sample a pixel is a sample).
+    for (uint32_t i = 0; i < n && a.cause[tile] == 2; ++i) {
+      const PTri t = ptri_of(a, begin + i);
+      if (!t.opaque && covers(t, s) && (o.item < 0 || sample_depth_order(t.plane, *o.plane, s) < 0)) ++shaded;
+    }
     finish_sample(a, px, py, k, o);
   }
   for (int c : {kColPairTests, kColCandidates, kColClips, kColPieces, kColVisiblePieces, kColOcclusionTests}) row[c] = 0;
   row[kColSamplesCovered] = int64_t(covered);
   row[kColFragments] = int64_t(generated);
+  a.shaded[tile] = covered + shaded;
 }
 
 constexpr uint32_t kPixBlock = 256, kPixChunk = 32;
@@ -364,13 +372,13 @@ constexpr uint32_t kPixBlock = 256, kPixChunk = 32;
 template <class P>
 __global__ void __launch_bounds__(kPixBlock) k_per_pixel(HybArgs<P> a, uint64_t n_tiles) {
   __shared__ PTri staged[kPixChunk];
-  __shared__ unsigned long long sums[2];
+  __shared__ unsigned long long sums[3];
   for (uint64_t tile = blockIdx.x; tile < n_tiles; tile += gridDim.x) {
     if (a.cause[tile] == 0) continue;  // uniform over the block
     int64_t* row = a.rows + tile * kTileColumns;
     const uint32_t begin = a.item_begin[tile], n = uint32_t(row[kColTriangles]);
-    if (threadIdx.x == 0) sums[0] = sums[1] = 0;
-    uint32_t covered = 0, generated = 0;
+    if (threadIdx.x == 0) sums[0] = sums[1] = sums[2] = 0;
+    uint32_t covered = 0, generated = 0, shaded = 0;
     const uint32_t tw = a.grid.tile_w, th = a.grid.tile_h;
     const uint32_t total = tw * th * a.n_samples;
     for (uint32_t r = 0; r < total; r += kPixBlock) {
@@ -399,6 +407,20 @@ __global__ void __launch_bounds__(kPixBlock) k_per_pixel(HybArgs<P> a, uint64_t 
             }
           }
       }
+      // Non-opaque triangles (cause 2: the tile has some) are shaded where they cover the sample
+      // in front of its owner (per_pixel_resolver.cpp; at 1 sample a pixel is a sample).
+      if (a.cause[tile] == 2)
+        for (uint32_t c = 0; c < n; c += kPixChunk) {
+          const uint32_t m = tmin(kPixChunk, n - c);
+          __syncthreads();
+          if (threadIdx.x < m) staged[threadIdx.x] = ptri_of(a, begin + c + threadIdx.x);
+          __syncthreads();
+          if (mine)
+            for (uint32_t j = 0; j < m; ++j)
+              if (!staged[j].opaque && covers(staged[j], s) &&
+                  (o.item < 0 || sample_depth_order(staged[j].plane, owner_plane, s) < 0))
+                ++shaded;
+        }
       if (mine) {
         covered += o.item >= 0 ? 1 : 0;
         finish_sample(a, px, py, k, o);
@@ -406,8 +428,10 @@ __global__ void __launch_bounds__(kPixBlock) k_per_pixel(HybArgs<P> a, uint64_t 
     }
     atomicAdd(&sums[0], static_cast<unsigned long long>(covered));
     atomicAdd(&sums[1], static_cast<unsigned long long>(generated));
+    atomicAdd(&sums[2], static_cast<unsigned long long>(shaded));
     __syncthreads();
     if (threadIdx.x == 0) {
+      a.shaded[tile] = sums[0] + sums[2];
       for (int c : {kColPairTests, kColCandidates, kColClips, kColPieces, kColVisiblePieces, kColOcclusionTests}) row[c] = 0;
       row[kColSamplesCovered] = int64_t(sums[0]);
       row[kColFragments] = int64_t(sums[1]);
@@ -506,6 +530,7 @@ void stage_hybrid(Pipeline<P>& p) {
   a.height = p.f.height;
   a.ids = p.ids.get();
   a.owned = p.hyb_owned.need(ni + 1);
+  a.shaded = p.hyb_shaded.need(nt + 1);
   ex.zero(a.owned, (ni + 1) * 4);
   if (ex.where == Where::cpu) {
     for (uint64_t t = 0; t < nt; ++t) verdict_host<P>(a, ex.host_index(t, nt));

@@ -583,6 +583,7 @@ CudaResult run(const trace::Frame& frame, const CudaConfig& cfg) {
   ex.download(rows.data(), p.tile_rows.get(), rows.size() * 8);
   uint64_t c[kCounterCount];
   ex.download(c, p.counters.get(), sizeof(c));
+  std::vector<uint64_t> hyb_shaded;
   if (cfg.hybrid) {
     r.per_pixel_cause.resize(p.n_tiles);
     r.crossing_triangles.resize(p.n_tiles);
@@ -592,6 +593,8 @@ CudaResult run(const trace::Frame& frame, const CudaConfig& cfg) {
     ex.download(r.crossing_triangles.data(), p.hyb_crossing.get(), p.n_tiles * 4ull);
     ex.download(r.detection_screens.data(), p.hyb_screens.get(), p.n_tiles * 8ull);
     ex.download(r.detection_tests.data(), p.hyb_tests.get(), p.n_tiles * 8ull);
+    hyb_shaded.resize(p.n_tiles);
+    ex.download(hyb_shaded.data(), p.hyb_shaded.get(), p.n_tiles * 8ull);
   }
   r.download_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 
@@ -607,6 +610,9 @@ CudaResult run(const trace::Frame& frame, const CudaConfig& cfg) {
     r.max_tile_triangles = std::max<uint64_t>(r.max_tile_triangles, uint64_t(c.triangles));
     r.max_tile_edges = std::max<uint64_t>(r.max_tile_edges, uint64_t(c.edges));
     sum += c;
+    // At 1 sample: an analytic tile shades its visible pieces' samples; a per-pixel tile its
+    // owners' pixels and the non-opaque triangles in front of them (k_per_pixel).
+    r.fragments_shaded += cfg.hybrid && r.per_pixel_cause[t] != 0 ? hyb_shaded[t] : uint64_t(c.samples_covered);
   }
   r.pair_tests = uint64_t(sum.pair_tests);
   r.candidate_pairs = uint64_t(sum.candidate_pairs);

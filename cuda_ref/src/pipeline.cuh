@@ -190,7 +190,7 @@ struct Pipeline {
   // Hybrid (hybrid.cu): per tile its verdict and detection work; per occluder position the
   // detector's scratch; per item its owned samples in a per-pixel tile.
   Buf<uint32_t> hyb_cause, hyb_crossing, hyb_range, hyb_owned, hyb_zmax, hyb_id;
-  Buf<uint64_t> hyb_screens, hyb_tests;
+  Buf<uint64_t> hyb_screens, hyb_tests, hyb_shaded;
   Buf<uint8_t> hyb_flag;
 
   // Outputs.
@@ -228,6 +228,7 @@ struct Pipeline {
     for (auto* b : {&hyb_cause, &hyb_crossing, &hyb_range, &hyb_owned, &hyb_zmax, &hyb_id}) b->bind(&e);
     hyb_screens.bind(&e);
     hyb_tests.bind(&e);
+    hyb_shaded.bind(&e);
     hyb_flag.bind(&e);
   }
 };

@@ -202,7 +202,7 @@ int run(const CudaArgs& a, const trace::Frame& frame, uint32_t tw, uint32_t th) 
                            {"float_exact_areas", r.float_exact_areas}};
   // Shader invocations (once per pixel and triangle) are the covered samples at 1 sample per
   // pixel; with more samples the CUDA reference does not count them (golden does).
-  if (r.samples == 1) totals["fragments_shaded"] = r.samples_covered;
+  if (r.samples == 1) totals["fragments_shaded"] = r.fragments_shaded;
   if (cfg.hybrid) totals["per_pixel_fallback"] = fallback;
   auto stage_json = [](const std::vector<tilevis::cuda::StageTime>& v) {
     nlohmann::json j = nlohmann::json::object();

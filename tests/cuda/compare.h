@@ -83,6 +83,7 @@ inline Diff diff(const vis::GoldenResult& g, const cuda::CudaResult& c) {
   both("occlusion_tests", g.occlusion_tests, c.occlusion_tests);
   both("samples_covered", g.samples_covered, c.samples_covered);
   both("fragments_generated", g.fragments_generated, c.fragments_generated);
+  if (c.samples == 1) both("fragments_shaded", g.shader_invocations, c.fragments_shaded);
   both("max_tile_triangles", g.max_tile_triangles, c.max_tile_triangles);
   both("max_tile_edges", g.max_tile_edges, c.max_tile_edges);
   both("max_tile_pieces", g.max_tile_pieces, c.max_tile_pieces);

@@ -68,6 +68,8 @@ struct CudaResult {
   uint64_t pair_tests = 0, candidate_pairs = 0, clip_polygons = 0, pieces = 0, visible_pieces = 0,
            visible_triangles = 0, occlusion_tests = 0, samples_covered = 0, fragments_generated = 0;
   uint64_t max_tile_triangles = 0, max_tile_edges = 0, max_tile_pieces = 0;
+  uint64_t fragments_shaded = 0;  // at 1 sample: shader invocations (golden's fragments_shaded); hybrid's
+                                  // per-pixel tiles shade their owners and the non-opaque triangles in front
   uint64_t deep_pairs = 0;       // pairs past the cheap tests (test 6, bounding boxes, test 4)
   uint64_t float_anomalies = 0;  // float only: polygons that outgrew their bound (non-convex results)
   uint64_t float_regularized = 0;     // float only: splits whose vertex sides were made convex first
