@@ -25,6 +25,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.colors import LogNorm, TwoSlopeNorm  # noqa: E402
 
+import captured_section  # noqa: E402  (the workloads given as traces: their own section)
+
 TOTALS = ["triangles_in", "triangles_front", "silhouette_edges", "pair_tests", "candidate_pairs", "clip_polygons",
           "pieces", "visible_pieces", "occlusion_tests", "samples_covered", "fragments_generated",
           "fragments_shaded", "cycles", "param_buffer_bytes", "param_buffer_peak_bytes", "dram_bytes",
@@ -1034,6 +1036,7 @@ def main():
                     '<a href="#heatmaps">heatmaps</a><a href="#crosscheck">cross-check</a>'
                     '<a href="#speed">speed vs accuracy</a><a href="#configs">configurations</a>'
                     '<a href="#crossover">crossover</a></nav>')
+    captured, rows, scenes = captured_section.split(manifest, rows, scenes)
     section_savings(rep, rows, scenes, out)
     best = section_tiles(rep, rows, scenes)
     section_configs(rep, rows)
@@ -1042,6 +1045,7 @@ def main():
     section_crosscheck(rep, rows, manifest)
     section_stability(rep, out, rows, scenes)
     section_speed_accuracy(rep, rows)
+    captured_section.section(rep, out, captured, manifest, provenance)
     rep.heading("Producers", 2, "producers")
     rep.table(["producer", "kind", "available", "command"],
               [[n, p.get("kind", ""), "yes" if p.get("available", True) else f"no: {p.get('why', '')}",

@@ -457,8 +457,8 @@ class Loader {
         for (const std::string& p : g.producers)
           if (!m_sw.producer(p).uses_frame())
             m_root.at("grids").at(i).at("producers").fail(
-                fmt::format("producer {} has no {{frame}}, so it cannot run frames 1 to {} of trace {}", p,
-                            w.frames.size() - 1, w.file.string()));
+                fmt::format("producer {} has no {{frame}}, so it cannot run frames other than 0 of trace {} "
+                            "({} frames)", p, w.file.string(), w.frames.size()));
       }
     }
   }

@@ -3,7 +3,9 @@
 again runs nothing and that an interrupted sweep finishes only the rest, then opens
 index.html in headless Chromium (Selenium and chromedriver: Debian python3-selenium,
 chromium-driver) and checks that the page loads with no console errors, no network requests
-and every chart image decoded; saves a screenshot (OUT/screenshot.png).
+and every chart image decoded; saves a screenshot (OUT/screenshot.png). The sweep includes a
+workload given as a trace of two passes (made here from two built-in scenes), and the report's
+captured-workloads section is recounted from the points' stats.json and compare.json.
 
   check_report.py --tilevis BIN --sweep tiny.json --out DIR [--chromium C] [--chromedriver D]
 """
@@ -17,6 +19,9 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from trace_concat import concat  # noqa: E402
 
 
 def fail(msg):
@@ -78,9 +83,11 @@ def open_in_chromium(a, page, screenshot):
 
 
 def check_crossover(out):
-    """The crossover line counts what the points say: recount from their stats.json."""
+    """The crossover line counts what the points say: recount from their stats.json (the
+    scenes' points: a trace frame's folder, fK-WxH-sS, belongs to the captured section)."""
+    scene_point = lambda p: not re.match(r"f\d+-", p.parts[-4])  # noqa: E731
     wins = total = 0
-    for evu in out.glob("points/*/*/sim_tile-analytic/*/stats.json"):
+    for evu in filter(scene_point, out.glob("points/*/*/sim_tile-analytic/*/stats.json")):
         hsr = evu.parents[2] / "sim_tile-hsr" / evu.parent.name / "stats.json"
         if hsr.exists():
             total += 1
@@ -91,9 +98,63 @@ def check_crossover(out):
     if total == 0 or want not in line:
         fail(f"crossover.txt should say the EVU wins {want} (from the points' stats.json): {line!r}")
     best = json.loads((out / "best_configs.json").read_text())
-    if sorted(best) != sorted({p.parts[-5] for p in out.glob("points/*/*/sim_tile-hsr/*/stats.json")}):
+    if sorted(best) != sorted({p.parts[-5] for p in filter(scene_point, out.glob("points/*/*/sim_tile-hsr/*/stats.json"))}):
         fail(f"best_configs.json should hold every scene the model ran in both modes: {sorted(best)}")
     print(f"check_report: crossover {want}")
+
+
+def make_captured(a, out):
+    """OUT/captured/two_pass.tvt: dragon at 160x90, then glass at 128x96, as a two-pass capture."""
+    scenes = Path(a.sweep).resolve().parents[2] / "traces" / "scenes"
+    parts = []
+    for name, vp in (("dragon", "160x90"), ("glass", "128x96")):
+        t = out / f"{name}-part.tvt"
+        p = subprocess.run([a.tilevis, "trace", str(scenes / f"{name}.json"), "--viewport", vp, "-q", "-o", str(t)],
+                           capture_output=True, text=True, timeout=120)
+        if p.returncode:
+            fail(f"tilevis trace {name}: {p.stderr[-500:]}")
+        parts.append(t)
+    (out / "captured").mkdir(parents=True)
+    concat(out / "captured" / "two_pass.tvt", parts)
+
+
+def check_captured(out):
+    """The captured section's numbers (captured.json, report.md) recounted from the points."""
+    got = json.loads((out / "captured.json").read_text())["workloads"] if (out / "captured.json").exists() else []
+    if [w["workload"] for w in got] != ["two_pass"]:
+        fail(f"captured.json should hold the workload two_pass: {[w['workload'] for w in got]}")
+    w = got[0]
+    frames = sorted(out.glob("points/two_pass/f*"), key=lambda d: int(d.name[1:].split("-")[0]))
+    if [d.name for d in frames] != ["f0-160x90-s1", "f1-128x96-s1"]:
+        fail(f"the two passes should be points at their own viewports: {[d.name for d in frames]}")
+    load = lambda p: json.loads(p.read_text())  # noqa: E731
+    modes = {m: sum(load(d / "truth/t32x32/stats.json")["modes"][m] for d in frames) for m in ("none", "early_z", "hsr")}
+    hybrid = sum(load(d / "sim_tile-hybrid/t32x32/stats.json")["totals"]["fragments_shaded"] for d in frames)
+    cycles = {t: sum(load(d / f"sim_tile-hybrid/t{t}/stats.json")["totals"]["cycles"] for d in frames)
+              for t in ("16x16", "32x32")}
+    best = min(cycles, key=lambda t: (cycles[t], t != "16x16"))
+    mism = sum(load(d / "sim_tile-hybrid/t32x32/vs-truth/compare.json")["mismatched_samples"] for d in frames)
+    pixels = 160 * 90 + 128 * 96
+    want = {"fragments none": (w["fragments"]["none"], modes["none"]),
+            "fragments early_z": (w["fragments"]["early_z"], modes["early_z"]),
+            "fragments hsr": (w["fragments"]["hsr"], modes["hsr"]),
+            "fragments hybrid": (w["fragments"]["hybrid"], hybrid),
+            "overdraw": (round(w["overdraw"], 9), round(modes["none"] / pixels, 9)),
+            "hybrid saving vs none": (round(w["savings"]["hybrid_vs_none"], 9), round(1 - hybrid / modes["none"], 9)),
+            "best tile": (w["best_tile"]["hybrid"]["tile"], best),
+            "hybrid cycles by tile": (w["best_tile"]["hybrid"]["cycles_by_tile"], cycles),
+            "hybrid = truth": (w["equals_truth"]["hybrid"]["equal"], mism == 0),
+            "non-occluding triangles": (w["non_occluding_triangles"], 12)}
+    wrong = {k: v for k, v in want.items() if v[0] != v[1]}
+    if wrong:
+        fail(f"captured.json disagrees with the points (reported, recounted): {wrong}")
+    md = (out / "report.md").read_text()
+    row = next((l for l in md.splitlines() if l.startswith("| two_pass |")), "")
+    expect = [f"{modes['none']:,}", f"{hybrid:,}", best, "yes (2 passes)" if mism == 0 else "no:"]
+    if not all(f" {e}" in row for e in expect):
+        fail(f"report.md's captured row should show {expect}: {row!r}")
+    print(f"check_report: captured section: two_pass hybrid {hybrid:,} of {modes['none']:,} fragments, best tile "
+          f"{best}, hybrid = truth: {mism == 0}")
 
 
 def main():
@@ -106,6 +167,8 @@ def main():
     a = ap.parse_args()
     out = Path(a.out)
     shutil.rmtree(out, ignore_errors=True)
+    out.mkdir(parents=True)
+    make_captured(a, out)
     t0 = time.time()
 
     # Interrupt a first run part-way, then finish it: only the remaining jobs run.
@@ -135,11 +198,12 @@ def main():
     if external or "<script" in text:
         fail(f"the report must be self-contained: external references {external}, scripts: {'<script' in text}")
     figures = sorted(p.name for p in (out / "figures").glob("*.png"))
-    for kind in ("savings", "tiles_", "heatmap_", "speed_accuracy", "crossover", "crossover_params"):
+    for kind in ("savings", "tiles_", "heatmap_", "speed_accuracy", "crossover", "crossover_params", "captured"):
         if not any(f.startswith(kind) for f in figures):
             fail(f"no {kind} chart in {out / 'figures'}: {figures}")
 
     check_crossover(out)
+    check_captured(out)
 
     title, images, errors, requests = open_in_chromium(a, index, out / "screenshot.png")
     if errors:
