@@ -8,13 +8,19 @@
 #                                                  fills .gpusweep/ (git-ignored): bin/tilevis, lib/, the
 #                                                  meshes the built-in scenes name (meshes/{glmark2,cgal}/,
 #                                                  meshes/root/ for absolute paths), commit.txt; --tests adds
-#                                                  cuda_gpu_tests (for bench; 11 MB of the 64 MiB a call carries)
+#                                                  cuda_gpu_tests (for bench; 11 MB of the 64 MiB a call carries);
+#                                                  captured.tar.xz: the captured OpenGL workloads (the .tvt files of
+#                                                  $TILEVIS_CAPTURED, default reports/demo/captured, captured there
+#                                                  first when it holds none and xvfb-run and glmark2 are present;
+#                                                  19 MB of traces, 3 MB compressed)
 #   bash cuda_ref/sweep_on_gpu.sh run SWEEP NAME   THERE, from the repository root with .gpusweep
 #                                                  carried: tilevis sweep SWEEP -o reports/NAME -j nproc,
 #                                                  stopped cleanly (SIGINT) after TILEVIS_SWEEP_SECONDS
 #                                                  (default 500) so that the machine's command limit
 #                                                  never cuts a point in half; run it again to go on
-#                                                  (finished points are kept while the machine is warm)
+#                                                  (finished points are kept while the machine is warm);
+#                                                  the carried captured traces go to reports/NAME/captured, the
+#                                                  folder reference.json's and demo.json's "captured" set names
 #
 #   bash cuda_ref/sweep_on_gpu.sh bench SCENE...   THERE, likewise: cuda_ref's GPU tests (the carried
 #                                                  cuda_gpu_tests), then `tilevis cuda` exact and float
@@ -26,7 +32,8 @@
 #
 # `run` leaves in $OUT: NAME-report.tar.xz (index.html, report.md, points.csv, figures/, sweep.json,
 # best_tiles.*: what reports/NAME/ commits) and NAME-points.tar.xz.partNN (every point's JSON, CSV
-# and logs, no EXR or traces: enough for `tilevis sweep SWEEP -o reports/NAME --report-only` here).
+# and logs, no EXR or traces, plus the captured .tvt files in NAME/captured, which the sweep reads
+# to plan their points: enough for `tilevis sweep SWEEP -o reports/NAME --report-only` here).
 # CUDA points hold the producer-level resource "gpu", so one runs at a time and its timings are
 # its own; the CPU producers fill the other cores meanwhile.
 set -euo pipefail
@@ -65,11 +72,44 @@ prepare() {
       *) ;;  # beside the scene file: travels with the working tree
     esac || die "mesh $mesh missing: build first (./tilevis demo)"
   done
+  carry_captured
   git rev-parse --short HEAD >"$CARRY/commit.txt"
   [ -z "$(git status --porcelain --untracked-files=no)" ] || sed -i 's/$/-dirty/' "$CARRY/commit.txt"
   grep -qx "/$CARRY/" .git/info/exclude 2>/dev/null || grep -qx "/$CARRY/" .gitignore ||
     echo "/$CARRY/" >>.git/info/exclude
   say "$(du -sh "$CARRY" | cut -f1) in $CARRY/ (commit $(cat "$CARRY/commit.txt")): carry [\"$CARRY\"]"
+}
+
+# The captured OpenGL workloads (traces/capture) for the sweeps' "captured" trace sets: the GPU
+# machine has no Xvfb or glmark2, so they are captured here and carried, compressed.
+carry_captured() {
+  local dir="${TILEVIS_CAPTURED:-reports/demo/captured}"
+  if ! ls "$dir"/*.tvt >/dev/null 2>&1; then
+    if command -v xvfb-run >/dev/null && command -v glmark2 >/dev/null; then
+      say "no captured traces in $dir: capturing glmark2 and neverball there (about a minute)"
+      SIMULATE=0 traces/capture/capture_workloads.sh "$dir" build/model/app/tilevis >"$dir.log" 2>&1 ||
+        say "capture_workloads.sh failed: see $dir.log"
+    fi
+  fi
+  if ls "$dir"/*.tvt >/dev/null 2>&1; then
+    (cd "$dir" && ls ./*.tvt | tar -cf - -T - | xz -6 -T0) >"$CARRY/captured.tar.xz"
+    say "captured workloads: $(ls "$dir"/*.tvt | wc -l) traces from $dir ($(du -ch "$dir"/*.tvt | tail -n 1 | cut -f1)," \
+        "$(du -h "$CARRY/captured.tar.xz" | cut -f1) compressed)"
+  else
+    say "WARNING: no captured traces in $dir and no xvfb-run/glmark2 here to make them: a sweep there will list" \
+        "its captured workloads as missing (make them with traces/capture/capture_workloads.sh $dir)"
+  fi
+}
+
+# The carried captured traces into reports/NAME/captured (kept if that folder already holds traces).
+unpack_captured() {
+  local dir="reports/$1/captured"
+  if [ -f "$CARRY/captured.tar.xz" ]; then
+    ls "$dir"/*.tvt >/dev/null 2>&1 || { mkdir -p "$dir" && xz -dc "$CARRY/captured.tar.xz" | tar -C "$dir" -xf -; }
+    say "captured workloads: $(ls "$dir"/*.tvt | wc -l) traces in $dir"
+  else
+    say "WARNING: no captured traces carried ($CARRY/captured.tar.xz): the sweep lists its captured workloads as missing"
+  fi
 }
 
 # Meshes the scenes name by absolute path (Debian's assimp-testmodels), linked into place where missing.
@@ -90,6 +130,7 @@ run() {
   export TILEVIS_SOURCE_DIR="$ROOT" TILEVIS_COMMIT="$(cat "$CARRY/commit.txt")"
   export TILEVIS_GLMARK2_MODELS="$ROOT/$CARRY/meshes/glmark2" TILEVIS_CGAL_MESHES="$ROOT/$CARRY/meshes/cgal"
   link_absolute_meshes
+  unpack_captured "$name"
   export TILEVIS_PYTHON="${TILEVIS_PYTHON:-$(command -v python3)}"
   "$TILEVIS_PYTHON" -c "import matplotlib, numpy" || die "$TILEVIS_PYTHON lacks matplotlib or numpy"
   nvidia-smi -L || say "no nvidia-smi: the CUDA points will be reported unavailable"
@@ -100,8 +141,10 @@ run() {
     "$CARRY/bin/tilevis" sweep "$sweep" -o "$dir" --report-only || true
   fi
   tar -C reports -cJf "$out/$name-report.tar.xz" \
-    --exclude="$name/points" --exclude="$name/traces" "$name"
-  tar -C reports -cf - --exclude='*.exr' --exclude='*.bin' --exclude="$name/traces" "$name/points" |
+    --exclude="$name/points" --exclude="$name/traces" --exclude="$name/captured" "$name"
+  local captured=()
+  [ -d "reports/$name/captured" ] && captured=("$name/captured")
+  tar -C reports -cf - --exclude='*.exr' --exclude='*.bin' --exclude="$name/traces" "$name/points" "${captured[@]}" |
     xz -6 -T0 | split -b 15M -d - "$out/$name-points.tar.xz.part"
   ls -la "$out"
   return "$rc"

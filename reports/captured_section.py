@@ -222,7 +222,8 @@ def section(rep, out, rows, manifest, provenance):
             if not e:
                 return "–"
             if e["equal"]:
-                return f"yes ({e['passes_compared']} passes)"
+                n = e["passes_compared"]
+                return f"yes ({n} pass{'es' if n != 1 else ''})"
             return (f"no: {e['passes_compared'] - e['passes_equal']} of {e['passes_compared']} passes, "
                     f"{e['mismatched_samples']:,} samples")
 
@@ -242,8 +243,9 @@ def section(rep, out, rows, manifest, provenance):
                   f"; not on {', '.join(s['workload'] for s in n_h if s not in n_eq)}."))
     n_a = [s for s in summaries if "analytic" in s["equals_truth"]]
     a_ne = [s["workload"] for s in n_a if not s["equals_truth"]["analytic"]["equal"]]
-    verdict += (f" Analytic alone equals it on {len(n_a) - len(a_ne)} of {len(n_a)}"
-                + (f" (not on {', '.join(a_ne)})." if a_ne else "."))
+    if n_a:
+        verdict += (f" Analytic alone equals it on {len(n_a) - len(a_ne)} of {len(n_a)}"
+                    + (f" (not on {', '.join(a_ne)})." if a_ne else "."))
     rep.para(verdict, "**" + verdict + "**")
     tiles_text = []
     for s in summaries:

@@ -6,6 +6,9 @@
 # programs Debian ships (packages glmark2-x11, glmark2-data, neverball, xvfb).
 # Usage: traces/capture/capture_workloads.sh OUT [TILEVIS]   (default TILEVIS: build/model/app/tilevis)
 # FRAMES (default 1) and SKIP (default 5) choose the frames; SCENES overrides the scene list.
+# A workload already captured (its trace and depth check in OUT) is kept: RECAPTURE=1 captures
+# it again. SIMULATE=0 leaves out the runs through truth, golden and the model below: a sweep
+# that names OUT as a trace set runs them (./tilevis demo: reports/sweeps/demo.json).
 # glmark2 is captured with --offscreen (every render pass a trace frame: shadow maps, terrain's
 # and desktop's render-to-texture passes); OFFSCREEN=0 keeps only what reaches the window.
 set -u
@@ -17,8 +20,11 @@ scenes=${SCENES:-"build texture shading bump effect2d pulsar desktop buffer idea
 mkdir -p "$out"
 unset DISPLAY
 failed=""
+# Kept when already captured and checked (the sweep's points of it stay valid).
+captured() { [ "${RECAPTURE:-0}" != 1 ] && [ -s "$out/$1.tvt" ] && [ -s "$out/$1.depth.json" ]; }
 for s in $scenes; do
   echo "== glmark2 $s"
+  if captured "glmark2_$s"; then echo "   already captured (RECAPTURE=1 captures it again)"; continue; fi
   offscreen=--offscreen
   [ "${OFFSCREEN:-1}" = 0 ] && offscreen=
   if "$tilevis" capture $offscreen --frames "$frames" --skip "$skip" --timeout 300 -o "$out/glmark2_$s.tvt" -- \
@@ -31,6 +37,7 @@ for s in $scenes; do
 done
 if [ -x /usr/games/neverball ]; then
   echo "== neverball (title screen)"
+  if captured neverball_title; then echo "   already captured (RECAPTURE=1 captures it again)"; else
   # Frame 200: the title screen's level replay is running; no sound device under Xvfb.
   if SDL_AUDIODRIVER=dummy "$tilevis" capture --frames "$frames" --skip "${NEVERBALL_SKIP:-200}" --timeout 300 \
        -o "$out/neverball_title.tvt" -- /usr/games/neverball > "$out/neverball_title.log" 2>&1; then
@@ -39,10 +46,12 @@ if [ -x /usr/games/neverball ]; then
   else
     echo "   not captured (see $out/neverball_title.log)"; failed="$failed neverball_title"
   fi
+  fi
 fi
 # Every trace frame through the producers: the exact truth, golden analytic and hybrid (and
 # their agreement with the truth), the SystemC model at tiles 16, 32 and 64.
 for t in "$out"/*.tvt; do
+  [ "${SIMULATE:-1}" = 0 ] && break
   w=${t%.tvt}
   n=$("$tilevis" info "$t" --summary | sed -n 's/.* \([0-9][0-9]*\) frame(s).*/\1/p')
   k=0
@@ -85,7 +94,7 @@ for cap in sorted(glob.glob(os.path.join(out, "*.tvt.capture.json"))):
     load = lambda v, p: json.load(open(os.path.join(v, p))) if os.path.exists(os.path.join(v, p)) else None
     ok_frames = [v for v in fr if all(load(v, p) for p in ("truth/stats.json", "analytic/stats.json", "hybrid/stats.json",
                  "analytic_vs_truth/compare.json", "hybrid_vs_truth/compare.json", "sim_16/stats.json", "sim_32/stats.json", "sim_64/stats.json"))]
-    if fr and len(ok_frames) == len(fr):
+    if fr and len(ok_frames) == len(fr) and os.environ.get("SIMULATE", "1") != "0":  # else the sweep runs them
         f = {"none": 0, "early_z": 0, "hsr": 0, "analytic": 0, "hybrid": 0}
         cycles = {16: 0, 32: 0, 64: 0}
         compared = {"analytic": 0, "hybrid": 0}; mismatched = {"analytic": 0, "hybrid": 0}
@@ -117,7 +126,7 @@ for r in rows:
     diff = ", ".join(f"{k} {v}" for k, v in sorted(r["differences"].items())) or "none"
     lines.append(f"| {r['workload']} | {r['frames']} | {r['draws']} | {r['triangles']:,} | {r['non_occluding_draws']} | "
                  f"{r['skipped_draws']} | {r['covered_pixels']:,} | {pct(r['agreement'])} | {pct(r['agreement_gl_rule'])} | {diff} |")
-lines += ["", "| workload | trace frames (passes) | non-occluding triangles | fragments per pixel | fragments none | early-Z | HSR | analytic | hybrid | analytic = truth | hybrid = truth | model cycles 16 / 32 / 64 | best tile |",
+if any("fragments" in r for r in rows): lines += ["", "| workload | trace frames (passes) | non-occluding triangles | fragments per pixel | fragments none | early-Z | HSR | analytic | hybrid | analytic = truth | hybrid = truth | model cycles 16 / 32 / 64 | best tile |",
           "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|"]
 for r in rows:
     if "fragments" not in r: continue
