@@ -107,22 +107,19 @@ template <class P>
 TV_HD void occ_finish(const OccArgs<P>& a, uint64_t p, const PieceView<P>& v, bool hidden, uint32_t tests) {
   int64_t* row = a.rows + uint64_t(v.tile) * kTileColumns;
   count_add(&row[kColOcclusionTests], tests);
-  a.visible[p] = hidden ? 0 : 1;
+  // Float: the vertices' area where its sign is proven (poly.cuh certified_convex); else the
+  // piece is marked 2 and exact_areas (raster.cu, before the fold) gives it the exact area of
+  // the region its lines bound.
+  bool unproven = false;
+  if constexpr (!P::kExact) unproven = !hidden && !certified_convex(v.e, v.n);
+  a.visible[p] = hidden ? 0 : unproven ? 2 : 1;
   count_add(&row[kColVisiblePieces], hidden ? 0 : 1);
   count_add(&a.counters[kVisibleTriangles], hidden ? 0 : v.n - 2);
   if (!hidden) {
-    double area = ddiv(doubled_area<P>(v.e, v.n), a.area_scale);
+    const double area = ddiv(doubled_area<P>(v.e, v.n), a.area_scale);
     if constexpr (!P::kExact) {
-      // Float: the vertices' area where its sign is proven, else the exact area of the region
-      // the piece's lines bound (poly.cuh); a negative area is counted (it cannot occur).
-      if (!certified_convex(v.e, v.n)) {
-        bool overflow = false;
-        const double x = exact_region_doubled_area<P>(v.e, v.n, a.src.tris[v.tri], a.src.grid.rect(v.tile), overflow);
-        if (!overflow) area = ddiv(x, a.area_scale);
-        count_add(&a.counters[kFloatAnomalies], overflow ? 1u : 0u);
-        count_add(&a.counters[kFloatExactAreas], 1u);
-      }
-      count_add(&a.counters[kFloatNegativeAreas], area < 0 ? 1u : 0u);
+      count_add(&a.counters[kFloatExactAreas], unproven ? 1u : 0u);
+      count_add(&a.counters[kFloatNegativeAreas], !unproven && area < 0 ? 1u : 0u);  // cannot occur
     }
     a.area[p] = area;
   }

@@ -466,26 +466,33 @@ TV_HD inline bool orient_positive(double ax, double ay, double bx, double by, do
 
 // Whether the float vertices are proven to form a convex polygon in positive order (repeated
 // vertices, whose area terms are exactly 0, are passed over). Then every fan term of
-// doubled_area is positive, and so is the float area.
+// doubled_area is positive, and so is the float area. No local arrays: it runs in the occlusion
+// kernels, for every visible float piece.
 TV_HD inline bool certified_convex(const PEdge<FloatP>* poly, uint32_t n) {
   if (n < 3 || n > kSideCap) return false;
-  double x[kSideCap], y[kSideCap];
-  uint32_t m = 0;
+  auto same = [&](uint32_t i, uint32_t j) {
+    return poly[i].start.x == poly[j].start.x && poly[i].start.y == poly[j].start.y;
+  };
+  uint32_t distinct = 0;
   for (uint32_t i = 0; i < n; ++i) {
-    const double vx = poly[i].start.x, vy = poly[i].start.y;
-    if (m > 0 && vx == x[m - 1] && vy == y[m - 1]) continue;
-    x[m] = vx;
-    y[m] = vy;
-    ++m;
+    const uint32_t h0 = i == 0 ? n - 1 : i - 1;
+    if (same(i, h0)) continue;  // a repeat of the vertex before it
+    ++distinct;
+    uint32_t j = i + 1 == n ? 0 : i + 1, steps = 0;
+    while (same(j, i) && ++steps < n) j = j + 1 == n ? 0 : j + 1;
+    const auto& A = poly[h0].start;
+    const auto& B = poly[i].start;
+    const auto& C = poly[j].start;
+    if (same(j, h0) || same(j, i)) return false;  // fewer than 3 distinct vertices
+    if (!orient_positive(A.x, A.y, B.x, B.y, C.x, C.y)) return false;
   }
-  while (m > 1 && x[m - 1] == x[0] && y[m - 1] == y[0]) --m;
-  if (m < 3) return false;
-  for (uint32_t i = 0; i < m; ++i) {
-    const uint32_t h = i == 0 ? m - 1 : i - 1, j = i + 1 == m ? 0 : i + 1;
-    if (!orient_positive(x[h], y[h], x[i], y[i], x[j], y[j])) return false;
+  if (distinct < 3) return false;
+  const auto& O = poly[0].start;
+  for (uint32_t i = 1; i + 1 < n; ++i) {
+    if (same(i, i + 1) || same(i, 0) || same(i + 1, 0)) continue;  // an area term of exactly 0
+    if (!orient_positive(O.x, O.y, poly[i].start.x, poly[i].start.y, poly[i + 1].start.x, poly[i + 1].start.y))
+      return false;
   }
-  for (uint32_t i = 1; i + 1 < m; ++i)
-    if (!orient_positive(x[0], y[0], x[i], y[i], x[i + 1], y[i + 1])) return false;
   return true;
 }
 

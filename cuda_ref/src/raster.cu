@@ -287,8 +287,50 @@ OutArgs<P> out_args(Pipeline<P>& p) {
   return o;
 }
 
+// Float: the visible pieces whose float area's sign was not proven (marked 2 by occlusion) get
+// the exact area of the region their lines bound (poly.cuh), in a kernel of their own so that the
+// exact code stays out of the occlusion kernels.
+template <class P>
+struct ExactAreaArgs {
+  PieceSource<P> src;
+  const uint8_t* visible;
+  double* piece_area;
+  uint64_t* counters;
+  double area_scale;
+};
+
+template <class P>
+TV_HD void exact_area(const ExactAreaArgs<P>& a, uint64_t p) {
+  if constexpr (!P::kExact) {
+    // Slots past those this run used keep an earlier run's flags.
+    if (p >= a.src.n_items && p - a.src.n_items >= a.counters[kSlotsUsed]) return;
+    if (a.visible[p] != 2) return;
+    PEdge<P> local[kTileCap];
+    const PieceView<P> v = piece_at<P>(a.src, p, local);
+    bool overflow = false;
+    const double x = exact_region_doubled_area<P>(v.e, v.n, a.src.tris[v.tri], a.src.grid.rect(v.tile), overflow);
+    if (!overflow) a.piece_area[p] = ddiv(x, a.area_scale);
+    count_add(&a.counters[kFloatAnomalies], overflow ? 1u : 0u);
+    count_add(&a.counters[kFloatNegativeAreas], a.piece_area[p] < 0 ? 1u : 0u);
+  }
+}
+
+template <class P>
+__global__ void k_exact_area(ExactAreaArgs<P> a, uint64_t n) {
+  TV_GRID_LOOP(i, n) exact_area<P>(a, i);
+}
+
 template <class P>
 void stage_fold(Pipeline<P>& p) {
+  if constexpr (!P::kExact) {
+    ExactAreaArgs<P> e{};
+    e.src = piece_source(p);
+    e.visible = p.piece_visible.get();
+    e.piece_area = p.piece_area.get();
+    e.counters = p.counters.get();
+    e.area_scale = 2.0 * double(1u << p.f.subpixel_bits) * double(1u << p.f.subpixel_bits);
+    p.ex.launch(k_exact_area<P>, exact_area<P>, p.n_items + p.caps.clip_slots, e);
+  }
   p.ex.launch(k_fold_area<P>, fold_area<P>, p.n_items, out_args(p));
 }
 
