@@ -1,5 +1,6 @@
 #include "visibility/evu_jobs.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -17,6 +18,50 @@ void put_vertex(std::ostream& o, const geom::Vertex& v) { o << ' ' << v.x << ' '
 
 }  // namespace
 
+EvuJob make_evu_job(const TileFrame& f, uint32_t tile, const TileCounters* golden) {
+  EvuJob j;
+  j.tile = tile;
+  j.rect = f.grid().rect(tile);
+  const auto& tris = f.tile_triangles(tile);
+  const auto& edges = f.tile_edges(tile);
+  j.triangles.reserve(tris.size());
+  for (uint32_t i : tris) {
+    const FrontTriangle& t = f.triangles()[i];
+    EvuJobTriangle jt;
+    jt.id = t.t->id;
+    for (int k = 0; k < 3; ++k) jt.v[k] = t.tri.v[k];
+    jt.opaque = t.t->opaque;
+    j.triangles.push_back(jt);
+  }
+  j.edges.reserve(2 * edges.size());
+  for (uint32_t i : edges) {
+    const svgpu::Edge& e = f.edges()[i];
+    j.edges.push_back(e.a);
+    j.edges.push_back(e.b);
+  }
+  if (golden) j.golden = *golden;
+  j.golden.triangles = int64_t(tris.size());
+  j.golden.edges = int64_t(edges.size());
+  return j;
+}
+
+EvuJobSource::EvuJobSource(const TileFrame& f) : m_f(f), m_resolver(make_tile_resolver("analytic", {})) {
+  const Setup& s = f.setup();
+  m_out = std::make_unique<FrameOutput>();
+  m_out->ids.assign(size_t(s.width) * s.height * s.samples.size(), -1);
+  uint32_t max_id = 0;
+  for (const auto& t : s.triangles) max_id = std::max(max_id, t.id);
+  m_out->visible_area.assign(size_t(max_id) + 1, 0.0);
+}
+
+EvuJobSource::~EvuJobSource() = default;
+
+EvuJob EvuJobSource::job(uint32_t tile) {
+  TileCounters c;
+  if (!m_f.tile_triangles(tile).empty()) m_resolver->resolve(m_f, tile, *m_out, c, nullptr);
+  return make_evu_job(m_f, tile, &c);
+}
+
 uint64_t write_evu_jobs(const Setup& setup, uint32_t tile_w, uint32_t tile_h, uint32_t frame, const std::string& path) {
   const geom::TileGrid grid = geom::TileGrid::make(setup.width, setup.height, tile_w, tile_h, setup.subpixel_bits);
   TileFrame f(setup, grid);
@@ -26,34 +71,25 @@ uint64_t write_evu_jobs(const Setup& setup, uint32_t tile_w, uint32_t tile_h, ui
   o << kMagic << ' ' << kVersion << '\n';
   o << "frame " << frame << ' ' << setup.width << ' ' << setup.height << ' ' << setup.subpixel_bits << ' ' << tile_w
     << ' ' << tile_h << '\n';
-  auto resolver = make_tile_resolver("analytic", {});
-  FrameOutput out;
-  out.ids.assign(size_t(setup.width) * setup.height * setup.samples.size(), -1);
-  uint32_t max_id = 0;
-  for (const auto& t : setup.triangles) max_id = std::max(max_id, t.id);
-  out.visible_area.assign(size_t(max_id) + 1, 0.0);
+  EvuJobSource source(f);
   uint64_t jobs = 0;
   for (uint32_t tile = 0; tile < grid.tile_count(); ++tile) {
-    const auto& tris = f.tile_triangles(tile);
-    if (tris.empty()) continue;
-    const auto& edges = f.tile_edges(tile);
-    TileCounters c;
-    resolver->resolve(f, tile, out, c, nullptr);
-    const geom::Rect r = grid.rect(tile);
-    o << "tile " << tile << ' ' << r.x0 << ' ' << r.y0 << ' ' << r.x1 << ' ' << r.y1 << ' ' << tris.size() << ' '
-      << edges.size() << ' ' << c.pair_tests << ' ' << c.candidate_pairs << ' ' << c.clip_polygons << ' ' << c.pieces
-      << ' ' << c.visible_pieces << ' ' << c.occlusion_tests << '\n';
-    for (uint32_t i : tris) {
-      const FrontTriangle& t = f.triangles()[i];
-      o << 't' << ' ' << t.t->id;
-      for (const auto& v : t.tri.v) put_vertex(o, v);
-      o << ' ' << (t.t->opaque ? 1 : 0) << '\n';
+    if (f.tile_triangles(tile).empty()) continue;
+    const EvuJob j = source.job(tile);
+    const TileCounters& c = j.golden;
+    const geom::Rect& r = j.rect;
+    o << "tile " << tile << ' ' << r.x0 << ' ' << r.y0 << ' ' << r.x1 << ' ' << r.y1 << ' ' << j.triangles.size() << ' '
+      << j.edges.size() / 2 << ' ' << c.pair_tests << ' ' << c.candidate_pairs << ' ' << c.clip_polygons << ' '
+      << c.pieces << ' ' << c.visible_pieces << ' ' << c.occlusion_tests << '\n';
+    for (const EvuJobTriangle& t : j.triangles) {
+      o << 't' << ' ' << t.id;
+      for (const auto& v : t.v) put_vertex(o, v);
+      o << ' ' << (t.opaque ? 1 : 0) << '\n';
     }
-    for (uint32_t i : edges) {
-      const svgpu::Edge& e = f.edges()[i];
+    for (size_t k = 0; k < j.edges.size(); k += 2) {
       o << 'e';
-      put_vertex(o, e.a);
-      put_vertex(o, e.b);
+      put_vertex(o, j.edges[k]);
+      put_vertex(o, j.edges[k + 1]);
       o << '\n';
     }
     ++jobs;

@@ -2,11 +2,13 @@
 // holds a front-facing triangle, with its rectangle, its triangles and silhouette edges in the
 // binning order the analytic resolver reads them, and the resolver's counters for the tile.
 // `tilevis golden T --dump-evu-jobs DIR` writes DIR/evu_jobs.txt; the format is in
-// rtl_ref/README.md ("Vector format"). Text, one record a line, integers only.
+// rtl_ref/README.md ("Vector format"). Text, one record a line, integers only. make_evu_job
+// builds one tile's job in memory (fidelity rtl runs it through rtl_ref's Verilated units).
 #pragma once
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -28,6 +30,31 @@ struct EvuJob {
   std::vector<EvuJobTriangle> triangles;  // TileFrame::tile_triangles order (ascending setup index)
   std::vector<geom::Vertex> edges;        // pairs a, b in TileFrame::tile_edges order (ascending silhouette id)
   TileCounters golden;                    // the analytic resolver's counters for the tile
+};
+
+class TileFrame;
+class TileResolver;
+struct FrameOutput;
+
+// The job of `tile` in a binned frame (TileFrame::bin): its rectangle, its front-facing
+// triangles and silhouette edges in binning order. `golden`: the analytic resolver's counters
+// for the tile, when the caller has them (its triangles and edges are set from the job's
+// lists); nullptr leaves them zero. A tile without triangles gives a job without triangles.
+EvuJob make_evu_job(const TileFrame& f, uint32_t tile, const TileCounters* golden = nullptr);
+
+// The jobs of one binned frame with their golden counters from the analytic resolver: one
+// resolver and one frame output for every tile asked for (the frame output is the size of the
+// frame's samples, so make one source per frame, not one per tile). `f` must outlive it.
+class EvuJobSource {
+ public:
+  explicit EvuJobSource(const TileFrame& f);
+  ~EvuJobSource();
+  EvuJob job(uint32_t tile);
+
+ private:
+  const TileFrame& m_f;
+  std::unique_ptr<TileResolver> m_resolver;
+  std::unique_ptr<FrameOutput> m_out;
 };
 
 struct EvuJobsHeader {
