@@ -9,12 +9,11 @@
 #include <fstream>
 #include <memory>
 #include <random>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
-#include "VTileSequencer.h"
-#include "port_bits.h"
-#include "verilated.h"
+#include "drivers.h"
 #include "visibility/evu_jobs.h"
 #include "visibility/svgpu.h"
 
@@ -23,8 +22,7 @@ using namespace tilevis::rtl;
 
 namespace {
 
-constexpr uint32_t kLanes = TB_LANES, kTriCap = TB_TRI_CAP, kEdgeCap = TB_EDGE_CAP;
-constexpr int kEIW = TB_EIW;
+constexpr uint32_t kLanes = kSeqLanes, kTriCap = kSeqTriCap, kEdgeCap = kSeqEdgeCap;
 // The SystemC model's defaults (model/units/early_visibility_unit/early_visibility_unit.h):
 // reject {lanes 8, ii 1, latency 6}, pass_overhead_cycles 32.
 constexpr uint64_t kModelRejectLatency = 6, kModelPassOverhead = 32;
@@ -38,83 +36,6 @@ struct SeqJob {
 struct Result {
   uint64_t jobs = 0, passes = 0, pairs = 0, mismatches = 0, cycles = 0, load_cycles = 0, stopped = 0;
   uint64_t model_cycles = 0;
-};
-
-class Bench {
- public:
-  Bench() : m_ctx(std::make_unique<VerilatedContext>()), m_dut(std::make_unique<VTileSequencer>(m_ctx.get())) {
-    m_dut->rst = 1;
-    tick();
-    tick();
-    m_dut->rst = 0;
-  }
-
-  // Runs a job in passes; returns its clocks (loads included). Appends the issued pairs as
-  // (global triangle index, global edge index) in issue order.
-  uint64_t run(const SeqJob& j, std::vector<std::pair<uint32_t, uint32_t>>& issued, uint64_t& passes,
-               uint64_t& load_cycles, uint64_t& stopped) {
-    const uint32_t nt = uint32_t(j.tri_zmax.size()), ne = uint32_t(j.edge_zmin.size());
-    uint64_t clocks = 0;
-    for (uint32_t t0 = 0; t0 < nt; t0 += kTriCap) {
-      const uint32_t tn = std::min(kTriCap, nt - t0);
-      std::vector<bool> stopped_before(tn, false);
-      for (uint32_t e0 = 0; e0 == 0 || e0 < ne; e0 += kEdgeCap) {
-        const uint32_t en = std::min(kEdgeCap, ne - e0);
-        // Load: one entry per list per clock (the longer list sets the time).
-        const uint32_t load = std::max(tn, en);
-        for (uint32_t k = 0; k < load; ++k) {
-          m_dut->tri_we = k < tn;
-          m_dut->tri_waddr = k;
-          m_dut->tri_wzmax = k < tn ? j.tri_zmax[t0 + k] : 0;
-          m_dut->edge_we = k < en;
-          m_dut->edge_waddr = k;
-          m_dut->edge_wzmin = k < en ? j.edge_zmin[e0 + k] : 0;
-          tick();
-        }
-        m_dut->tri_we = m_dut->edge_we = 0;
-        load_cycles += load;
-        clocks += load;
-        ++passes;
-        m_dut->n_tris = tn;
-        m_dut->n_edges = en;
-        m_dut->start = 1;
-        uint64_t walk = 0;
-        for (;;) {
-          tick();
-          m_dut->start = 0;
-          ++walk;
-          for (uint32_t l = 0; l < kLanes; ++l)
-            if (get_bit(m_dut->iss_valid, int(l))) {
-              const uint32_t t = m_dut->iss_tri;
-              const uint32_t e = uint32_t(get_field(m_dut->iss_edge, int(l) * kEIW, kEIW));
-              issued.emplace_back(t0 + t, e0 + e);
-            }
-          if (m_dut->tri_end && m_dut->tri_stop) {
-            stopped += !stopped_before[m_dut->iss_tri];
-            stopped_before[m_dut->iss_tri] = true;
-          }
-          if (m_dut->done) break;
-          if (walk > 4 + uint64_t(tn) * (kEdgeCap / kLanes + 2)) {
-            std::printf("TileSequencer: pass of tile %u never ended\n", j.tile);
-            std::exit(1);
-          }
-        }
-        clocks += walk;
-        if (ne == 0) break;
-      }
-    }
-    return clocks;
-  }
-
- private:
-  void tick() {
-    m_dut->clk = 1;
-    m_dut->eval();
-    m_dut->clk = 0;
-    m_dut->eval();
-  }
-  std::unique_ptr<VerilatedContext> m_ctx;
-  std::unique_ptr<VTileSequencer> m_dut;
 };
 
 // The resolver's pairs (analytic_resolver.cpp: edges by z_min, stable; per triangle until the
@@ -142,7 +63,8 @@ uint64_t model_reject_cycles(const std::vector<uint64_t>& per_tri, uint32_t nt, 
 
 }  // namespace
 
-int main(int argc, char** argv) {
+namespace {
+int bench(int argc, char** argv) {
   uint64_t random = 0, seed = 1, job_stride = 1;
   std::vector<std::string> jobs;
   std::string csv;
@@ -170,7 +92,6 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  Verilated::commandArgs(argc, argv);
   std::ofstream out;
   if (!csv.empty()) {
     out.open(csv);
@@ -178,12 +99,13 @@ int main(int argc, char** argv) {
            "cycles\n";
   }
   uint64_t bad = 0;
-  auto check = [&](Bench& b, const SeqJob& j, Result& r, const std::string& source) {
+  auto check = [&](TileSequencerDriver& b, const SeqJob& j, Result& r, const std::string& source) {
     std::vector<uint64_t> per_tri;
     auto want = model_pairs(j, per_tri);
-    std::vector<std::pair<uint32_t, uint32_t>> got;
-    uint64_t passes = 0, load = 0;
-    const uint64_t clocks = b.run(j, got, passes, load, r.stopped);
+    TileSequencerDriver::Result run = b.run(j.tri_zmax, j.edge_zmin);
+    std::vector<std::pair<uint32_t, uint32_t>>& got = run.issued;
+    const uint64_t passes = run.passes, load = run.load_clocks, clocks = run.load_clocks + run.walk_clocks;
+    r.stopped += run.stopped;
     ++r.jobs;
     r.passes += passes;
     r.pairs += want.size();
@@ -217,7 +139,7 @@ int main(int argc, char** argv) {
     bad += r.mismatches;
   };
   if (random) {
-    Bench b;
+    TileSequencerDriver b;
     Result r;
     std::mt19937_64 rng(seed);
     for (uint64_t k = 0; k < random; ++k) {
@@ -236,7 +158,7 @@ int main(int argc, char** argv) {
     print(r, "random (seed " + std::to_string(seed) + ")");
   }
   for (const std::string& f : jobs) {
-    Bench b;
+    TileSequencerDriver b;
     Result r;
     uint64_t seen = 0, golden_mismatch = 0;
     vis::read_evu_jobs(f, [&](const vis::EvuJob& job) {
@@ -257,4 +179,14 @@ int main(int argc, char** argv) {
     bad += golden_mismatch;
   }
   return bad ? 1 : 0;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return bench(argc, argv);
+  } catch (const std::exception& e) {  // the RTL stopped (an assertion, a pass that never ends)
+    std::printf("%s\n", e.what());
+    return 1;
+  }
 }

@@ -30,6 +30,8 @@ struct RtlTileClocks {
   std::vector<RtlTriangleClocks> tris;  // job order: the tile's front-facing triangles, setup order
   uint64_t reject_latency = 0;          // per tile: TileSequencer + PairReject/DepthTest pipeline drain
   uint64_t passes = 1;                  // TileSequencer passes (lists over capacity)
+  uint64_t list_load = 0;               // list writes before each pass, max(triangles, edges) clocks a pass
+                                        // (tile fetch's time in the model; not in reject or reject_latency)
 };
 
 class RtlEvu {
