@@ -99,8 +99,9 @@ constexpr uint64_t kMaxU32 = std::numeric_limits<uint32_t>::max();
 
 Registry::Registry() {
   add_enum<Fidelity>("sim.fidelity", "analytic: closed form per tile; tile: one transaction per tile per unit; "
-                     "primitive: per-primitive transactions, FIFO back-pressure, memory contention",
-                     {Fidelity::analytic, Fidelity::tile, Fidelity::primitive},
+                     "primitive: per-primitive transactions, FIFO back-pressure, memory contention; "
+                     "rtl: primitive with the EVU's clocks from its Verilated RTL (needs Verilator at build time)",
+                     {Fidelity::analytic, Fidelity::tile, Fidelity::primitive, Fidelity::rtl},
                      +[](TilerConfig& c) -> Fidelity& { return c.sim.fidelity; });
   add_enum<Mode>("sim.mode", "visibility: analytic (EVU), hybrid (EVU, and the HSR unit for tiles where the analytic answer can be wrong), hsr (per-pixel HSR unit), early_z, none",
                  {Mode::analytic, Mode::hybrid, Mode::hsr, Mode::early_z, Mode::none}, +[](TilerConfig& c) -> Mode& { return c.sim.mode; });
@@ -169,15 +170,23 @@ Registry::Registry() {
   TV_UINT("fetch.cache_line_bytes", fetch.cache.line_bytes, "bytes", 1, 4096, "its line (assumption)");
   TV_UINT("fetch.cache_ways", fetch.cache.ways, "ways", 1, 1024, "its associativity, LRU (assumption)");
 
-  TV_UINT("evu.reject.lanes", evu.reject.lanes, "lanes", 1, 1024, "pair tests issued together");
-  TV_UINT("evu.reject.ii", evu.reject.ii, "cycles", 1, 1024, "initiation interval");
-  TV_UINT("evu.reject.latency_cycles", evu.reject.latency_cycles, "cycles", 0, 100000, "pipeline depth, per tile");
-  TV_UINT("evu.clip.lanes", evu.clip.lanes, "lanes", 1, 1024, "splits issued together");
-  TV_UINT("evu.clip.ii", evu.clip.ii, "cycles", 1, 1024, "initiation interval");
-  TV_UINT("evu.clip.latency_cycles", evu.clip.latency_cycles, "cycles", 0, 100000, "pipeline depth, per tile");
-  TV_UINT("evu.occlude.lanes", evu.occlude.lanes, "lanes", 1, 1024, "containment tests issued together");
-  TV_UINT("evu.occlude.ii", evu.occlude.ii, "cycles", 1, 1024, "initiation interval");
-  TV_UINT("evu.occlude.latency_cycles", evu.occlude.latency_cycles, "cycles", 0, 100000, "pipeline depth, per tile");
+  TV_UINT("evu.reject.lanes", evu.reject.lanes, "lanes", 1, 1024, "pairs issued together: edges a row (RTL: TileSequencer LANES)");
+  TV_UINT("evu.reject.ii", evu.reject.ii, "cycles", 1, 1024, "clocks per row of pairs (RTL: 1)");
+  TV_UINT("evu.reject.latency_cycles", evu.reject.latency_cycles, "cycles", 0, 100000, "PairReject and DepthTest drain, per tile (RTL: 3 + 3)");
+  TV_UINT("evu.reject.pass_cycles", evu.reject_pass_cycles, "cycles", 0, 100000, "start and end of a TileSequencer pass (RTL: 2)");
+  TV_UINT("evu.reject.readahead_rows", evu.reject_readahead_rows, "rows", 0, 16, "row read ahead and dropped when test 6 stops a triangle before its last row (RTL: 1)");
+  TV_UINT("evu.list_load_per_cycle", evu.list_load_per_cycle, "entries", 1, 1024, "list entries loaded per clock per list (RTL: one write port)");
+  TV_UINT("evu.clip.lanes", evu.clip.lanes, "lanes", 1, 1024, "independent Clip units (assumption)");
+  TV_UINT("evu.clip.ii", evu.clip.ii, "cycles", 1, 1024, "clocks per parent edge of a split (RTL: a vertex a clock)");
+  TV_UINT("evu.clip.latency_cycles", evu.clip.latency_cycles, "cycles", 0, 100000, "drain per tile (RTL: inside the split's clocks)");
+  TV_UINT("evu.clip.split_cycles", evu.clip_split_cycles, "cycles", 0, 100000, "start and done of a split (RTL: 2)");
+  TV_UINT("evu.clip.emit_per_edge", evu.clip_emit_per_edge, "cycles", 0, 1024, "clocks per parent edge to emit a crossing split's children (RTL: 1)");
+  TV_UINT("evu.clip.check_cycles", evu.clip_check_cycles, "cycles", 0, 1024, "tests 1-3 re-run on a piece against a candidate edge (assumption: not in the RTL)");
+  TV_UINT("evu.occlude.lanes", evu.occlude.lanes, "lanes", 1, 1024, "independent Occlude units (assumption)");
+  TV_UINT("evu.occlude.ii", evu.occlude.ii, "cycles", 1, 1024, "clocks per occluder test (RTL: 1)");
+  TV_UINT("evu.occlude.latency_cycles", evu.occlude.latency_cycles, "cycles", 0, 100000, "drain per tile (RTL: inside the piece's clocks)");
+  TV_UINT("evu.occlude.piece_cycles", evu.occlude_piece_cycles, "cycles", 0, 1024, "interior point of a piece (RTL: 2)");
+  TV_UINT("evu.occlude.drain_cycles", evu.occlude_drain_cycles, "cycles", 0, 1024, "last verdict of a piece with occluder tests, the clock after its occluder (RTL: 1)");
   TV_UINT("evu.detect.lanes", evu.detect.lanes, "lanes", 1, 1024, "hybrid: pair comparisons issued together");
   TV_UINT("evu.detect.ii", evu.detect.ii, "cycles", 1, 1024, "hybrid: initiation interval of the pair comparison");
   TV_UINT("evu.detect.beside", evu.detect_beside, "-", 0, 1, "hybrid: 1 the detector has its own datapath and works while reject does; 0 it runs before reject on the reject lanes");
@@ -185,7 +194,6 @@ Registry::Registry() {
   TV_UINT("evu.hybrid_pair_budget", evu.hybrid_pair_budget, "pairs", 0, 0xffffffffu, "hybrid: a tile whose triangles x edges exceed this goes per pixel (0: no budget)");
   TV_UINT("evu.triangle_list_entries", evu.triangle_list_entries, "triangles", 1, 1u << 24, "on-chip triangle list; longer lists take passes");
   TV_UINT("evu.edge_list_entries", evu.edge_list_entries, "edges", 1, 1u << 24, "on-chip edge list; longer lists take passes");
-  TV_UINT("evu.pass_overhead_cycles", evu.pass_overhead_cycles, "cycles", 0, 100000, "pipeline refill per extra pass");
 
   TV_UINT("hsr.samples_per_clock", hsr.samples_per_clock, "samples/cycle", 1, 4096, "depth tests per clock");
   TV_UINT("hsr.triangles_per_clock", hsr.triangles_per_clock, "triangles/cycle", 1, 64, "triangle setup rate");

@@ -11,6 +11,7 @@
 
 #include "top/heatmap_png.h"
 #include "top/tiler.h"
+#include "units/early_visibility_unit/rtl_evu.h"
 
 namespace tilevis::sim {
 namespace {
@@ -68,6 +69,11 @@ SimOutput simulate(const trace::Frame& frame, const TilerConfig& config, const S
   fc.hybrid_pair_budget = config.evu.hybrid_pair_budget;
   fc.detection_bin = config.evu.detection_bin;
   fc.progress = options.progress;
+  std::unique_ptr<RtlEvu> rtl;
+  if (config.sim.fidelity == Fidelity::rtl && uses_evu(config.sim.mode)) {
+    rtl = make_rtl_evu(config.evu.reject.lanes, config.evu.triangle_list_entries, config.evu.edge_list_entries);
+    fc.rtl = rtl.get();
+  }
   FrameWork work(frame, fc);
   const bool event_driven = config.sim.fidelity != Fidelity::analytic;
   Tiler tiler("tiler", config, work, event_driven && !options.vcd.empty());
@@ -84,6 +90,7 @@ SimOutput simulate(const trace::Frame& frame, const TilerConfig& config, const S
     }
     sc_core::sc_start();
     if (tf) sc_core::sc_close_vcd_trace_file(tf);
+    if (!work.failure().empty()) throw std::runtime_error(work.failure());
     if (!tiler.frame_done())
       throw std::logic_error("the simulation ran out of events before the frame was written (a deadlock in the model)");
     out.cycles = tiler.simulated_cycles();

@@ -20,7 +20,7 @@ Tiler::Tiler(const sc_core::sc_module_name& name, const TilerConfig& config, Fra
   m_env.period = sc_core::sc_time(1e6 / config.sim.clock_mhz, sc_core::SC_PS);
   m_env.trace = trace_signals;
   m_env.waits = &m_waits;
-  const bool per_primitive = config.sim.fidelity == Fidelity::primitive;
+  const bool per_primitive = config.sim.fidelity == Fidelity::primitive || config.sim.fidelity == Fidelity::rtl;
   const int geometry_depth = per_primitive ? int(config.sim.fifo_primitives) : 2;
   const int render_depth = per_primitive ? int(config.sim.fifo_primitives) : int(config.sim.fifo_tiles);
   const uint32_t batch = per_primitive ? 1 : config.sim.batch_triangles;

@@ -40,9 +40,10 @@ class AnalyticResolver final : public TileResolver {
     m_stamp.assign(size_t(g.tile_w) * g.tile_h, 0);
     for (uint32_t i : tris) {
       const TileCounters before = c;
+      m_shape = {};
       const uint64_t shaded = process_triangle(f, f.triangles()[i], tile, rect, out, c);
       out.shader_invocations += shaded;
-      if (per_triangle) per_triangle->push_back({f.triangles()[i].setup_index, c - before, shaded});
+      if (per_triangle) per_triangle->push_back({f.triangles()[i].setup_index, c - before, shaded, m_shape});
       if (m_opt.work_done) m_opt.work_done(step);
     }
     return {};
@@ -61,7 +62,10 @@ class AnalyticResolver final : public TileResolver {
     m_candidates.clear();
     for (uint32_t ei : m_sorted_edges) {
       const svgpu::Edge& e = f.edges()[ei];
-      if (svgpu::edge_behind(e, tt)) break;  // test 6: and so is every later edge
+      if (svgpu::edge_behind(e, tt)) {  // test 6: and so is every later edge
+        m_shape.test6_stop = 1;
+        break;
+      }
       ++c.pair_tests;
       if (svgpu::boxes_apart(e, tt) || svgpu::shares_edge(e, tt.tri)) continue;  // tests 2 (boxes) and 4
       if (svgpu::survives(poly, tt, e)) m_candidates.push_back(ei);
@@ -76,9 +80,13 @@ class AnalyticResolver final : public TileResolver {
       const svgpu::Edge& e = f.edges()[ei];
       const size_t n = m_pieces.size();
       for (size_t k = 0; k < n; ++k) {
+        ++m_shape.piece_checks;
         if (!svgpu::survives(m_pieces[k], tt, e)) continue;
+        const uint64_t parent_edges = m_pieces[k].size();
         geom::SplitResult sr = svgpu::split(m_pieces[k], e);
         ++c.clip_polygons;
+        m_shape.split_edges += parent_edges;
+        if (!sr.inside.empty() && !sr.outside.empty()) m_shape.crossing_edges += parent_edges;
         m_pieces[k] = std::move(sr.inside);
         if (!sr.outside.empty()) m_pieces.push_back(std::move(sr.outside));
       }
@@ -95,7 +103,9 @@ class AnalyticResolver final : public TileResolver {
     const int64_t tx = g.tile_x(tile), ty = g.tile_y(tile);
     for (const ConvexPolygon& piece : m_pieces) {
       if (piece.empty()) continue;
+      const int64_t tests_before = c.occlusion_tests;
       const bool visible = !occluded(f, piece, tt, c);
+      m_shape.pieces_tested += c.occlusion_tests != tests_before;
       // A visible piece is shaded; only an opaque one owns its samples (ids: the nearest opaque
       // surface, the truth's definition; non-opaque content is blended over it).
       const bool owns = visible && tt.t->opaque;
@@ -223,6 +233,7 @@ class AnalyticResolver final : public TileResolver {
   ResolverOptions m_opt;
   std::vector<uint32_t> m_sorted_edges, m_occluders, m_candidates;
   std::vector<ConvexPolygon> m_pieces;
+  EvuShape m_shape;  // of the triangle in process
   std::vector<uint64_t> m_stamp;  // per pixel of the tile: the last triangle serial that shaded it
   uint64_t m_serial = 0;
   geom::TileGrid m_bins_for{};

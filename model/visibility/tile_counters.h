@@ -76,4 +76,15 @@ struct TileCounters {
   friend bool operator==(const TileCounters&, const TileCounters&) = default;
 };
 
+// The shape of one triangle's analytic work beyond its counters: what sets its clocks in the
+// early-visibility unit's RTL (rtl_ref/units; the model's cost functions,
+// model/units/early_visibility_unit). Zero in per-pixel tiles.
+struct EvuShape {
+  uint32_t test6_stop = 0;        // 1: the walk over the depth-sorted edges ended on test 6, 0: at the list's end
+  uint64_t split_edges = 0;       // edges of the parent polygon, summed over the triangle's splits
+  uint64_t crossing_edges = 0;    // the same over the splits whose line crosses the parent (both children kept)
+  uint64_t piece_checks = 0;      // tests 1-3 re-run on a piece against a candidate edge while clipping
+  uint64_t pieces_tested = 0;     // pieces with at least one occluder test
+};
+
 }  // namespace tilevis::vis

@@ -66,6 +66,7 @@ struct TileTriangleWork {
   uint32_t triangle = 0;  // index into Setup::triangles
   TileCounters counters;
   uint64_t shader_invocations = 0;  // pixels where it shades a sample, or samples at sample rate (zbuffer::PixelShades)
+  EvuShape shape;
 };
 
 // Where a resolver writes: frame-sized outputs shared by all tiles.

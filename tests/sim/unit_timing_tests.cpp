@@ -77,9 +77,10 @@ trace::Frame empty_frame() {
   return f;
 }
 
-TileWork* tile_of(std::vector<TriangleWork> tris) {
+TileWork* tile_of(std::vector<TriangleWork> tris, uint32_t edges = 0) {
   auto* w = new TileWork;  // lives until the child exits
   w->tris = std::move(tris);
+  w->edges = edges;
   w->draws.assign(w->tris.size(), 0);
   w->resolved = true;
   return w;
@@ -103,7 +104,7 @@ std::vector<Item> items_of(TileWork* w, bool per_triangle) {
 
 template <typename MakeUnit>
 nlohmann::json run_unit(uint64_t expected, Mode mode, std::vector<TriangleWork> tris, bool per_triangle,
-                        MakeUnit&& make) {
+                        MakeUnit&& make, uint32_t edges = 0) {
   return simtest::in_child([&] {
     sc_core::sc_report_handler::set_handler(collect);
     FrameWorkConfig fc;
@@ -111,7 +112,7 @@ nlohmann::json run_unit(uint64_t expected, Mode mode, std::vector<TriangleWork> 
     FrameWork work(empty_frame(), fc);
     UnitEnv env{&work, kPeriod, false, nullptr};
     Harness h("harness", expected);
-    h.items = items_of(tile_of(std::move(tris)), per_triangle);
+    h.items = items_of(tile_of(std::move(tris), edges), per_triangle);
     auto unit = make(env);
     unit->in(h.to_unit);
     unit->out(h.from_unit);
@@ -130,48 +131,63 @@ void expect_boundary(const nlohmann::json& r, uint64_t n) {
   EXPECT_TRUE(r["reports"].empty()) << r["reports"].dump();
 }
 
-TriangleWork pairs(uint32_t p) {
+// A triangle of a tile whose depth-sorted edge walk issued `p` pairs, ending on test 6 or not.
+TriangleWork pairs(uint32_t p, bool test6_stop) {
   TriangleWork t;
   t.pair_tests = p;
+  t.shape.test6_stop = test6_stop;
   return t;
 }
-TriangleWork clips(uint32_t candidates, uint32_t splits) {
+// Splits of parents of `split_edges` edges in all (`crossing_edges` of them crossed), and
+// `checks` re-checks of pieces against candidate edges.
+TriangleWork clips(uint32_t splits, uint32_t split_edges, uint32_t crossing_edges, uint32_t checks) {
   TriangleWork t;
-  t.candidate_pairs = candidates;
   t.clip_polygons = splits;
+  t.shape.split_edges = split_edges;
+  t.shape.crossing_edges = crossing_edges;
+  t.shape.piece_checks = checks;
   return t;
 }
-TriangleWork occlusion(uint32_t pieces, uint32_t tests) {
+TriangleWork occlusion(uint32_t pieces, uint32_t tests, uint32_t pieces_tested) {
   TriangleWork t;
   t.pieces = pieces;
   t.occlusion_tests = tests;
+  t.shape.pieces_tested = pieces_tested;
   return t;
 }
 
 }  // namespace
 
-TEST(UnitTiming, RejectIssuesPairTestsAcrossItsLanes) {
-  // 8 lanes, II 1, latency 6: ceil(20/8) + 1 (no pairs: passes in a cycle) + ceil(9/8) + 6 = 12.
+// The defaults are the RTL's clocks (rtl_ref, reports/rtl/README.md): the RTL library's test
+// (tests/rtl) checks the same formulas against the Verilated units on real tile jobs.
+TEST(UnitTiming, RejectWalksRowsOfEdgesLikeTheTileSequencer) {
+  // 8 lanes, 24 edges (3 rows). A triangle that walks every edge: 3 rows; one stopped by test
+  // 6 on its first edge: its row and the row read ahead, 2; the last triangle stopped on edge
+  // 9: rows 0 and 1, nothing read ahead after the last, 2. Per tile: lists loaded through one
+  // write port (max(3, 24) = 24 clocks), the pass's start and end (2), PairReject and
+  // DepthTest drained (3 + 3): 7 + 24 + 2 + 6 = 39.
   const EarlyVisibilityConfig cfg;
-  const auto r = run_unit(12, Mode::analytic, {pairs(20), pairs(0), pairs(9)}, false,
-                          [&](const UnitEnv& env) { return std::make_unique<EvuReject>("reject", env, cfg); });
-  expect_boundary(r, 12);
+  const auto r = run_unit(39, Mode::analytic, {pairs(24, false), pairs(0, true), pairs(9, true)}, false,
+                          [&](const UnitEnv& env) { return std::make_unique<EvuReject>("reject", env, cfg); }, 24);
+  expect_boundary(r, 39);
 }
 
-TEST(UnitTiming, ClipPaysItsInitiationInterval) {
-  // 2 lanes, II 4, latency 12: ceil(5/2)*4 + 1 + ceil(1/2)*4 + 12 = 29.
+TEST(UnitTiming, ClipPaysTwoClocksASplitAndItsParentsEdges) {
+  // 2 lanes: (2 splits x 2 + 7 parent edges + 3 crossing edges + 3 re-checks) / 2 = 9, nothing,
+  // (2 + 5 + 0 + 1) / 2 = 4: 13.
   const EarlyVisibilityConfig cfg;
-  const auto r = run_unit(29, Mode::analytic, {clips(3, 2), clips(0, 0), clips(1, 0)}, false,
+  const auto r = run_unit(13, Mode::analytic, {clips(2, 7, 3, 3), clips(0, 0, 0, 0), clips(1, 5, 0, 1)}, false,
                           [&](const UnitEnv& env) { return std::make_unique<EvuClip>("clip", env, cfg); });
-  expect_boundary(r, 29);
+  expect_boundary(r, 13);
 }
 
 TEST(UnitTiming, OccludeTestsPiecesAgainstOccluders) {
-  // 4 lanes, II 1, latency 10: ceil(11/4) + ceil(1/4) + ceil(7/4) + 10 = 16.
+  // 4 lanes; a piece: 2 clocks for its interior point, one a test, one for the last verdict
+  // when it had tests: ceil((4 + 9 + 2) / 4) + ceil(2 / 4) + ceil((6 + 4 + 2) / 4) = 4 + 1 + 3 = 8.
   const EarlyVisibilityConfig cfg;
-  const auto r = run_unit(16, Mode::analytic, {occlusion(2, 9), occlusion(1, 0), occlusion(3, 4)}, false,
+  const auto r = run_unit(8, Mode::analytic, {occlusion(2, 9, 2), occlusion(1, 0, 0), occlusion(3, 4, 2)}, false,
                           [&](const UnitEnv& env) { return std::make_unique<EvuOcclude>("occlude", env, cfg); });
-  expect_boundary(r, 16);
+  expect_boundary(r, 8);
 }
 
 TEST(UnitTiming, HsrTestsSamplesPerClock) {
@@ -187,18 +203,20 @@ TEST(UnitTiming, HsrTestsSamplesPerClock) {
 
 namespace {
 
-// The whole EVU: reject -> clip -> occlude.
+// The whole EVU: reject -> clip -> occlude, on a tile of 24 edges.
 nlohmann::json run_evu(uint64_t expected, bool per_triangle) {
   const std::vector<TriangleWork> tris = {
-      [] { TriangleWork t = pairs(20); t.candidate_pairs = 3; t.clip_polygons = 2; t.pieces = 2; t.occlusion_tests = 9; return t; }(),
-      [] { TriangleWork t = pairs(0); t.pieces = 1; return t; }(),
-      [] { TriangleWork t = pairs(9); t.candidate_pairs = 1; t.pieces = 3; t.occlusion_tests = 4; return t; }()};
+      [] { TriangleWork t = pairs(24, false); t.clip_polygons = 2; t.shape.split_edges = 7; t.shape.crossing_edges = 3;
+           t.shape.piece_checks = 3; t.pieces = 2; t.occlusion_tests = 9; t.shape.pieces_tested = 2; return t; }(),
+      [] { TriangleWork t = pairs(0, true); t.pieces = 1; return t; }(),
+      [] { TriangleWork t = pairs(9, true); t.clip_polygons = 1; t.shape.split_edges = 5; t.shape.piece_checks = 1;
+           t.pieces = 3; t.occlusion_tests = 4; t.shape.pieces_tested = 2; return t; }()};
   return simtest::in_child([&] {
     sc_core::sc_report_handler::set_handler(collect);
     FrameWork work(empty_frame(), {});
     UnitEnv env{&work, kPeriod, false, nullptr};
     Harness h("harness", expected);
-    h.items = items_of(tile_of(tris), per_triangle);
+    h.items = items_of(tile_of(tris, 24), per_triangle);
     EarlyVisibilityUnit evu("evu", env, EarlyVisibilityConfig{}, 16);
     evu.in(h.to_unit);
     evu.out(h.from_unit);
@@ -212,17 +230,18 @@ nlohmann::json run_evu(uint64_t expected, bool per_triangle) {
 }  // namespace
 
 TEST(UnitTiming, EvuTileTransactionRunsTheSubUnitsInTurn) {
-  // One transaction for the tile: reject 12, then clip 12+1+4+12 = 29, then occlude 16: 57.
-  const auto r = run_evu(57, false);
-  expect_boundary(r, 57);
-  EXPECT_EQ(r["busy"].get<double>(), 57.0);
+  // One transaction for the tile: reject 39, then clip 13, then occlude 8: 60.
+  const auto r = run_evu(60, false);
+  expect_boundary(r, 60);
+  EXPECT_EQ(r["busy"].get<double>(), 60.0);
 }
 
 TEST(UnitTiming, EvuPrimitiveTransactionsPipelineTheSubUnits) {
-  // Per triangle: reject ends at 3, 4, 4+2+6 = 12; clip starts each when both it and the
-  // triangle are ready: 3..15, 15..16, 16..16+4+12 = 32; occlude: 15..18, 18..19, 32..32+2+10 = 44.
-  const auto r = run_evu(44, true);
-  expect_boundary(r, 44);
+  // Reject: 3 rows + the tile's 32 clocks, then 2, then 2: ends at 35, 37, 39. Clip starts each
+  // when both it and the triangle are ready: 35..44, 44..44, 44..48; occlude: 44..48, 48..49,
+  // 49..52.
+  const auto r = run_evu(52, true);
+  expect_boundary(r, 52);
 }
 
 namespace {

@@ -1,8 +1,14 @@
 #include "units/common/frame_work.h"
 
 #include <algorithm>
+#include <numeric>
 #include <stdexcept>
 #include <string>
+
+#include <systemc>
+
+#include "units/early_visibility_unit/rtl_evu.h"
+#include "visibility/evu_jobs.h"
 
 namespace tilevis::sim {
 
@@ -22,6 +28,7 @@ const char* to_string(Fidelity f) {
     case Fidelity::analytic: return "analytic";
     case Fidelity::tile: return "tile";
     case Fidelity::primitive: return "primitive";
+    case Fidelity::rtl: return "rtl";
   }
   return "?";
 }
@@ -354,6 +361,39 @@ void FrameWork::resolve_tile(TileWork& w) {
   if (m_cfg.progress) m_cfg.progress(++m_tiles_resolved, m_tiles_binned);
 }
 
+// Fidelity rtl: the tile's job through the Verilated EVU, which checks every decision against
+// the job's golden counters (these per-triangle ones, summed) and returns its clocks.
+// Called inside the simulation's threads: a failure stops the simulation and simulate() throws
+// it (an exception must not cross the SystemC kernel).
+void FrameWork::take_rtl_clocks(TileWork& w) {
+  try {
+    take_rtl_clocks_or_throw(w);
+  } catch (const std::exception& e) {
+    if (m_failure.empty()) m_failure = e.what();
+    sc_core::sc_stop();
+  }
+}
+
+void FrameWork::take_rtl_clocks_or_throw(TileWork& w) {
+  vis::TileCounters golden;
+  for (const TriangleWork& t : w.tris) golden += t;
+  const vis::EvuJob job = vis::make_evu_job(m_seg->golden->frame(), w.tile, &golden);
+  const RtlTileClocks clocks = m_cfg.rtl->run(job);
+  std::unordered_map<uint32_t, const RtlTriangleClocks*> by_id;
+  for (const RtlTriangleClocks& t : clocks.tris) by_id.emplace(t.id, &t);
+  for (TriangleWork& t : w.tris) {
+    const auto it = by_id.find(t.id);
+    if (it == by_id.end())
+      throw std::logic_error("fidelity rtl: the RTL returned no clocks for triangle " + std::to_string(t.id) +
+                             " of tile " + std::to_string(w.tile));
+    t.rtl = true;
+    t.rtl_reject = it->second->reject;
+    t.rtl_clip = std::accumulate(it->second->splits.begin(), it->second->splits.end(), uint64_t(0));
+    t.rtl_occlude = std::accumulate(it->second->pieces.begin(), it->second->pieces.end(), uint64_t(0));
+  }
+  w.rtl_reject_tile = clocks.reject_latency + clocks.list_load;
+}
+
 void FrameWork::resolve_analytic(TileWork& w) {
   Segment& sg = *m_seg;
   m_per_tri.clear();
@@ -367,11 +407,13 @@ void FrameWork::resolve_analytic(TileWork& w) {
     const vis::SetupTriangle& t = sg.s->triangles[rec.triangle];
     TriangleWork& tw = w.tris[i];
     static_cast<vis::TileCounters&>(tw) = rec.counters;
+    tw.shape = rec.shape;
     tw.id = t.id;
     tw.draw = t.draw;
     tw.fragments_shaded = uint32_t(rec.shader_invocations);
     if (w.per_pixel) tw.depth_tests = uint32_t(tw.fragments_generated);  // the HSR unit: one test per covered sample
   }
+  if (m_cfg.rtl && !w.per_pixel && !w.tris.empty()) take_rtl_clocks(w);
   if (segment_count() == 1) return;
 
   // Merge into the stored depth of earlier partial renders: a visible sample of this

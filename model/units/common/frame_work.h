@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <string>
 #include <unordered_map>
 #include <vector>
 
@@ -32,6 +33,8 @@
 
 namespace tilevis::sim {
 
+class RtlEvu;
+
 struct FrameWorkConfig {
   Mode mode = Mode::analytic;
   uint32_t tile_w = 32, tile_h = 32;
@@ -41,6 +44,8 @@ struct FrameWorkConfig {
   // Hybrid: a tile whose triangles x edges exceed this goes per pixel (0: no budget).
   uint64_t hybrid_pair_budget = 0;
   uint32_t detection_bin = 8;  // hybrid: the detector's bins, pixels (0: the tile)
+  // Fidelity rtl: the Verilated EVU whose clocks analytic tiles take (not owned; null: none).
+  RtlEvu* rtl = nullptr;
   // Called after each tile's visibility with (tiles resolved, tiles binned so far).
   std::function<void(uint64_t, uint64_t)> progress;
 };
@@ -99,6 +104,9 @@ class FrameWork {
   void close_tile(TileWork* w);                              // TileWriter: results kept, work freed
   void finish_segment();
 
+  // What stopped the simulation early (fidelity rtl: the RTL failed a tile), empty if nothing.
+  const std::string& failure() const { return m_failure; }
+
   // --- Results, after finish().
   void finish();
   const std::vector<int32_t>& ids() const { return m_ids; }
@@ -116,6 +124,9 @@ class FrameWork {
   bool sample_rate(const TriangleWork& t) const { return m_frame.draws[t.draw].sample_rate(); }
   uint32_t covering_fan(uint32_t id, geom::Point p);
   void resolve_analytic(TileWork& w);
+  void take_rtl_clocks(TileWork& w);
+  void take_rtl_clocks_or_throw(TileWork& w);
+  std::string m_failure;
   void resolve_pixels(TileWork& w);
 
   trace::Frame m_frame;

@@ -24,7 +24,8 @@ enum class Mode : uint8_t {
 enum class Fidelity : uint8_t {
   analytic,   // closed-form cycles per tile from counts, no events
   tile,       // one transaction per tile per unit (geometry units: per batch)
-  primitive   // one transaction per primitive, FIFO back-pressure, memory contention
+  primitive,  // one transaction per primitive, FIFO back-pressure, memory contention
+  rtl         // primitive, with the EVU's clocks from its Verilated RTL (rtl_ref): the reference level
 };
 
 const char* to_string(Mode m);
@@ -40,6 +41,10 @@ const char* to_string(Fidelity f);
 struct TriangleWork : vis::TileCounters {
   uint32_t id = 0;     // original (trace) triangle id
   uint32_t draw = 0;
+  vis::EvuShape shape;               // what sets its EVU clocks beyond the counters (analytic tiles)
+  // Fidelity rtl: the clocks the Verilated EVU spent on it (rtl_evu.h), summed per unit.
+  bool rtl = false;
+  uint64_t rtl_reject = 0, rtl_clip = 0, rtl_occlude = 0;
   uint32_t depth_tests = 0;          // per-sample depth tests spent on it (HSR, early-Z, partial-render merge)
   uint32_t fragments_shaded = 0;
 };
@@ -66,6 +71,8 @@ struct TileWork {
                                       // (1 interpenetration, 2 non-opaque content, 3 work budget)
   uint64_t detection_screens = 0;     // hybrid: triangle pairs the EVU screened to decide that
   uint64_t detection_tests = 0;       // hybrid: pairs past the screen whose planes it compared
+  uint64_t rtl_reject_tile = 0;       // fidelity rtl: the TileSequencer's clocks not spent on one triangle
+                                      // (list loads, start and end of each pass, pipeline drain)
   uint64_t cycles[size_t(TileUnit::count)] = {};
   uint64_t start_cycle = 0, end_cycle = 0;  // first fetch to last write (event-driven levels)
 

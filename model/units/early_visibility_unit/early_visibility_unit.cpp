@@ -1,12 +1,61 @@
 #include "units/early_visibility_unit/early_visibility_unit.h"
 
+#include <algorithm>
+
 namespace tilevis::sim {
 namespace {
 
-// A triangle with no operations for the sub-unit passes through in one cycle.
+// A triangle with no operations for the detector passes through in one cycle.
 uint64_t issue_cycles(uint64_t ops, const EvuStageConfig& s) { return ops ? ceil_div(ops, s.lanes) * s.ii : 1; }
 
+// Clocks spread over a sub-unit's independent lanes.
+uint64_t on_lanes(uint64_t clocks, const EvuStageConfig& s) { return ceil_div(clocks, s.lanes); }
+
 }  // namespace
+
+uint64_t reject_rows(uint64_t pairs, bool test6_stop, uint64_t edges, bool last, const EarlyVisibilityConfig& c) {
+  const uint64_t lanes = c.reject.lanes;
+  const uint64_t all_rows = std::max<uint64_t>(1, ceil_div(edges, lanes));
+  if (!test6_stop) return std::max<uint64_t>(1, ceil_div(pairs, lanes));
+  // The row holding the edge that stopped it, and the row read ahead unless that was the last.
+  const uint64_t rows = pairs / lanes + 1;
+  return rows + (rows < all_rows && !last ? c.reject_readahead_rows : 0);
+}
+
+uint64_t reject_clocks(const TriangleWork& t, uint64_t edges, bool last, const EarlyVisibilityConfig& c) {
+  if (t.rtl) return t.rtl_reject;
+  return reject_rows(uint64_t(t.pair_tests), t.shape.test6_stop != 0, edges, last, c) * c.reject.ii;
+}
+
+uint64_t clip_clocks(const TriangleWork& t, const EarlyVisibilityConfig& c) {
+  const uint64_t checks = t.shape.piece_checks * c.clip_check_cycles;
+  if (t.rtl) return t.rtl_clip + checks;
+  return uint64_t(t.clip_polygons) * c.clip_split_cycles + t.shape.split_edges * c.clip.ii +
+         t.shape.crossing_edges * c.clip_emit_per_edge + checks;
+}
+
+uint64_t occlude_clocks(const TriangleWork& t, const EarlyVisibilityConfig& c) {
+  if (t.rtl) return t.rtl_occlude;
+  return uint64_t(t.pieces) * c.occlude_piece_cycles + uint64_t(t.occlusion_tests) * c.occlude.ii +
+         t.shape.pieces_tested * c.occlude_drain_cycles;
+}
+
+uint64_t reject_tile_clocks(const TileWork& w, const EarlyVisibilityConfig& c) {
+  if (w.per_pixel) return 0;
+  if (!w.tris.empty() && w.tris.front().rtl) return w.rtl_reject_tile;
+  // Passes as the TileSequencer makes them: triangle chunks outer, edge chunks inner; each
+  // loads both lists through their write ports, then starts and ends.
+  const uint64_t tris = w.tris.size(), edges = w.edges;
+  const uint64_t tc = c.triangle_list_entries, ec = c.edge_list_entries;
+  uint64_t clocks = 0;
+  for (uint64_t t0 = 0; t0 < tris; t0 += tc)
+    for (uint64_t e0 = 0; e0 == 0 || e0 < edges; e0 += ec) {
+      const uint64_t load = std::max(std::min(tc, tris - t0), edges ? std::min(ec, edges - e0) : 0);
+      clocks += ceil_div(load, c.list_load_per_cycle) + c.reject_pass_cycles;
+      if (!edges) break;
+    }
+  return clocks + c.reject.latency_cycles;
+}
 
 EvuReject::EvuReject(const sc_core::sc_module_name& name, const UnitEnv& env, const EarlyVisibilityConfig& config)
     : Stage(name, env, "EVU reject: SVGPU tests 1-6 on triangle x silhouette-edge pairs", TileUnit::reject, true),
@@ -15,8 +64,10 @@ EvuReject::EvuReject(const sc_core::sc_module_name& name, const UnitEnv& env, co
 Cost EvuReject::cost(const Item& it) const {
   Cost c;
   const TileWork& w = *it.tile;
-  for (uint32_t i = it.first; i < it.first + it.count; ++i) c.cycles += issue_cycles(w.tris[i].pair_tests, m_cfg.reject);
-  if (it.first_of_tile) c.cycles += uint64_t(w.passes - 1) * m_cfg.pass_overhead_cycles;
+  if (!w.per_pixel)
+    for (uint32_t i = it.first; i < it.first + it.count; ++i)
+      c.cycles += reject_clocks(w.tris[i], w.edges, i + 1 == w.tris.size(), m_cfg);
+  if (it.first_of_tile) c.cycles += reject_tile_clocks(w, m_cfg);
   // Hybrid: before a tile is committed to the EVU or the HSR unit, its triangle pairs are
   // screened (depth ranges and boxes: integer compares at the reject rate) and those past the
   // screen compared over their overlaps (polygon clipping and depth compares: evu.detect).
@@ -27,11 +78,10 @@ Cost EvuReject::cost(const Item& it) const {
     if (w.detection_screens) detect += issue_cycles(w.detection_screens, m_cfg.reject);
     if (w.detection_tests) detect += issue_cycles(w.detection_tests, m_cfg.detect);
     uint64_t reject = 0;
-    if (m_cfg.detect_beside)
-      for (const TriangleWork& t : w.tris) reject += issue_cycles(t.pair_tests, m_cfg.reject);
+    if (m_cfg.detect_beside && !w.per_pixel)
+      for (size_t i = 0; i < w.tris.size(); ++i) reject += reject_clocks(w.tris[i], w.edges, i + 1 == w.tris.size(), m_cfg);
     c.cycles += detect > reject ? detect - reject : 0;
   }
-  if (it.last) c.cycles += m_cfg.reject.latency_cycles;
   return c;
 }
 
@@ -43,8 +93,7 @@ EvuClip::EvuClip(const sc_core::sc_module_name& name, const UnitEnv& env, const 
 Cost EvuClip::cost(const Item& it) const {
   Cost c;
   const TileWork& w = *it.tile;
-  for (uint32_t i = it.first; i < it.first + it.count; ++i)
-    c.cycles += issue_cycles(uint64_t(w.tris[i].candidate_pairs) + w.tris[i].clip_polygons, m_cfg.clip);
+  for (uint32_t i = it.first; i < it.first + it.count; ++i) c.cycles += on_lanes(clip_clocks(w.tris[i], m_cfg), m_cfg.clip);
   if (it.last) c.cycles += m_cfg.clip.latency_cycles;
   return c;
 }
@@ -58,7 +107,7 @@ Cost EvuOcclude::cost(const Item& it) const {
   Cost c;
   const TileWork& w = *it.tile;
   for (uint32_t i = it.first; i < it.first + it.count; ++i)
-    c.cycles += issue_cycles(uint64_t(w.tris[i].pieces) + w.tris[i].occlusion_tests, m_cfg.occlude);
+    c.cycles += on_lanes(occlude_clocks(w.tris[i], m_cfg), m_cfg.occlude);
   if (it.last) c.cycles += m_cfg.occlude.latency_cycles;
   return c;
 }
