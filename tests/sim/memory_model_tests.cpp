@@ -89,13 +89,17 @@ TEST(Dram, PostedWriteReturnsWhenItsFirstBurstIsTaken) {
 }
 
 TEST(Dram, BacklogIsHowFarTheBusesAreBehindOnAverage) {
+  // The data queued on each channel, sent back to back from its arrival: a row miss's wait
+  // (activate, read latency) is not backlog, only the bursts' own time on the bus.
   Dram d{DramConfig{}};
   EXPECT_EQ(d.backlog(0), 0u);
-  d.access(0, 0, 256, true);  // 8 bursts on channel 0, its bus busy until 75 + 64 = 139 tCK
-  EXPECT_EQ(d.backlog(0), tck(139) / 4);
-  EXPECT_EQ(d.backlog(tck(139)), 0u);
+  d.access(0, 0, 256, true);  // 8 bursts of 8 tCK on channel 0: 64 tCK of data
+  EXPECT_EQ(d.backlog(0), tck(64) / 4);
+  EXPECT_EQ(d.backlog(tck(64)), 0u);
   d.access(0, 256, 256, true);  // channel 1, the same
-  EXPECT_EQ(d.backlog(tck(39)), 2 * tck(100) / 4);
+  EXPECT_EQ(d.backlog(tck(39)), 2 * tck(25) / 4);
+  d.access(tck(64), 0, 32, true);  // a burst after the queue drained: its own 8 tCK only
+  EXPECT_EQ(d.backlog(tck(64)), tck(8) / 4);
 }
 
 TEST(Cache, LeastRecentlyUsedLineGoes) {

@@ -42,6 +42,7 @@ uint64_t Dram::burst(uint64_t t, uint64_t address, bool read) {
   Channel& ch = m_channels[l.channel];
   Bank& b = m_banks[size_t(l.channel) * m_cfg.banks + l.bank];
   ++m_n.bursts;
+  ch.queued_until = std::max(ch.queued_until, t) + m_burst_ps;
 
   // All-bank refresh every tREFI, lasting tRFC: a burst inside a window waits for its
   // end, and every row of the channel is closed by it.
@@ -82,7 +83,7 @@ uint64_t Dram::burst(uint64_t t, uint64_t address, bool read) {
 
 uint64_t Dram::backlog(uint64_t at) const {
   uint64_t behind = 0;
-  for (const Channel& ch : m_channels) behind += ch.bus_free > at ? ch.bus_free - at : 0;
+  for (const Channel& ch : m_channels) behind += ch.queued_until > at ? ch.queued_until - at : 0;
   return behind / m_cfg.channels;
 }
 

@@ -84,6 +84,10 @@ class Dram {
   };
   struct Channel {
     uint64_t bus_free = 0;
+    // The channel's data backlog: when the bursts it has accepted would have left the bus had
+    // they been sent back to back from the time each arrived (data, not latency, so that a
+    // row miss's wait is not counted as bytes queued).
+    uint64_t queued_until = 0;
     uint64_t refreshed = 0;  // refresh windows already applied (count)
   };
   uint64_t burst(uint64_t at, uint64_t address, bool read);
