@@ -53,7 +53,7 @@ def main():
           "RTL: Clip clocks per split, 2n + 2 for a parent of n edges; model: EvuClip::cost at 1 lane, "
           "ii 4, latency 12, charged per candidate and per split.")
     table("Occlude (one lane)", load(occlude, lambda r: int(r["rtl_clocks"]), "model_cycles"),
-          "RTL: per piece 2 clocks for the interior point, one per occluder test, 2 to drain the verdicts; "
+          "RTL: per piece 2 clocks for the interior point, one per occluder test, 1 more for the last verdict; "
           "model: EvuOcclude::cost at 1 lane, ii 1, latency 10, charged per piece and per test.")
 
 

@@ -9,7 +9,8 @@
 // row r, stage B compares and issues it; A runs ahead by one row, so a triangle that stops on
 // test 6 before its last row costs one more clock (the row A fetched is dropped).
 //   clocks per triangle = rows read by A = min(floor(p / LANES) + 2, rows) when it stops on
-//   test 6 after p pairs, else rows = max(1, ceil(n_edges / LANES)).
+//   test 6 after p pairs, else rows = max(1, ceil(n_edges / LANES)); the pass's last
+//   triangle stopping on test 6 costs floor(p / LANES) + 1 (`done` comes with that row).
 // A pass ends 2 clocks after its last row (stage B, then `done`).
 //
 // Overflow: a tile with more than TRI_CAP triangles or EDGE_CAP edges runs in passes, each

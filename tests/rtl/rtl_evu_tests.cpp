@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <fstream>
 #include <map>
+#include <random>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -92,6 +93,33 @@ std::vector<uint64_t> reject_formula(const std::vector<uint32_t>& zmax, const st
 }
 
 class RtlEvuTest : public ::testing::TestWithParam<const char*> {};
+
+// The sequencer's per-triangle clocks across passes (lists past both capacities), on random
+// lists with many equal depths: the formula, and the walk is their sum + 2 a pass.
+TEST(RtlEvu, SequencerClocksPerTriangleAcrossPasses) {
+  std::mt19937_64 rng(21);
+  rtl::TileSequencerDriver seq;
+  uint64_t multi_pass = 0;
+  for (int k = 0; k < 64; ++k) {
+    const bool big = k % 8 == 0;
+    const uint32_t nt = 1 + uint32_t(rng() % (big ? 2 * rtl::kSeqTriCap + 3 : 40));
+    const uint32_t ne = uint32_t(rng() % (big ? 2 * rtl::kSeqEdgeCap + 3 : 4 * rtl::kSeqLanes + 3));
+    const uint32_t range = 1 + uint32_t(rng() % 64);
+    std::vector<uint32_t> zmax, zmin;
+    for (uint32_t t = 0; t < nt; ++t) zmax.push_back(uint32_t(rng() % range));
+    for (uint32_t e = 0; e < ne; ++e) zmin.push_back(uint32_t(rng() % range));
+    std::sort(zmin.begin(), zmin.end());
+    const rtl::TileSequencerDriver::Result r = seq.run(zmax, zmin);
+    SCOPED_TRACE("job " + std::to_string(k) + ": " + std::to_string(nt) + " triangles, " + std::to_string(ne) +
+                 " edges");
+    EXPECT_EQ(r.tri_clocks, reject_formula(zmax, zmin));
+    uint64_t sum = 0;
+    for (uint64_t c : r.tri_clocks) sum += c;
+    EXPECT_EQ(r.walk_clocks, sum + 2 * r.passes);
+    multi_pass += r.passes > 1;
+  }
+  EXPECT_GT(multi_pass, 0u);
+}
 
 TEST(RtlEvu, AvailableAndRefusesOtherParameters) {
   EXPECT_TRUE(sim::rtl_evu_available());
