@@ -8,18 +8,35 @@ namespace {
 // A triangle with no operations for the detector passes through in one cycle.
 uint64_t issue_cycles(uint64_t ops, const EvuStageConfig& s) { return ops ? ceil_div(ops, s.lanes) * s.ii : 1; }
 
+// Is triangle i the last of its pass's triangle list (nothing read ahead after it)?
+bool last_of_pass(const TileWork& w, uint32_t i, const EarlyVisibilityConfig& c) {
+  return i + 1 == w.tris.size() || (i + 1) % c.triangle_list_entries == 0;
+}
+
 // Clocks spread over a sub-unit's independent lanes.
 uint64_t on_lanes(uint64_t clocks, const EvuStageConfig& s) { return ceil_div(clocks, s.lanes); }
 
 }  // namespace
 
 uint64_t reject_rows(uint64_t pairs, bool test6_stop, uint64_t edges, bool last, const EarlyVisibilityConfig& c) {
-  const uint64_t lanes = c.reject.lanes;
-  const uint64_t all_rows = std::max<uint64_t>(1, ceil_div(edges, lanes));
-  if (!test6_stop) return std::max<uint64_t>(1, ceil_div(pairs, lanes));
-  // The row holding the edge that stopped it, and the row read ahead unless that was the last.
-  const uint64_t rows = pairs / lanes + 1;
-  return rows + (rows < all_rows && !last ? c.reject_readahead_rows : 0);
+  // Edge chunks of the on-chip list, one pass each: a triangle walks every edge of a chunk it
+  // does not stop in; in the chunk where test 6 stops it (and on the first edge of every later
+  // one) it reads the rows through the stopping edge and one more, read ahead and dropped,
+  // unless it is the pass's last triangle or that was the chunk's last row.
+  const uint64_t lanes = c.reject.lanes, cap = c.edge_list_entries;
+  uint64_t rows = 0;
+  for (uint64_t e0 = 0; e0 == 0 || e0 < edges; e0 += cap) {
+    const uint64_t en = std::min(cap, edges - e0);
+    const uint64_t chunk_rows = std::max<uint64_t>(1, ceil_div(en, lanes));
+    if (!test6_stop || pairs >= e0 + en) {
+      rows += chunk_rows;
+    } else {
+      const uint64_t p = pairs > e0 ? pairs - e0 : 0;
+      rows += std::min(p / lanes + 1 + (last ? 0 : c.reject_readahead_rows), chunk_rows);
+    }
+    if (edges == 0) break;
+  }
+  return rows;
 }
 
 uint64_t reject_clocks(const TriangleWork& t, uint64_t edges, bool last, const EarlyVisibilityConfig& c) {
@@ -66,7 +83,7 @@ Cost EvuReject::cost(const Item& it) const {
   const TileWork& w = *it.tile;
   if (!w.per_pixel)
     for (uint32_t i = it.first; i < it.first + it.count; ++i)
-      c.cycles += reject_clocks(w.tris[i], w.edges, i + 1 == w.tris.size(), m_cfg);
+      c.cycles += reject_clocks(w.tris[i], w.edges, last_of_pass(w, i, m_cfg), m_cfg);
   if (it.first_of_tile) c.cycles += reject_tile_clocks(w, m_cfg);
   // Hybrid: before a tile is committed to the EVU or the HSR unit, its triangle pairs are
   // screened (depth ranges and boxes: integer compares at the reject rate) and those past the
@@ -79,7 +96,7 @@ Cost EvuReject::cost(const Item& it) const {
     if (w.detection_tests) detect += issue_cycles(w.detection_tests, m_cfg.detect);
     uint64_t reject = 0;
     if (m_cfg.detect_beside && !w.per_pixel)
-      for (size_t i = 0; i < w.tris.size(); ++i) reject += reject_clocks(w.tris[i], w.edges, i + 1 == w.tris.size(), m_cfg);
+      for (uint32_t i = 0; i < w.tris.size(); ++i) reject += reject_clocks(w.tris[i], w.edges, last_of_pass(w, i, m_cfg), m_cfg);
     c.cycles += detect > reject ? detect - reject : 0;
   }
   return c;
