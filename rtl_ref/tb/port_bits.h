@@ -2,6 +2,7 @@
 // A port of <= 8, 16, 32, 64 bits is an integer; wider ports are VlWide (32-bit words).
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <type_traits>
 
@@ -34,11 +35,29 @@ inline bool get_bit(const T& port, int bit) {
     return (port[bit / 32] >> (bit % 32)) & 1;
 }
 
-// Two's complement of v in `width` bits (width <= 128; bits above 127 copy the sign).
+// Two's complement of v in `width` bits (bits above 127 copy the sign). Wide ports are written
+// a 32-bit word at a time.
 template <class T>
 inline void put_field(T& port, int lsb, int width, I128 v) {
   const U128 u = U128(v);
-  for (int i = 0; i < width; ++i) put_bit(port, lsb + i, i < 128 ? ((u >> i) & 1) : v < 0);
+  // Bits i .. i + 63 of v's two's complement (sign-extended past bit 127).
+  const auto bits = [&](int i) -> uint64_t {
+    const uint64_t sign = v < 0 ? ~uint64_t(0) : 0;
+    if (i >= 128) return sign;
+    const uint64_t b = uint64_t(u >> i);
+    return i > 64 ? b | (sign << (128 - i)) : b;
+  };
+  if constexpr (std::is_integral_v<T>) {
+    for (int i = 0; i < width; ++i) put_bit(port, lsb + i, (bits(i) & 1) != 0);
+  } else {
+    for (int i = 0; i < width;) {
+      const int bit = lsb + i, off = bit % 32, n = std::min(32 - off, width - i);
+      const uint32_t mask = (n == 32 ? ~uint32_t(0) : (uint32_t(1) << n) - 1) << off;
+      uint32_t& w = port[bit / 32];
+      w = (w & ~mask) | ((uint32_t(bits(i)) << off) & mask);
+      i += n;
+    }
+  }
 }
 
 template <class T>
