@@ -379,17 +379,22 @@ void FrameWork::take_rtl_clocks_or_throw(TileWork& w) {
   for (const TriangleWork& t : w.tris) golden += t;
   const vis::EvuJob job = vis::make_evu_job(m_seg->golden->frame(), w.tile, &golden);
   const RtlTileClocks clocks = m_cfg.rtl->run(job);
-  std::unordered_map<uint32_t, const RtlTriangleClocks*> by_id;
-  for (const RtlTriangleClocks& t : clocks.tris) by_id.emplace(t.id, &t);
-  for (TriangleWork& t : w.tris) {
-    const auto it = by_id.find(t.id);
-    if (it == by_id.end())
-      throw std::logic_error("fidelity rtl: the RTL returned no clocks for triangle " + std::to_string(t.id) +
-                             " of tile " + std::to_string(w.tile));
+  // The job's triangles are the resolver's, in its order (a fan of one clipped triangle shares
+  // an id, so match by position and check the id).
+  if (clocks.tris.size() != w.tris.size())
+    throw std::logic_error("fidelity rtl: the RTL returned clocks for " + std::to_string(clocks.tris.size()) +
+                           " triangles of tile " + std::to_string(w.tile) + ", which has " +
+                           std::to_string(w.tris.size()));
+  for (size_t i = 0; i < w.tris.size(); ++i) {
+    TriangleWork& t = w.tris[i];
+    const RtlTriangleClocks& r = clocks.tris[i];
+    if (r.id != t.id)
+      throw std::logic_error("fidelity rtl: tile " + std::to_string(w.tile) + ": the RTL's triangle " +
+                             std::to_string(i) + " is " + std::to_string(r.id) + ", the model's " + std::to_string(t.id));
     t.rtl = true;
-    t.rtl_reject = it->second->reject;
-    t.rtl_clip = std::accumulate(it->second->splits.begin(), it->second->splits.end(), uint64_t(0));
-    t.rtl_occlude = std::accumulate(it->second->pieces.begin(), it->second->pieces.end(), uint64_t(0));
+    t.rtl_reject = r.reject;
+    t.rtl_clip = std::accumulate(r.splits.begin(), r.splits.end(), uint64_t(0));
+    t.rtl_occlude = std::accumulate(r.pieces.begin(), r.pieces.end(), uint64_t(0));
   }
   w.rtl_reject_tile = clocks.reject_latency + clocks.list_load;
 }
