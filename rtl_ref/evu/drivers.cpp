@@ -1,6 +1,7 @@
 #include "drivers.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <deque>
 #include <stdexcept>
 #include <string>
@@ -317,6 +318,37 @@ OccludeDriver::Result OccludeDriver::run(const geom::ConvexPolygon& piece, const
   v.o_valid = 0;
   r.clocks = clocks;
   return r;
+}
+
+std::vector<uint32_t> occluder_order(const ReplayedJob& r) {
+  std::vector<uint32_t> order;
+  for (uint32_t i = 0; i < r.triangles.size(); ++i)
+    if (r.triangles[i].opaque) order.push_back(i);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](uint32_t a, uint32_t c) { return r.triangles[a].t.z_min < r.triangles[c].t.z_min; });
+  return order;
+}
+
+void screened_occluders(const ReplayedJob& r, const std::vector<uint32_t>& order, const ReplayedTriangle& rt,
+                        const geom::RationalPoint& q, std::vector<OccludeDriver::Occluder>& out) {
+  const double qx = q.fx / q.fw, qy = q.fy / q.fw;
+  out.clear();
+  for (uint32_t oi : order) {
+    const ReplayedTriangle& u = r.triangles[oi];
+    if (u.t.z_min > rt.t.z_max) break;
+    if (u.id == rt.id) continue;
+    if (qx < u.t.bbox.x0 - 1.0 || qx > u.t.bbox.x1 + 1.0 || qy < u.t.bbox.y0 - 1.0 || qy > u.t.bbox.y1 + 1.0) continue;
+    out.push_back({&u.t, u.id});
+  }
+}
+
+int run_bench(int (*bench)(int, char**), int argc, char** argv) {
+  try {
+    return bench(argc, argv);
+  } catch (const std::exception& e) {
+    std::printf("%s\n", e.what());
+    return 1;
+  }
 }
 
 }  // namespace tilevis::rtl

@@ -16,6 +16,7 @@
 
 #include "geom/clip.h"
 #include "geom/polygon.h"
+#include "scoreboard.h"
 #include "visibility/svgpu.h"
 
 namespace tilevis::rtl {
@@ -113,5 +114,17 @@ class OccludeDriver {
   struct Impl;
   std::unique_ptr<Impl> m;
 };
+
+// The tile's opaque triangles as indices into r.triangles, nearest z_min first (stable), as
+// TileFrame::occluders orders them.
+std::vector<uint32_t> occluder_order(const ReplayedJob& r);
+// The occluders the analytic resolver tests exactly for a piece of `rt` with interior point q
+// (analytic_resolver.cpp, occluded(): its screens, in `order`); the exact tests go to the RTL.
+void screened_occluders(const ReplayedJob& r, const std::vector<uint32_t>& order, const ReplayedTriangle& rt,
+                        const geom::RationalPoint& q, std::vector<OccludeDriver::Occluder>& out);
+
+// A testbench's main: runs `bench`, and reports an exception (the RTL stopped: an assertion, a
+// pass that never ends) with exit status 1.
+int run_bench(int (*bench)(int, char**), int argc, char** argv);
 
 }  // namespace tilevis::rtl

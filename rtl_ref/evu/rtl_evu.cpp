@@ -102,11 +102,7 @@ class VerilatedEvu final : public RtlEvu {
 
     // Occlude: each piece against the tile's opaque triangles, nearest z_min first (stable), as
     // TileFrame::occluders, with the resolver's screens before each exact test.
-    std::vector<uint32_t> occ_ix;
-    for (uint32_t i = 0; i < r.triangles.size(); ++i)
-      if (r.triangles[i].opaque) occ_ix.push_back(i);
-    std::stable_sort(occ_ix.begin(), occ_ix.end(),
-                     [&](uint32_t a, uint32_t c) { return r.triangles[a].t.z_min < r.triangles[c].t.z_min; });
+    const std::vector<uint32_t> occ_ix = rtl::occluder_order(r);
     int64_t tests = 0, visible = 0;
     std::vector<rtl::OccludeDriver::Occluder> occ;
     for (size_t i = 0; i < r.triangles.size(); ++i) {
@@ -117,17 +113,7 @@ class VerilatedEvu final : public RtlEvu {
           tc.pieces.push_back(0);
           continue;
         }
-        const geom::RationalPoint q = geom::interior_point(piece);
-        const double qx = q.fx / q.fw, qy = q.fy / q.fw;
-        occ.clear();
-        for (uint32_t oi : occ_ix) {
-          const auto& u = r.triangles[oi];
-          if (u.t.z_min > rt.t.z_max) break;
-          if (u.id == rt.id) continue;
-          if (qx < u.t.bbox.x0 - 1.0 || qx > u.t.bbox.x1 + 1.0 || qy < u.t.bbox.y0 - 1.0 || qy > u.t.bbox.y1 + 1.0)
-            continue;
-          occ.push_back({&u.t, u.id});
-        }
+        rtl::screened_occluders(r, occ_ix, rt, geom::interior_point(piece), occ);
         const rtl::OccludeDriver::Result o = m_occlude.run(piece, rt.t, rt.id, occ);
         if (!o.q_matches) fail("Occlude's interior point differs from geom::interior_point");
         if (o.verdict_mismatches) fail("Occlude's verdicts differ from svgpu::occludes");

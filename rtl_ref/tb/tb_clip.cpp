@@ -189,11 +189,4 @@ int bench(int argc, char** argv) {
 }
 }  // namespace
 
-int main(int argc, char** argv) {
-  try {
-    return bench(argc, argv);
-  } catch (const std::exception& e) {  // the RTL stopped (an assertion, a pass that never ends)
-    std::printf("%s\n", e.what());
-    return 1;
-  }
-}
+int main(int argc, char** argv) { return tilevis::rtl::run_bench(bench, argc, argv); }

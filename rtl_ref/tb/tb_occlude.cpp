@@ -163,12 +163,7 @@ int bench(int argc, char** argv) {
       if (seen++ % job_stride != 0) return;
       ++checked;
       const ReplayedJob r = replay_job(j);
-      // Occluders: the tile's opaque triangles, nearest z_min first (stable), as TileFrame::occluders.
-      std::vector<uint32_t> occ_ix;
-      for (uint32_t i = 0; i < r.triangles.size(); ++i)
-        if (r.triangles[i].opaque) occ_ix.push_back(i);
-      std::stable_sort(occ_ix.begin(), occ_ix.end(),
-                       [&](uint32_t a, uint32_t c) { return r.triangles[a].t.z_min < r.triangles[c].t.z_min; });
+      const std::vector<uint32_t> occ_ix = occluder_order(r);
       int64_t tests = 0, visible = 0, pieces = 0;
       const uint64_t clocks0 = cov.clocks;
       uint64_t model = 10;
@@ -177,19 +172,8 @@ int bench(int argc, char** argv) {
         int64_t tri_pieces = 0;
         for (const auto& piece : rt.pieces) {
           if (piece.empty()) continue;
-          const geom::RationalPoint q = geom::interior_point(piece);
-          const double qx = q.fx / q.fw, qy = q.fy / q.fw;
-          // The resolver's scan (analytic_resolver.cpp, occluded()): the screens before an
-          // exact test are its own; the exact tests go to the RTL.
           std::vector<Occluder> occ;
-          for (uint32_t oi : occ_ix) {
-            const auto& u = r.triangles[oi];
-            if (u.t.z_min > rt.t.z_max) break;
-            if (u.id == rt.id) continue;
-            if (qx < u.t.bbox.x0 - 1.0 || qx > u.t.bbox.x1 + 1.0 || qy < u.t.bbox.y0 - 1.0 || qy > u.t.bbox.y1 + 1.0)
-              continue;
-            occ.push_back({&u.t, u.id});
-          }
+          screened_occluders(r, occ_ix, rt, geom::interior_point(piece), occ);
           const uint64_t before = cov.tests;
           const bool hidden = b.run(piece, rt.t, rt.id, occ, cov);
           tests += int64_t(cov.tests - before);
@@ -220,11 +204,4 @@ int bench(int argc, char** argv) {
 }
 }  // namespace
 
-int main(int argc, char** argv) {
-  try {
-    return bench(argc, argv);
-  } catch (const std::exception& e) {  // the RTL stopped (an assertion, a pass that never ends)
-    std::printf("%s\n", e.what());
-    return 1;
-  }
-}
+int main(int argc, char** argv) { return tilevis::rtl::run_bench(bench, argc, argv); }

@@ -214,19 +214,22 @@ INSTANTIATE_TEST_SUITE_P(Scenes, ZBufferEmulation,
                                             ::testing::Values(1u, 4u)));
 
 #if TILEVIS_HAVE_SCENE
+// A shipped scene's first frame at 320x240, 1 sample.
+static trace::Frame shipped_small(const std::string& name) {
+  tilevis::scene::BuildOptions o;
+  o.width = 320;
+  o.height = 240;
+  o.samples = 1;
+  return tilevis::scene::build_trace(std::filesystem::path(TILEVIS_SOURCE_DIR) / "traces/scenes" / (name + ".json"), o)
+      .frames.at(0);
+}
+
 // Hybrid on shipped failure scenes (interpenetration, decals, slivers, broken meshes) at a small
 // viewport: the detector's crossing verdicts, their work counts and the per-pixel tiles equal
 // golden's; some tiles do go per pixel for interpenetration.
 TEST(Emulation, HybridOnShippedFailureScenes) {
   for (const char* name : {"interpenetrating", "decals", "slivers", "broken_mesh"}) {
-    tilevis::scene::BuildOptions o;
-    o.width = 320;
-    o.height = 240;
-    o.samples = 1;
-    const trace::Frame f = tilevis::scene::build_trace(std::filesystem::path(TILEVIS_SOURCE_DIR) / "traces/scenes" /
-                                                           (std::string(name) + ".json"),
-                                                       o)
-                               .frames.at(0);
+    const trace::Frame f = shipped_small(name);
     for (uint32_t tile : {8u, 32u}) {
       const auto g = ct::golden_of(f, tile, tile, "hybrid");
       auto cfg = ct::config(cuda::Device::cpu, cuda::Precision::exact, tile, tile);
@@ -248,14 +251,7 @@ TEST(Emulation, HybridOnShippedFailureScenes) {
 // used only where its sign is proven, else the exact area of the region the piece's lines bound).
 TEST(Emulation, FloatAreasNeverNegativeOnShippedFailureScenes) {
   for (const char* name : {"slivers", "broken_mesh", "decals", "interpenetrating"}) {
-    tilevis::scene::BuildOptions o;
-    o.width = 320;
-    o.height = 240;
-    o.samples = 1;
-    const trace::Frame f = tilevis::scene::build_trace(std::filesystem::path(TILEVIS_SOURCE_DIR) / "traces/scenes" /
-                                                           (std::string(name) + ".json"),
-                                                       o)
-                               .frames.at(0);
+    const trace::Frame f = shipped_small(name);
     const auto r = cuda::run_cuda(f, ct::config(cuda::Device::cpu, cuda::Precision::floating, 32, 32));
     EXPECT_EQ(r.float_negative_areas, 0u) << name;
     EXPECT_EQ(r.float_anomalies, 0u) << name;
