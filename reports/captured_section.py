@@ -20,6 +20,8 @@ from collections import defaultdict
 
 import matplotlib.pyplot as plt
 
+from report_format import fmt_int, fmt_pct, fmt_signed_pct, tile_key
+
 SIM_PRODUCERS = ["sim_tile", "sim_primitive", "sim_analytic"]  # the model's fidelity levels, preferred first
 TRUTH_MODES = ["none", "early_z", "hsr"]
 EVU_MODES = ["analytic", "hybrid"]
@@ -40,23 +42,6 @@ def split(manifest, rows, scenes):
             captured.append(dict(r, frame=frames[r["dir"]]))
     names = {r["scene"] for r in captured} | set(manifest.get("workloads", {}))
     return captured, [r for r in rows if r.get("dir") not in frames], [s for s in scenes if s not in names]
-
-
-def _tile_key(t):
-    w, h = (int(v) for v in t.split("x"))
-    return (w * h, w, h)
-
-
-def _int(x):
-    return "–" if x is None else f"{int(round(x)):,}"
-
-
-def _pct(x, digits=1):
-    return "–" if x is None else f"{100 * x:.{digits}f} %"
-
-
-def _signed_pct(x):
-    return "–" if x is None else f"{100 * x:+.1f} %"
 
 
 class Workload:
@@ -92,10 +77,10 @@ class Workload:
 
     def tiles(self, producer, mode):
         return sorted({t for (p, m, t) in self.points if p == producer and m == mode
-                       and self.complete(p, m, t) is not None}, key=_tile_key)
+                       and self.complete(p, m, t) is not None}, key=tile_key)
 
     def fragment_tile(self):
-        tiles = sorted({t for (p, m, t) in self.points}, key=_tile_key)
+        tiles = sorted({t for (p, m, t) in self.points}, key=tile_key)
         return FRAGMENT_TILE if FRAGMENT_TILE in tiles else (tiles[0] if tiles else None)
 
     def agreement(self, producer, mode, tile):
@@ -158,7 +143,7 @@ def summarise(w):
         by_tile = {t: w.total(prod, m, t, "cycles") for t in w.tiles(prod, m)}
         by_tile = {t: c for t, c in by_tile.items() if c is not None}
         if by_tile:
-            b = min(by_tile, key=lambda t: (by_tile[t], _tile_key(t)))
+            b = min(by_tile, key=lambda t: (by_tile[t], tile_key(t)))
             best[m] = {"tile": b, "cycles": by_tile[b], "cycles_by_tile": by_tile, "producer": prod}
     s["best_tile"] = best
     agree = {}
@@ -228,11 +213,11 @@ def section(rep, out, rows, manifest, provenance):
             return (f"no: {e['passes_compared'] - e['passes_equal']} of {e['passes_compared']} passes, "
                     f"{e['mismatched_samples']:,} samples")
 
-        table.append([s["workload"], s["passes"], _int(s["triangles"]), _pct(s["non_occluding_share"]),
+        table.append([s["workload"], s["passes"], fmt_int(s["triangles"]), fmt_pct(s["non_occluding_share"]),
                       "–" if s["overdraw"] is None else f"{s['overdraw']:.2f}",
-                      _int(f["none"]), _int(f["early_z"]), _int(f["hsr"]), _int(f["analytic"]), _int(f["hybrid"]),
-                      _pct(sv.get("hybrid_vs_none")), _pct(sv.get("hybrid_vs_early_z")),
-                      _signed_pct(sv.get("hybrid_vs_hsr")), _signed_pct(s.get("hybrid_cycle_saving_vs_hsr")),
+                      fmt_int(f["none"]), fmt_int(f["early_z"]), fmt_int(f["hsr"]), fmt_int(f["analytic"]), fmt_int(f["hybrid"]),
+                      fmt_pct(sv.get("hybrid_vs_none")), fmt_pct(sv.get("hybrid_vs_early_z")),
+                      fmt_signed_pct(sv.get("hybrid_vs_hsr")), fmt_signed_pct(s.get("hybrid_cycle_saving_vs_hsr")),
                       b["hybrid"]["tile"] if "hybrid" in b else "–", b["analytic"]["tile"] if "analytic" in b else "–",
                       eq_text("analytic"), eq_text("hybrid")])
     rep.table(head, table)
@@ -252,9 +237,9 @@ def section(rep, out, rows, manifest, provenance):
     for s in summaries:
         b = s["best_tile"].get("hybrid") or s["best_tile"].get("analytic")
         if b and len(b["cycles_by_tile"]) > 1:
-            tiles_text.append(f"{s['workload']} " + " / ".join(f"{t} {_int(c)}" for t, c in
+            tiles_text.append(f"{s['workload']} " + " / ".join(f"{t} {fmt_int(c)}" for t, c in
                                                                 sorted(b["cycles_by_tile"].items(),
-                                                                       key=lambda kv: _tile_key(kv[0]))))
+                                                                       key=lambda kv: tile_key(kv[0]))))
     if tiles_text:
         rep.para("Model cycles per tile size (hybrid, summed over passes): " + "; ".join(tiles_text) + ".")
     rep.para(provenance(used), "*" + provenance(used) + "*")

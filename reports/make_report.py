@@ -26,6 +26,8 @@ import numpy as np  # noqa: E402
 from matplotlib.colors import LogNorm, TwoSlopeNorm  # noqa: E402
 
 import captured_section  # noqa: E402  (the workloads given as traces: their own section)
+from report_format import fmt_int, fmt_pct, tile_key  # noqa: E402
+from report_format import fmt_signed_pct as fmt_saving  # noqa: E402
 
 TOTALS = ["triangles_in", "triangles_front", "silhouette_edges", "pair_tests", "candidate_pairs", "clip_polygons",
           "pieces", "visible_pieces", "occlusion_tests", "samples_covered", "fragments_generated",
@@ -157,14 +159,6 @@ def read_csv(path):
 
 # ------------------------------------------------------------------ helpers
 
-def fmt_int(x):
-    return "–" if x is None else f"{int(round(x)):,}"
-
-
-def fmt_pct(x, digits=1):
-    return "–" if x is None else f"{100 * x:.{digits}f} %"
-
-
 def fmt_s(x):
     if x is None:
         return "–"
@@ -178,11 +172,6 @@ def fmt_bytes(x):
         if x >= div:
             return f"{x / div:.1f} {unit}"
     return f"{int(x)} B"
-
-
-def tile_key(t):
-    w, h = (int(v) for v in t.split("x"))
-    return (w * h, w, h)
 
 
 def res_key(r):
@@ -697,10 +686,6 @@ def saving(evu, hsr, col="cycles"):
     """What the EVU saves over per-pixel HSR at the same setting: 1 - EVU / HSR (negative: it costs more)."""
     a, b = (evu or {}).get(col), (hsr or {}).get(col)
     return (1 - a / b) if a is not None and b else None
-
-
-def fmt_saving(x):
-    return "–" if x is None else f"{100 * x:+.1f} %"
 
 
 def crossover_settings(rows):
