@@ -18,6 +18,67 @@
 // < 2^(51+D) + 2^(49+D) (86 bits); t = num / den: |num|, |den| <= 2^73 (75 bits); E <= 2^(74+D)
 // (108 bits); M < 2^(100+D) (134 bits); M den - E area w < 2^(174+D) (208 bits). Asserted in
 // simulation.
+// A lane's arithmetic blocks are modules of their own so that synthesis maps each once
+// (rtl_ref/synth, hierarchical flow).
+
+// The side of a polygon vertex (x : y : w) to the edge's line (a, b, c): a x + b y + c w
+// (stage 1, MAXV per lane).
+module DepthTestSide #(
+    parameter int LA = 26, LC = 49, PX = 74, PW = 51, SW = 100
+) (
+    input  wire signed [LA-1:0] la, lb,
+    input  wire signed [LC-1:0] lc,
+    input  wire signed [PX-1:0] x, y,
+    input  wire signed [PW-1:0] w,
+    output wire signed [SW-1:0] s
+);
+  assign s = SW'(la * x) + SW'(lb * y) + SW'(lc * w);
+endmodule
+
+// The crossing of a polygon edge's line (pa, pb, pc) with the edge's line (la, lb, lc), the point
+// of l x l_i normalised to w > 0 (stage 2, one per chord end).
+module DepthTestCrossing #(
+    parameter int LA = 26, LC = 49, PX = 74, PW = 51
+) (
+    input  wire signed [LA-1:0] la, lb, pa, pb,
+    input  wire signed [LC-1:0] lc, pc,
+    output wire signed [PX-1:0] x, y,
+    output wire signed [PW-1:0] w
+);
+  wire signed [PX-1:0] x_i = PX'(lb * pc) - PX'(pb * lc), y_i = PX'(lc * pa) - PX'(pc * la);
+  wire signed [PW-1:0] w_i = PW'(la * pb) - PW'(pa * lb);
+  assign x = w_i < 0 ? -x_i : x_i;
+  assign y = w_i < 0 ? -y_i : y_i;
+  assign w = w_i < 0 ? -w_i : w_i;
+endmodule
+
+// The depth along the edge at a chord end (x : y : w) against the triangle's plane, exact:
+// M den - E area w (stage 3, one per chord end; its sign is geom::depth_order_edge's).
+module DepthTestAlongEdge #(
+    parameter int ZW = 32, CW = 25, PX = 74, PW = 51, AW = 59, GW = 84,
+    parameter int NUMW = 75, EW = 108, MW = 134, DW = 208
+) (
+    input  wire signed [PX-1:0] x, y,
+    input  wire signed [PW-1:0] w,
+    input  wire signed [CW-1:0] ax, ay,
+    input  wire [ZW-1:0]        az,
+    input  wire signed [CW:0]   dx, dy,
+    input  wire signed [ZW+1:0] dz,
+    input  wire                 x_major,
+    input  wire signed [AW-1:0] alpha, beta,
+    input  wire signed [GW-1:0] gamma,
+    input  wire signed [PW-1:0] area,
+    output wire signed [DW-1:0] de
+);
+  wire signed [NUMW-1:0] num0 = x_major ? NUMW'(x) - NUMW'(ax * w) : NUMW'(y) - NUMW'(ay * w);
+  wire signed [NUMW-1:0] den0 = x_major ? NUMW'(dx * w) : NUMW'(dy * w);
+  wire signed [NUMW-1:0] num = den0 < 0 ? -num0 : num0, den = den0 < 0 ? -den0 : den0;
+  wire signed [EW-1:0] e = EW'($signed({1'b0, az}) * den) + EW'(dz * num);
+  wire signed [MW-1:0] m = MW'(alpha * x) + MW'(beta * y) + MW'(gamma * w);
+  wire signed [2*PW-1:0] aw = area * w;
+  assign de = DW'(m * den) - DW'(e * aw);
+endmodule
+
 module DepthTestLane #(
     parameter int MAXV = 8,
     parameter int ZW = 32, CW = 25, LA = 26, LC = 49, PX = 74, PW = 51, AW = 59, GW = 84, NW = 4
@@ -50,7 +111,8 @@ module DepthTestLane #(
     for (v = 0; v < MAXV; v = v + 1) begin : side
       wire signed [PX-1:0] x = p_vx[v*PX +: PX], y = p_vy[v*PX +: PX];
       wire signed [PW-1:0] w = p_vw[v*PW +: PW];
-      wire signed [SW-1:0] s = SW'(la * x) + SW'(lb * y) + SW'(lc * w);
+      wire signed [SW-1:0] s;
+      DepthTestSide #(.LA(LA), .LC(LC), .PX(PX), .PW(PW), .SW(SW)) u (.la(la), .lb(lb), .lc(lc), .x(x), .y(y), .w(w), .s(s));
       assign pos_w[v] = s > 0;
       assign zero_w[v] = s == 0;
     end
@@ -125,10 +187,12 @@ module DepthTestLane #(
     end
   end
   // crossing of a polygon edge line with the edge's line, w > 0 (the point of l x l_i)
-  wire signed [PX-1:0] fx_i = PX'(s1_lb * f_lc) - PX'(f_lb * s1_lc), fy_i = PX'(s1_lc * f_la) - PX'(f_lc * s1_la);
-  wire signed [PW-1:0] fw_i = PW'(s1_la * f_lb) - PW'(f_la * s1_lb);
-  wire signed [PX-1:0] gx_i = PX'(s1_lb * g_lc) - PX'(g_lb * s1_lc), gy_i = PX'(s1_lc * g_la) - PX'(g_lc * s1_la);
-  wire signed [PW-1:0] gw_i = PW'(s1_la * g_lb) - PW'(g_la * s1_lb);
+  wire signed [PX-1:0] fx_n, fy_n, gx_n, gy_n;
+  wire signed [PW-1:0] fw_n, gw_n;
+  DepthTestCrossing #(.LA(LA), .LC(LC), .PX(PX), .PW(PW)) f_cross (
+      .la(s1_la), .lb(s1_lb), .lc(s1_lc), .pa(f_la), .pb(f_lb), .pc(f_lc), .x(fx_n), .y(fy_n), .w(fw_n));
+  DepthTestCrossing #(.LA(LA), .LC(LC), .PX(PX), .PW(PW)) g_cross (
+      .la(s1_la), .lb(s1_lb), .lc(s1_lc), .pa(g_la), .pb(g_lb), .pc(g_lc), .x(gx_n), .y(gy_n), .w(gw_n));
   reg s2_valid;
   reg signed [PX-1:0] s2_fx, s2_fy, s2_gx, s2_gy;
   reg signed [PW-1:0] s2_fw, s2_gw;
@@ -140,12 +204,12 @@ module DepthTestLane #(
   always @(posedge clk) begin
     if (rst) s2_valid <= 1'b0;
     else s2_valid <= s1_valid;
-    s2_fx <= f_on ? f_vx : (fw_i < 0 ? -fx_i : fx_i);
-    s2_fy <= f_on ? f_vy : (fw_i < 0 ? -fy_i : fy_i);
-    s2_fw <= f_on ? f_vw : (fw_i < 0 ? -fw_i : fw_i);
-    s2_gx <= g_on ? g_vx : (gw_i < 0 ? -gx_i : gx_i);
-    s2_gy <= g_on ? g_vy : (gw_i < 0 ? -gy_i : gy_i);
-    s2_gw <= g_on ? g_vw : (gw_i < 0 ? -gw_i : gw_i);
+    s2_fx <= f_on ? f_vx : fx_n;
+    s2_fy <= f_on ? f_vy : fy_n;
+    s2_fw <= f_on ? f_vw : fw_n;
+    s2_gx <= g_on ? g_vx : gx_n;
+    s2_gy <= g_on ? g_vy : gy_n;
+    s2_gw <= g_on ? g_vw : gw_n;
     s2_ax <= s1_ax; s2_ay <= s1_ay; s2_bx <= s1_bx; s2_by <= s1_by; s2_az <= s1_az; s2_bz <= s1_bz;
     s2_alpha <= s1_alpha; s2_beta <= s1_beta; s2_gamma <= s1_gamma; s2_area <= s1_area;
   end
@@ -170,13 +234,9 @@ module DepthTestLane #(
     for (k = 0; k < 2; k = k + 1) begin : along_edge
       wire signed [PX-1:0] x = k == 0 ? s2_fx : s2_gx, y = k == 0 ? s2_fy : s2_gy;
       wire signed [PW-1:0] w = k == 0 ? s2_fw : s2_gw;
-      wire signed [NUMW-1:0] num0 = x_major ? NUMW'(x) - NUMW'(s2_ax * w) : NUMW'(y) - NUMW'(s2_ay * w);
-      wire signed [NUMW-1:0] den0 = x_major ? NUMW'(dx * w) : NUMW'(dy * w);
-      wire signed [NUMW-1:0] num = den0 < 0 ? -num0 : num0, den = den0 < 0 ? -den0 : den0;
-      wire signed [EW-1:0] e = EW'($signed({1'b0, s2_az}) * den) + EW'(dz * num);
-      wire signed [MW-1:0] m = MW'(s2_alpha * x) + MW'(s2_beta * y) + MW'(s2_gamma * w);
-      wire signed [2*PW-1:0] aw = s2_area * w;
-      assign de[k] = DW'(m * den) - DW'(e * aw);
+      DepthTestAlongEdge #(.ZW(ZW), .CW(CW), .PX(PX), .PW(PW), .AW(AW), .GW(GW), .NUMW(NUMW), .EW(EW), .MW(MW), .DW(DW)) u (
+          .x(x), .y(y), .w(w), .ax(s2_ax), .ay(s2_ay), .az(s2_az), .dx(dx), .dy(dy), .dz(dz), .x_major(x_major),
+          .alpha(s2_alpha), .beta(s2_beta), .gamma(s2_gamma), .area(s2_area), .de(de[k]));
     end
   endgenerate
   wire signed [DW-1:0] de_f = de[0], de_g = de[1];

@@ -13,6 +13,46 @@
 // plane alpha, beta <= 2^(25+D) (AW = 59), gamma < 2^(50+D) (GW = 84), 0 < area <= 2^49
 // (PW = 51); M = alpha x + beta y + gamma w < 2^(200+D) (MW = 234); M_u area_t - M_t area_u
 // < 2^(250+D) (284 bits). Asserted in simulation.
+// A lane's arithmetic blocks are modules of their own so that synthesis maps each once
+// (rtl_ref/synth, hierarchical flow).
+
+// A coordinate of the centroid's numerator: x0 w1 w2 + x1 w0 w2 + x2 w0 w1 (two per lane: x, y).
+module OccludeCentroidNum #(
+    parameter int PX = 74, PW = 51, QX = 174
+) (
+    input  wire signed [PX-1:0]   x0, x1, x2,
+    input  wire signed [2*PW-1:0] w12, w02, w01,
+    output wire signed [QX-1:0]   c
+);
+  assign c = QX'(x0 * w12) + QX'(x1 * w02) + QX'(x2 * w01);
+endmodule
+
+// A plane's depth numerator at q: M = alpha x + beta y + gamma w (two per lane: t's and u's).
+module OccludeNumerator #(
+    parameter int QX = 174, QW = 151, AW = 59, GW = 84, MW = 234
+) (
+    input  wire signed [AW-1:0] alpha, beta,
+    input  wire signed [GW-1:0] gamma,
+    input  wire signed [QX-1:0] x, y,
+    input  wire signed [QW-1:0] w,
+    output wire signed [MW-1:0] m
+);
+  assign m = MW'(alpha * x) + MW'(beta * y) + MW'(gamma * w);
+endmodule
+
+// The side of q to an occluder's edge line: a x + b y + c w (three per lane).
+module OccludeEdgeSide #(
+    parameter int QX = 174, QW = 151, LA = 26, LC = 49, SW = 200
+) (
+    input  wire signed [LA-1:0] a, b,
+    input  wire signed [LC-1:0] c,
+    input  wire signed [QX-1:0] x, y,
+    input  wire signed [QW-1:0] w,
+    output wire signed [SW-1:0] s
+);
+  assign s = SW'(a * x) + SW'(b * y) + SW'(c * w);
+endmodule
+
 module OccludeLane #(
     parameter int PX = 74, PW = 51, QX = 174, QW = 151, LA = 26, LC = 49, AW = 59, GW = 84, MW = 234,
     parameter int IDW = 32
@@ -49,8 +89,11 @@ module OccludeLane #(
   wire signed [PX-1:0] y0 = p_vy[0 +: PX], y1 = p_vy[PX +: PX], y2 = p_vy[2*PX +: PX];
   wire signed [PW-1:0] w0 = p_vw[0 +: PW], w1 = p_vw[PW +: PW], w2 = p_vw[2*PW +: PW];
   wire signed [2*PW-1:0] w12 = w1 * w2, w02 = w0 * w2, w01 = w0 * w1;
-  wire signed [QX-1:0] cx = QX'(x0 * w12) + QX'(x1 * w02) + QX'(x2 * w01);
-  wire signed [QX-1:0] cy = QX'(y0 * w12) + QX'(y1 * w02) + QX'(y2 * w01);
+  wire signed [QX-1:0] cx, cy;
+  OccludeCentroidNum #(.PX(PX), .PW(PW), .QX(QX)) cx_num (
+      .x0(x0), .x1(x1), .x2(x2), .w12(w12), .w02(w02), .w01(w01), .c(cx));
+  OccludeCentroidNum #(.PX(PX), .PW(PW), .QX(QX)) cy_num (
+      .x0(y0), .x1(y1), .x2(y2), .w12(w12), .w02(w02), .w01(w01), .c(cy));
   wire signed [QW-1:0] cw = QW'(QW'(3) * w0 * w12);
   reg p1;
   reg signed [AW-1:0] ta, tb;
@@ -58,7 +101,9 @@ module OccludeLane #(
   reg signed [PW-1:0] tarea;
   reg [IDW-1:0] tid;
   // ---- piece stage 2: t's numerator at q -------------------------------------------------
-  wire signed [MW-1:0] mt = MW'(ta * q_x) + MW'(tb * q_y) + MW'(tg * q_w);
+  wire signed [MW-1:0] mt;
+  OccludeNumerator #(.QX(QX), .QW(QW), .AW(AW), .GW(GW), .MW(MW)) mt_num (
+      .alpha(ta), .beta(tb), .gamma(tg), .x(q_x), .y(q_y), .w(q_w), .m(mt));
   reg signed [MW-1:0] m_t;
   always @(posedge clk) begin
     if (rst) begin
@@ -83,7 +128,8 @@ module OccludeLane #(
     for (k = 0; k < 3; k = k + 1) begin : edge_side
       wire signed [LA-1:0] a = u_la[k*LA +: LA], b = u_lb[k*LA +: LA];
       wire signed [LC-1:0] c = u_lc[k*LC +: LC];
-      wire signed [SW-1:0] s = SW'(a * q_x) + SW'(b * q_y) + SW'(c * q_w);
+      wire signed [SW-1:0] s;
+      OccludeEdgeSide #(.QX(QX), .QW(QW), .LA(LA), .LC(LC), .SW(SW)) u (.a(a), .b(b), .c(c), .x(q_x), .y(q_y), .w(q_w), .s(s));
       // tie rule: on the line counts as in_edge iff (a, b) is lexicographically positive
       assign in_edge[k] = s > 0 || (s == 0 && (a > 0 || (a == 0 && b > 0)));
 `ifndef SYNTHESIS
@@ -96,7 +142,9 @@ module OccludeLane #(
 `endif
     end
   endgenerate
-  wire signed [MW-1:0] mu = MW'(u_alpha * q_x) + MW'(u_beta * q_y) + MW'(u_gamma * q_w);
+  wire signed [MW-1:0] mu;
+  OccludeNumerator #(.QX(QX), .QW(QW), .AW(AW), .GW(GW), .MW(MW)) mu_num (
+      .alpha(u_alpha), .beta(u_beta), .gamma(u_gamma), .x(q_x), .y(q_y), .w(q_w), .m(mu));
   reg o1, o1_contains, o1_earlier;
   reg signed [MW-1:0] m_u;
   reg signed [PW-1:0] uarea;
