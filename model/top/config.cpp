@@ -100,9 +100,21 @@ constexpr uint64_t kMaxU32 = std::numeric_limits<uint32_t>::max();
 Registry::Registry() {
   add_enum<Fidelity>("sim.fidelity", "analytic: closed form per tile; tile: one transaction per tile per unit; "
                      "primitive: per-primitive transactions, FIFO back-pressure, memory contention; "
-                     "rtl: primitive with the EVU's clocks from its Verilated RTL (needs Verilator at build time)",
-                     {Fidelity::analytic, Fidelity::tile, Fidelity::primitive, Fidelity::rtl},
+                     "rtl: primitive with the EVU's clocks from its Verilated RTL (needs Verilator at build time); "
+                     "auto: primitive on a random sample of each segment's tiles, grown until the frame's confidence "
+                     "interval fits sim.error_budget, the rest estimated (ids only for the tiles simulated)",
+                     {Fidelity::analytic, Fidelity::tile, Fidelity::primitive, Fidelity::rtl, Fidelity::automatic},
                      +[](TilerConfig& c) -> Fidelity& { return c.sim.fidelity; });
+  TV_REAL("sim.error_budget", scheduler.sampling.error_budget, "ratio", 1e-4, 1.0,
+          "fidelity auto: the confidence interval's half-width to reach, a share of the frame's cycles");
+  TV_REAL("sim.confidence", scheduler.sampling.confidence, "ratio", 0.5, 0.9999,
+          "fidelity auto: two-sided confidence of the frame's interval");
+  TV_UINT("sim.sample_cluster", scheduler.sampling.cluster_tiles, "tiles", 1, 1u << 16,
+          "fidelity auto: consecutive tiles (scheduler order) per sampling unit");
+  TV_UINT("sim.sample_first", scheduler.sampling.first_clusters, "clusters", 2, 1u << 20,
+          "fidelity auto: clusters in the first round of a segment's sample");
+  TV_UINT("sim.sample_seed", scheduler.sampling.seed, "", 0, std::numeric_limits<uint64_t>::max(),
+          "fidelity auto: seed of the sample (the same seed, the same tiles)");
   add_enum<Mode>("sim.mode", "visibility: analytic (EVU), hybrid (EVU, and the HSR unit for tiles where the analytic answer can be wrong), hsr (per-pixel HSR unit), early_z, none",
                  {Mode::analytic, Mode::hybrid, Mode::hsr, Mode::early_z, Mode::none}, +[](TilerConfig& c) -> Mode& { return c.sim.mode; });
   TV_UINT("sim.tile_width", sim.tile_width, "pixels", geom::TileGrid::kMinTile, geom::TileGrid::kMaxTile, "tile width");

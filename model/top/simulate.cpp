@@ -1,6 +1,7 @@
 #include "top/simulate.h"
 
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <fstream>
 
@@ -69,6 +70,7 @@ SimOutput simulate(const trace::Frame& frame, const TilerConfig& config, const S
   fc.hybrid_pair_budget = config.evu.hybrid_pair_budget;
   fc.detection_bin = config.evu.detection_bin;
   fc.progress = options.progress;
+  fc.sampled = config.sim.fidelity == Fidelity::automatic;
   std::unique_ptr<RtlEvu> rtl;
   if (config.sim.fidelity == Fidelity::rtl && uses_evu(config.sim.mode)) {
     rtl = make_rtl_evu(config.evu.reject.lanes, config.evu.triangle_list_entries, config.evu.edge_list_entries);
@@ -93,7 +95,7 @@ SimOutput simulate(const trace::Frame& frame, const TilerConfig& config, const S
     if (!work.failure().empty()) throw std::runtime_error(work.failure());
     if (!tiler.frame_done())
       throw std::logic_error("the simulation ran out of events before the frame was written (a deadlock in the model)");
-    out.cycles = tiler.simulated_cycles();
+    out.cycles = fc.sampled ? uint64_t(std::llround(tiler.scheduler().frame_estimate())) : tiler.simulated_cycles();
   } else {
     out.cycles = tiler.run_analytic();
   }
@@ -131,6 +133,7 @@ SimOutput simulate(const trace::Frame& frame, const TilerConfig& config, const S
              {"cores", tiler.cores_json()},
              {"triangles", work.triangle_accounts()},
              {"systemc_reports", out.systemc_reports},
+             {"sampling", fc.sampled ? tiler.scheduler().sampling_json() : nlohmann::json(nullptr)},
              {"host_seconds", out.host_seconds}};
   return out;
 }

@@ -20,7 +20,8 @@ Tiler::Tiler(const sc_core::sc_module_name& name, const TilerConfig& config, Fra
   m_env.period = sc_core::sc_time(1e6 / config.sim.clock_mhz, sc_core::SC_PS);
   m_env.trace = trace_signals;
   m_env.waits = &m_waits;
-  const bool per_primitive = config.sim.fidelity == Fidelity::primitive || config.sim.fidelity == Fidelity::rtl;
+  const bool per_primitive = config.sim.fidelity == Fidelity::primitive || config.sim.fidelity == Fidelity::rtl ||
+                             config.sim.fidelity == Fidelity::automatic;
   const int geometry_depth = per_primitive ? int(config.sim.fifo_primitives) : 2;
   const int render_depth = per_primitive ? int(config.sim.fifo_primitives) : int(config.sim.fifo_tiles);
   const uint32_t batch = per_primitive ? 1 : config.sim.batch_triangles;
@@ -31,7 +32,9 @@ Tiler::Tiler(const sc_core::sc_module_name& name, const TilerConfig& config, Fra
   m_silhouette = std::make_unique<SilhouetteUnit>("silhouette", m_env, config.silhouette);
   m_pb = std::make_unique<ParameterBuffer>("pb", m_env, config.pb);
   m_tiling = std::make_unique<TilingEngine>("tiling", m_env, config.tiling, *m_pb);
-  m_scheduler = std::make_unique<TileScheduler>("scheduler", m_env, config.scheduler);
+  TileSchedulerConfig scheduler = config.scheduler;
+  scheduler.sampled = config.sim.fidelity == Fidelity::automatic;
+  m_scheduler = std::make_unique<TileScheduler>("scheduler", m_env, scheduler);
 
   auto fifo = [&](const char* n, int depth) {
     m_fifos.push_back(std::make_unique<OccupancyFifo<Item>>(n, depth));
@@ -73,6 +76,7 @@ void Tiler::build_core(uint32_t k, int render_depth, bool per_primitive) {
   if (uses_hsr(config.sim.mode)) c.hsr = std::make_unique<HsrUnit>(n("hsr").c_str(), m_env, config.hsr);
   c.fragment = std::make_unique<FragmentUnit>(n("fragment").c_str(), m_env, config.fragment, *m_pb);
   c.writer = std::make_unique<TileWriter>(n("writer").c_str(), m_env, config.writer, config.framebuffer);
+  c.writer->closed = &m_scheduler->tile_closed();
 
   auto fifo = [&](const std::string& name, int depth) {
     c.fifos.push_back(std::make_unique<OccupancyFifo<Item>>((name + sfx).c_str(), depth));

@@ -45,6 +45,7 @@ class Tiler : public sc_core::sc_module {
   nlohmann::json cores_json() const;
   double memory_bound_share(uint64_t frame_cycles) const;
   Memory& memory() { return *m_memory; }
+  const TileScheduler& scheduler() const { return *m_scheduler; }
 
  private:
   // One tile core: the render pipeline behind the scheduler.

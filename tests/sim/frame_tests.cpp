@@ -3,6 +3,7 @@
 // the per-pixel modes equal the z-buffer truth; partial renders, silhouette-hash spills
 // and multi-pass EVU tiles change time and traffic, not ids; doubling the EVU's lanes on a
 // pair-bound tile cuts its busy cycles by 40-55 %; no SystemC warning anywhere.
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -321,4 +322,42 @@ TEST(Outputs, AnEmptyFrameFinishes) {
   EXPECT_TRUE(r["systemc_reports"].empty());
   EXPECT_EQ(r["totals"]["tiles_rendered"].get<uint64_t>(), 0u);
   EXPECT_EQ(r["mismatched_ids"].get<uint64_t>(), 0u);
+}
+
+// --- fidelity auto: the render of a sample of tiles at primitive granularity, the rest estimated.
+
+TEST(FidelityAuto, OneRoundOverEveryTileIsThePrimitiveLevel) {
+  const auto p = run(spheres(), {"sim.fidelity=primitive"});
+  const auto a = run(spheres(), {"sim.fidelity=auto", "sim.sample_first=1000000"});
+  expect_golden(a);  // every tile simulated: the ids and counters are whole
+  if (a.contains("error") || p.contains("error")) return;
+  EXPECT_EQ(a["totals"]["cycles"], p["totals"]["cycles"]);
+  EXPECT_EQ(a["sampling"]["tiles_simulated"], a["sampling"]["tiles"]);
+  EXPECT_EQ(a["sampling"]["relative_half_width"].get<double>(), 0.0);
+  EXPECT_TRUE(p["sampling"].is_null());
+}
+
+TEST(FidelityAuto, ASampleOfTilesBracketsThePrimitiveLevelsCycles) {
+  const trace::Frame f = simtest::shipped("bunny", 480, 270, 4);
+  const std::vector<std::string> common = {"sim.tile_width=8", "sim.tile_height=8"};
+  auto with = [&](std::vector<std::string> extra) {
+    extra.insert(extra.end(), common.begin(), common.end());
+    return run(f, extra);
+  };
+  const auto p = with({"sim.fidelity=primitive"});
+  const auto a = with({"sim.fidelity=auto", "sim.error_budget=0.05"});
+  expect_clean(a);
+  if (a.contains("error") || p.contains("error")) return;
+  const auto& s = a["sampling"];
+  const uint64_t tiles = s["tiles"], simulated = s["tiles_simulated"];
+  EXPECT_LT(simulated, tiles);  // the budget is met on part of the frame
+  EXPECT_GT(simulated, 0u);
+  EXPECT_EQ(a["totals"]["tiles_rendered"].get<uint64_t>(), simulated);
+  EXPECT_TRUE(s["within_budget"].get<bool>());
+  EXPECT_LE(s["relative_half_width"].get<double>(), 0.05);
+  // The primitive level's frame lies inside the interval (seed 1; 95 % nominal).
+  const double truth = p["totals"]["cycles"].get<double>();
+  EXPECT_GE(truth, s["interval_cycles"][0].get<double>());
+  EXPECT_LE(truth, s["interval_cycles"][1].get<double>());
+  EXPECT_EQ(a["totals"]["cycles"].get<uint64_t>(), uint64_t(std::llround(s["frame_cycles_estimated"].get<double>())));
 }

@@ -29,6 +29,7 @@ const char* to_string(Fidelity f) {
     case Fidelity::tile: return "tile";
     case Fidelity::primitive: return "primitive";
     case Fidelity::rtl: return "rtl";
+    case Fidelity::automatic: return "auto";
   }
   return "?";
 }
@@ -117,6 +118,12 @@ FrameWork::FrameWork(const trace::Frame& frame, const FrameWorkConfig& config) :
   for (size_t u = 0; u < size_t(TileUnit::count); ++u)
     if (unit_present(TileUnit(u), m_cfg.mode)) m_columns.push_back(column_name(TileUnit(u)));
   m_columns.push_back("tile_cycles");
+  if (m_cfg.sampled) {
+    m_simulated_col = m_columns.size();
+    m_columns.push_back("simulated");
+  }
+  m_tile_end.assign(m_grid.tile_count(), 0);
+  m_closed_in.assign(m_grid.tile_count(), 0);
   m_rows.assign(m_grid.tile_count(), std::vector<int64_t>(m_columns.size(), 0));
   m_stored.assign(m_rows.size(), false);
 }
@@ -308,6 +315,10 @@ void FrameWork::prepare_segment(uint32_t k) {
   }
   for (uint32_t tile : m_seg_tiles) ++m_rows[tile][c_seg];
   m_tiles_binned += m_seg_tiles.size();
+}
+
+uint32_t FrameWork::tile_triangle_count(uint32_t tile) const {
+  return uint32_t(uses_evu(m_cfg.mode) ? m_seg->golden->tile_triangles(tile).size() : m_seg->lists[tile].size());
 }
 
 TileWork* FrameWork::open_tile(uint32_t tile) {
@@ -563,8 +574,13 @@ void FrameWork::close_tile(TileWork* w) {
     bottleneck = std::max(bottleneck, w->cycles[u]);
   }
   row[c] += int64_t(bottleneck);
+  if (m_cfg.sampled) row[m_simulated_col] = 1;
+  m_tile_end[w->tile] = w->end_cycle;
+  m_closed_in[w->tile] = sg.index + 1;
   sg.open[w->tile].reset();
 }
+
+bool FrameWork::tile_closed(uint32_t tile) const { return m_seg && m_closed_in[tile] == m_seg->index + 1; }
 
 void FrameWork::finish_segment() {
   if (!m_seg) throw std::logic_error("finish_segment: no segment");

@@ -44,6 +44,8 @@ struct FrameWorkConfig {
   // Hybrid: a tile whose triangles x edges exceed this goes per pixel (0: no budget).
   uint64_t hybrid_pair_budget = 0;
   uint32_t detection_bin = 8;  // hybrid: the detector's bins, pixels (0: the tile)
+  // Fidelity auto: only a sample of the tiles is rendered; tiles.csv marks them ("simulated").
+  bool sampled = false;
   // Fidelity rtl: the Verilated EVU whose clocks analytic tiles take (not owned; null: none).
   RtlEvu* rtl = nullptr;
   // Called after each tile's visibility with (tiles resolved, tiles binned so far).
@@ -99,9 +101,12 @@ class FrameWork {
   // --- Render of one segment (one at a time, in order).
   void prepare_segment(uint32_t k);                          // binning of the segment
   const std::vector<uint32_t>& segment_tiles() const { return m_seg_tiles; }  // non-empty, row-major
+  uint32_t tile_triangle_count(uint32_t tile) const;        // binned in the open segment (before open_tile)
   TileWork* open_tile(uint32_t tile);                        // TileFetch
   void resolve_tile(TileWork& w);                            // the mode's visibility step
   void close_tile(TileWork* w);                              // TileWriter: results kept, work freed
+  bool tile_closed(uint32_t tile) const;                     // in the open segment
+  uint64_t tile_end_cycle(uint32_t tile) const { return m_tile_end[tile]; }  // its last close
   void finish_segment();
 
   // What stopped the simulation early (fidelity rtl: the RTL failed a tile), empty if nothing.
@@ -156,6 +161,9 @@ class FrameWork {
   size_t m_cycles_col = 0;
   std::vector<int32_t> m_ids;
   std::vector<double> m_visible_area;
+  std::vector<uint64_t> m_tile_end;
+  std::vector<uint32_t> m_closed_in;  // per tile: 1 + the segment it was last closed in (0: never)
+  size_t m_simulated_col = 0;
   uint64_t m_shaded = 0, m_depth_tests = 0, m_tiles_rendered = 0, m_passes_extra = 0, m_per_pixel_tiles = 0,
            m_detection_screens = 0, m_detection_tests = 0;
   uint64_t m_tiles_resolved = 0, m_tiles_binned = 0;  // progress

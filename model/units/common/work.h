@@ -25,7 +25,8 @@ enum class Fidelity : uint8_t {
   analytic,   // closed-form cycles per tile from counts, no events
   tile,       // one transaction per tile per unit (geometry units: per batch)
   primitive,  // one transaction per primitive, FIFO back-pressure, memory contention
-  rtl         // primitive, with the EVU's clocks from its Verilated RTL (rtl_ref): the reference level
+  rtl,        // primitive, with the EVU's clocks from its Verilated RTL (rtl_ref): the reference level
+  automatic   // "auto": primitive on a sample of each segment's tiles, the rest estimated (tile_sampler.h)
 };
 
 const char* to_string(Mode m);

@@ -1,6 +1,7 @@
 #include "units/tile_scheduler/tile_scheduler.h"
 
 #include <algorithm>
+#include <cmath>
 
 namespace tilevis::sim {
 namespace {
@@ -68,19 +69,134 @@ void TileScheduler::dispatch() {
     const uint32_t k = ready.read();
     m_work.prepare_segment(k);
     const std::vector<uint32_t> tiles = order(m_work.segment_tiles());
-    for (size_t i = 0; i < tiles.size(); ++i) {
-      const uint32_t core = m_cfg.policy == Schedule::dynamic ? free_core() : static_core(i);
-      Item it;
-      it.segment = k;
-      it.tile = m_work.open_tile(tiles[i]);
-      count(core);
-      push(to_core[core], it);
+    if (m_cfg.sampled) {
+      dispatch_sampled(k, tiles);
+    } else {
+      for (size_t i = 0; i < tiles.size(); ++i) {
+        const uint32_t core = next_core(i);
+        Item it;
+        it.segment = k;
+        it.tile = m_work.open_tile(tiles[i]);
+        count(core);
+        push(to_core[core], it);
+      }
     }
     Item end;
     end.kind = Item::Kind::segment_end;
     end.segment = k;
     for (uint32_t c = 0; c < m_cfg.cores; ++c) push(to_core[c], end);
   }
+}
+
+void TileScheduler::dispatch_sampled(uint32_t segment, const std::vector<uint32_t>& tiles) {
+  std::vector<double> triangles(tiles.size());
+  for (size_t i = 0; i < tiles.size(); ++i) triangles[i] = double(m_work.tile_triangle_count(tiles[i]));
+  TileSampler sampler(triangles, m_cfg.sampling, segment);
+  SegmentSample rec;
+  rec.segment = segment;
+  rec.start_cycle = cycles(sc_core::sc_time_stamp());
+  uint64_t want = std::min<uint64_t>(sampler.clusters(), std::max<uint32_t>(1, m_cfg.sampling.first_clusters));
+  while (want > 0) {
+    const std::vector<uint64_t> round = sampler.next_round(want);
+    const uint64_t round_start = cycles(sc_core::sc_time_stamp());
+    struct Sent {
+      uint32_t tile, core;
+      uint64_t cluster;
+      double triangles;
+    };
+    std::vector<Sent> sent;
+    size_t i = 0;
+    for (uint64_t c : round)
+      for (uint64_t p = sampler.cluster_begin(c); p < sampler.cluster_end(c); ++p, ++i) {
+        const uint32_t core = next_core(i);
+        Item it;
+        it.segment = segment;
+        it.tile = m_work.open_tile(tiles[p]);
+        count(core);
+        push(to_core[core], it);
+        sent.push_back({tiles[p], core, c, triangles[p]});
+      }
+    // The round ends when its last tile is written: every core empty again.
+    for (const Sent& s : sent)
+      while (!m_work.tile_closed(s.tile)) sc_core::wait(m_tile_closed);
+    rec.simulated_render += cycles(sc_core::sc_time_stamp()) - round_start;
+    ++rec.rounds;
+    // Occupancies: a core's tiles end in the order it got them.
+    std::vector<uint64_t> last(m_cfg.cores, round_start);
+    std::vector<bool> started(m_cfg.cores, false);
+    double y = 0, x = 0;
+    uint64_t m = 0;
+    for (size_t j = 0; j < sent.size(); ++j) {
+      const Sent& s = sent[j];
+      const uint64_t end = m_work.tile_end_cycle(s.tile);
+      const double occupancy = double(end - last[s.core]);
+      last[s.core] = end;
+      if (!started[s.core]) {
+        sampler.observe_fill(occupancy);
+        started[s.core] = true;
+      } else {
+        y += occupancy;
+        x += s.triangles;
+        ++m;
+      }
+      if (j + 1 == sent.size() || sent[j + 1].cluster != s.cluster) {
+        sampler.observe_cluster(y, m, x);
+        y = x = 0;
+        m = 0;
+      }
+    }
+    rec.estimate = sampler.estimate(m_cfg.cores);
+    if (rec.estimate.complete && rec.rounds == 1) break;  // the whole segment in one round: simulated, not estimated
+    // The budget is a share of the frame: what is simulated before this segment, earlier
+    // segments' corrections, this segment's render as estimated.
+    const double target = m_cfg.sampling.error_budget * (double(rec.start_cycle) + m_correction + rec.estimate.cycles);
+    if (rec.estimate.complete || rec.estimate.half_width <= target) break;
+    want = sampler.clusters_needed(target, m_cfg.cores) - sampler.clusters_taken();
+  }
+  if (!(rec.estimate.complete && rec.rounds == 1)) m_correction += rec.estimate.cycles - double(rec.simulated_render);
+  else rec.estimate.cycles = double(rec.simulated_render);
+  m_samples.push_back(rec);
+}
+
+double TileScheduler::frame_half_width() const {
+  double v = 0;
+  for (const SegmentSample& s : m_samples) v += s.estimate.half_width * s.estimate.half_width;
+  return std::sqrt(v);
+}
+
+nlohmann::json TileScheduler::sampling_json() const {
+  nlohmann::json segs = nlohmann::json::array();
+  uint64_t tiles = 0, observed = 0;
+  for (const SegmentSample& s : m_samples) {
+    tiles += s.estimate.tiles;
+    observed += s.estimate.tiles_observed;
+    segs.push_back({{"segment", s.segment},
+                    {"tiles", s.estimate.tiles},
+                    {"tiles_simulated", s.estimate.tiles_observed},
+                    {"clusters", s.estimate.clusters},
+                    {"clusters_simulated", s.estimate.clusters_observed},
+                    {"rounds", s.rounds},
+                    {"render_start_cycle", s.start_cycle},
+                    {"render_simulated_cycles", s.simulated_render},
+                    {"render_estimated_cycles", s.estimate.cycles},
+                    {"half_width_cycles", s.estimate.half_width},
+                    {"complete", s.estimate.complete}});
+  }
+  const double frame = frame_estimate(), half = frame_half_width();
+  return {{"help", "fidelity auto: each segment's render simulated on a random sample of clusters of consecutive tiles "
+                   "(rounds grown until the interval fits the budget) and estimated; geometry simulated in full"},
+          {"error_budget", m_cfg.sampling.error_budget},
+          {"confidence", m_cfg.sampling.confidence},
+          {"cluster_tiles", m_cfg.sampling.cluster_tiles},
+          {"seed", m_cfg.sampling.seed},
+          {"frame_cycles_simulated", m_frame_end},
+          {"frame_cycles_estimated", frame},
+          {"interval_cycles", {frame - half, frame + half}},
+          {"relative_half_width", frame > 0 ? half / frame : 0.0},
+          {"within_budget", frame <= 0 || half <= m_cfg.sampling.error_budget * frame},
+          {"tiles", tiles},
+          {"tiles_simulated", observed},
+          {"segments", segs}};
 }
 
 void TileScheduler::join() {

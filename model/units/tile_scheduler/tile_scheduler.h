@@ -10,7 +10,10 @@
 
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "units/common/unit_base.h"
+#include "units/tile_scheduler/tile_sampler.h"
 
 namespace tilevis::sim {
 
@@ -20,6 +23,8 @@ const char* to_string(Schedule s);
 struct TileSchedulerConfig {
   uint32_t cores = 1;
   Schedule policy = Schedule::row_major;
+  bool sampled = false;     // fidelity auto: render a sample of each segment's tiles (tile_sampler.h)
+  SamplingConfig sampling;
 };
 
 class TileScheduler : public UnitBase {
@@ -41,16 +46,34 @@ class TileScheduler : public UnitBase {
   void count(uint32_t core);
   uint64_t frame_end_cycle() const { return m_frame_end; }
   bool frame_done() const { return m_done; }
+  // Sampled: the frame's cycles as estimated (the simulated end, each segment's sampled
+  // render replaced by its estimate) and the interval's half-width; per segment, stats.json's
+  // "sampling". Not sampled: the simulated end, width 0.
+  double frame_estimate() const { return double(m_frame_end) + m_correction; }
+  double frame_half_width() const;
+  nlohmann::json sampling_json() const;
+  // TileWriter's tile ends wake a sampled round's wait.
+  sc_core::sc_event& tile_closed() { return m_tile_closed; }
 
  private:
   void dispatch();
+  void dispatch_sampled(uint32_t segment, const std::vector<uint32_t>& tiles);
   void join();
   uint32_t free_core();
+  uint32_t next_core(size_t i) { return m_cfg.policy == Schedule::dynamic ? free_core() : static_core(i); }
 
   TileSchedulerConfig m_cfg;
   uint64_t m_frame_end = 0;
   bool m_done = false;
   std::vector<Stat*> m_core_tiles;
+  sc_core::sc_event m_tile_closed;
+  double m_correction = 0;  // sampled: sum over segments of (estimated - simulated render)
+  struct SegmentSample {
+    uint32_t segment = 0;
+    RenderEstimate estimate;
+    uint64_t rounds = 0, simulated_render = 0, start_cycle = 0;
+  };
+  std::vector<SegmentSample> m_samples;
 };
 
 }  // namespace tilevis::sim

@@ -61,6 +61,7 @@ void TileWriter::run() {
     m_stores.value += it.tile->store;
     it.tile->end_cycle = cycles(sc_core::sc_time_stamp());
     m_work.close_tile(it.tile);
+    if (closed) closed->notify(sc_core::SC_ZERO_TIME);
   }
 }
 

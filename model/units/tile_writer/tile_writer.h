@@ -25,6 +25,7 @@ class TileWriter : public UnitBase {
   sc_core::sc_fifo_in<Item> in;
   sc_core::sc_fifo_out<uint32_t> done;  // segments this core has finished: to the scheduler
   tlm_utils::simple_initiator_socket<UnitBase> mem;
+  sc_core::sc_event* closed = nullptr;  // notified after each tile is written (the scheduler's sampled rounds)
 
   SC_HAS_PROCESS(TileWriter);
   TileWriter(const sc_core::sc_module_name& name, const UnitEnv& env, const TileWriterConfig& config,

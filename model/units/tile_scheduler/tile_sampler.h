@@ -1,0 +1,94 @@
+// Sampled simulation of a segment's render (fidelity auto), in the manner of SMARTS
+// (Wunderlich et al., ISCA 2003): simulate a random sample of the work in detail and
+// estimate the whole with a confidence interval, growing the sample until the interval
+// fits the error budget.
+//
+// The sampling unit is a cluster of consecutive tiles in the scheduler's order (tiles that
+// share primitives stay together, so parameter-cache and DRAM-row locality inside a cluster
+// are the full frame's). Rounds of randomly chosen clusters are dispatched in the
+// scheduler's order; each round starts on empty cores, so every core's first tile of a
+// round pays the pipeline fill.
+//
+// What is measured per tile is its occupancy of its core: the cycles from the previous
+// tile's end on the same core (in the same round) to its own end. A core's render is then
+// its first tile's fill plus the occupancies of the others, so a segment's render on C
+// cores is estimated as
+//     R = mean fill + Y / C,   Y = the occupancies of all but the C first tiles,
+// Y by a regression estimator over clusters with two auxiliaries known for every tile
+// before any is simulated: the tile count and the tiles' binned triangles,
+//     y_j = a m_j + b x_j + e_j   (cluster j: occupancy sum y, tiles m, triangles x),
+//     Y = a M + b X,   Var(Y) = K^2 (1 - n/K) s_e^2 / n   (K clusters, n observed),
+// with M and X the population's totals less C average tiles. Pure arithmetic: no SystemC.
+#pragma once
+
+#include <cstdint>
+#include <random>
+#include <vector>
+
+namespace tilevis::sim {
+
+struct SamplingConfig {
+  double error_budget = 0.02;  // interval half-width / frame cycles to reach
+  double confidence = 0.95;    // two-sided confidence of the interval
+  uint32_t cluster_tiles = 8;  // tiles per sampling unit (4 left a locality bias at 8x8 tiles)
+  uint32_t first_clusters = 16;  // the first round's clusters
+  uint64_t seed = 1;
+};
+
+// Two-sided standard-normal quantile: P(|Z| <= z) = confidence.
+double normal_quantile(double confidence);
+
+struct RenderEstimate {
+  double cycles = 0;       // estimated render cycles of the whole segment
+  double half_width = 0;   // of the confidence interval, cycles
+  uint64_t tiles = 0, tiles_observed = 0;
+  uint64_t clusters = 0, clusters_observed = 0;
+  bool complete = false;   // every tile was simulated (no estimate: zero width)
+};
+
+class TileSampler {
+ public:
+  // `triangles`: per tile in the scheduler's order, its binned triangles (the auxiliary).
+  TileSampler(std::vector<double> triangles, const SamplingConfig& config, uint64_t stream);
+
+  uint64_t tiles() const { return m_tiles; }
+  uint64_t clusters() const { return m_order.size(); }
+  uint64_t clusters_taken() const { return m_taken; }
+  // Tile positions [begin, end) of cluster c in the scheduler's order.
+  uint64_t cluster_begin(uint64_t c) const { return c * m_cfg.cluster_tiles; }
+  uint64_t cluster_end(uint64_t c) const;
+
+  // The next round: `count` more clusters drawn at random (without replacement), ascending.
+  std::vector<uint64_t> next_round(uint64_t count);
+
+  // Observations: the occupancies of cluster c's tiles that were not their core's first in
+  // their round (their sum, and how many); each core's first tile of a round as a fill.
+  // `triangles`: the auxiliary summed over the same tiles.
+  void observe_cluster(double occupancy_sum, uint64_t tiles_observed, double triangles);
+  void observe_fill(double cycles);
+
+  RenderEstimate estimate(uint32_t cores) const;
+  // Clusters needed in all (taken included) for a half-width of `target` cycles, from the
+  // observed variance; at least one more than taken while any remain.
+  uint64_t clusters_needed(double target, uint32_t cores) const;
+
+ private:
+  uint64_t m_tiles;
+  double m_triangles = 0;  // the population's auxiliary total
+  SamplingConfig m_cfg;
+  double m_z;
+  std::vector<uint64_t> m_order;  // a random permutation of the clusters
+  uint64_t m_taken = 0;
+  std::vector<double> m_y, m_m, m_x;  // per observed cluster: occupancy sum, tiles, triangles
+  double m_fill_sum = 0;
+  uint64_t m_fills = 0;
+
+  struct Fit {
+    double a = 0, b = 0;  // y = a m + b x
+    double s2 = 0;        // residual variance per cluster
+    double total = 0;     // Y = a M + b X
+  };
+  Fit fit(uint32_t cores) const;
+};
+
+}  // namespace tilevis::sim

@@ -1,0 +1,160 @@
+// The sampled render's estimator (units/tile_scheduler/tile_sampler.h), pure arithmetic:
+// the normal quantile, rounds without replacement, an exact fit where the occupancy is a
+// linear function of the auxiliaries, the interval's coverage on a noisy population (fixed
+// seeds: deterministic), and the sample size the budget asks for.
+#include <cmath>
+#include <random>
+#include <set>
+
+#include <gtest/gtest.h>
+
+#include "units/tile_scheduler/tile_sampler.h"
+
+using namespace tilevis::sim;
+
+namespace {
+
+SamplingConfig config(uint32_t cluster, uint64_t seed) {
+  SamplingConfig c;
+  c.cluster_tiles = cluster;
+  c.seed = seed;
+  return c;
+}
+
+// One core, every tile after the first observed: feeds `sampler` the clusters of one round.
+void observe_round(TileSampler& s, const std::vector<uint64_t>& round, const std::vector<double>& occupancy,
+                   const std::vector<double>& triangles, bool& first) {
+  for (uint64_t c : round) {
+    double y = 0, x = 0;
+    uint64_t m = 0;
+    for (uint64_t p = s.cluster_begin(c); p < s.cluster_end(c); ++p) {
+      if (first) {
+        s.observe_fill(occupancy[p]);
+        first = false;
+        continue;
+      }
+      y += occupancy[p], x += triangles[p], ++m;
+    }
+    s.observe_cluster(y, m, x);
+  }
+}
+
+}  // namespace
+
+TEST(Sampler, NormalQuantile) {
+  EXPECT_NEAR(normal_quantile(0.95), 1.959963985, 1e-8);
+  EXPECT_NEAR(normal_quantile(0.99), 2.575829304, 1e-8);
+  EXPECT_NEAR(normal_quantile(0.6826894921), 1.0, 1e-8);
+  EXPECT_THROW(normal_quantile(1.0), std::invalid_argument);
+}
+
+TEST(Sampler, RoundsDrawEveryClusterOnceAscendingAndTheSeedFixesThem) {
+  const std::vector<double> tris(103, 1.0);
+  TileSampler a(tris, config(4, 7), 0), b(tris, config(4, 7), 0), c(tris, config(4, 8), 0);
+  EXPECT_EQ(a.clusters(), 26u);
+  EXPECT_EQ(a.cluster_end(25), 103u);
+  std::set<uint64_t> seen;
+  std::vector<uint64_t> all_a, all_c;
+  for (uint64_t want : {5, 9, 100}) {
+    const auto r = a.next_round(want), rb = b.next_round(want), rc = c.next_round(want);
+    EXPECT_EQ(r, rb);
+    EXPECT_TRUE(std::is_sorted(r.begin(), r.end()));
+    for (uint64_t x : r) EXPECT_TRUE(seen.insert(x).second) << "cluster " << x << " drawn twice";
+    all_a.insert(all_a.end(), r.begin(), r.end());
+    all_c.insert(all_c.end(), rc.begin(), rc.end());
+  }
+  EXPECT_EQ(seen.size(), 26u);
+  EXPECT_TRUE(a.next_round(3).empty());
+  EXPECT_NE(all_a, all_c);  // another seed, another sample
+}
+
+TEST(Sampler, AnExactLinearPopulationIsEstimatedExactlyWithZeroWidth) {
+  std::mt19937_64 rng(3);
+  const size_t n = 400;
+  std::vector<double> tris(n), occ(n);
+  for (size_t i = 0; i < n; ++i) {
+    tris[i] = double(rng() % 200);
+    occ[i] = 150.0 + 7.0 * tris[i];
+  }
+  TileSampler s(tris, config(4, 1), 0);
+  bool first = true;
+  const std::vector<uint64_t> round = s.next_round(12);
+  observe_round(s, round, occ, tris, first);
+  const RenderEstimate e = s.estimate(1);
+  // The fill is the round's first tile; Y = a M + b X over all tiles but one (one core).
+  double sum_tris = 0;
+  for (size_t i = 0; i < n; ++i) sum_tris += tris[i];
+  const double fill = occ[s.cluster_begin(round.front())];
+  const double expect = fill + 150.0 * double(n - 1) + 7.0 * sum_tris * double(n - 1) / double(n);
+  EXPECT_NEAR(e.cycles, expect, 1e-9 * expect);
+  EXPECT_NEAR(e.half_width, 0.0, 1e-6 * e.cycles);
+  EXPECT_FALSE(e.complete);
+  EXPECT_EQ(e.clusters_observed, 12u);
+  EXPECT_EQ(e.tiles_observed, 48u);
+}
+
+TEST(Sampler, TheIntervalCoversTheTruthAtItsConfidence) {
+  // A population with clustered noise: occupancy = 300 + 4 x + cluster effect + tile noise.
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> cluster_effect(0.0, 120.0), noise(0.0, 80.0);
+  const size_t n = 2000;
+  std::vector<double> tris(n), occ(n);
+  double effect = 0;
+  for (size_t i = 0; i < n; ++i) {
+    if (i % 4 == 0) effect = cluster_effect(rng);
+    tris[i] = double(rng() % 300);
+    occ[i] = std::max(0.0, 300.0 + 4.0 * tris[i] + effect + noise(rng));
+  }
+  int covered = 0, runs = 200;
+  for (int seed = 1; seed <= runs; ++seed) {
+    TileSampler s(tris, config(4, uint64_t(seed)), 0);
+    bool first = true;
+    observe_round(s, s.next_round(40), occ, tris, first);
+    const RenderEstimate e = s.estimate(1);
+    // The truth on the estimator's terms: this run's fill tile, then every other tile.
+    double fill = 0, rest = 0;
+    bool seen_first = false;
+    const uint64_t first_cluster = [&] {
+      TileSampler t(tris, config(4, uint64_t(seed)), 0);
+      return t.next_round(40).front();
+    }();
+    for (size_t i = 0; i < n; ++i) {
+      if (!seen_first && i == s.cluster_begin(first_cluster)) {
+        fill = occ[i];
+        seen_first = true;
+        continue;
+      }
+      rest += occ[i];
+    }
+    const double truth = fill + rest;
+    covered += std::abs(e.cycles - truth) <= e.half_width;
+  }
+  // 95 % nominal; the regression estimator's variance is approximate: 88 % or more.
+  EXPECT_GE(covered, int(0.88 * runs)) << covered << " of " << runs;
+  EXPECT_LE(covered, runs);
+}
+
+TEST(Sampler, ATighterBudgetNeedsMoreClustersAndAllTakenIsComplete) {
+  std::mt19937_64 rng(5);
+  const size_t n = 800;
+  std::vector<double> tris(n), occ(n);
+  for (size_t i = 0; i < n; ++i) {
+    tris[i] = double(rng() % 100);
+    occ[i] = 200.0 + 3.0 * tris[i] + double(rng() % 400);
+  }
+  TileSampler s(tris, config(4, 2), 0);
+  bool first = true;
+  observe_round(s, s.next_round(16), occ, tris, first);
+  const RenderEstimate e = s.estimate(1);
+  ASSERT_GT(e.half_width, 0.0);
+  const uint64_t loose = s.clusters_needed(e.half_width * 2, 1), tight = s.clusters_needed(e.half_width / 4, 1);
+  EXPECT_GT(tight, loose);
+  EXPECT_GT(tight, 16u);
+  EXPECT_LE(tight, s.clusters());
+  observe_round(s, s.next_round(s.clusters()), occ, tris, first);
+  const RenderEstimate all = s.estimate(1);
+  EXPECT_TRUE(all.complete);
+  EXPECT_EQ(all.half_width, 0.0);
+  EXPECT_EQ(all.tiles_observed, n);
+  EXPECT_EQ(s.clusters_needed(1.0, 1), s.clusters());
+}
