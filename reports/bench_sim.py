@@ -31,7 +31,7 @@ def run_measured(cmd, allow_fail=False):
     wall = time.time() - t0
     if p.returncode != 0:
         if allow_fail:
-            return None
+            return (out.decode() + err.decode()).strip().splitlines()[-1:] or ["failed"]
         sys.stderr.write(out.decode() + err.decode())
         raise SystemExit(f"bench_sim: failed: {' '.join(map(str, cmd))}")
     return wall
@@ -89,6 +89,7 @@ def main():
     if a.only:
         scenes = [s for s in scenes if s.stem in a.only.split(",")]
     rows = []
+    failures = {}
     for scene in scenes:
         trace = work / "traces" / f"{scene.stem}.tvt"
         if not trace.exists():
@@ -98,8 +99,9 @@ def main():
             d = work / f"{scene.stem}_{level}"
             wall = run_measured([a.bin, "sim", trace, "--tile", a.tile, "-p", f"sim.fidelity={level}",
                                  "-p", f"sim.mode={a.mode}", "-o", d], allow_fail=level == "rtl")
-            if wall is None:
-                print(f"{scene.stem}: fidelity rtl unavailable (no Verilator in this build)", file=sys.stderr)
+            if isinstance(wall, list):  # rtl failed: unavailable in this build, or the RTL refused a job
+                print(f"{scene.stem}: fidelity rtl failed: {wall[0]}", file=sys.stderr)
+                failures[scene.stem] = wall[0]
                 continue
             s = json.loads((d / "stats.json").read_text())
             per[level] = {"wall_seconds": wall, "host_seconds": s["host_seconds"], "cycles": s["totals"]["cycles"],
@@ -147,9 +149,13 @@ def main():
         lines.append(f"| {r['scene']} | {r['triangles']:,} | {r['level']} | {r['wall_seconds']:.2f} | "
                      f"{r['host_seconds']:.2f} | {r['speedup_vs_reference']:.1f}x | {r['cycles']:,} | "
                      f"{100 * r['cycles_vs_reference']:.2f} % | {extra} |")
-    chart(rows, rows[0]["reference"] if rows else "rtl", out / "sim_bench.png")
+    if failures:
+        lines += ["", "Fidelity rtl failed on (the reference is primitive there):", ""]
+        lines += [f"- {k}: `{v}`" for k, v in sorted(failures.items())]
+    chart(rows, "rtl", out / "sim_bench.png")
     (out / "sim_bench.md").write_text("\n".join(lines) + "\n")
-    (out / "sim_bench.json").write_text(json.dumps({"machine": machine, "commit": commit, "rows": rows}, indent=2))
+    (out / "sim_bench.json").write_text(json.dumps({"machine": machine, "commit": commit, "rows": rows,
+                                                    "rtl_failures": failures}, indent=2))
     print(f"wrote {out / 'sim_bench.md'}")
 
 
