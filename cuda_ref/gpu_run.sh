@@ -3,14 +3,23 @@
 # SystemC, GLM, assimp, CGAL, Boost, no network). Run from the repository root with .gpu/ carried
 # along (made here-and-now by cuda_ref/prepare_gpu_run.sh on a full build machine):
 #
-#   bash cuda_ref/gpu_run.sh [all | build | test | baselines | cross | orbit | sanitize | report]...
+#   bash cuda_ref/gpu_run.sh [all | build | test | baselines | cross | baselines_4k4 | cross_4k4 | orbit
+#                             | sanitize | profile | report]...
 #
 #   build     unpack .gpu/debs into /tmp/sysroot (dpkg -x), configure a TILEVIS_MINIMAL Release
-#             build with Ninja in build-gpu pointed at it, build, unpack .gpu/traces.tar.xz
+#             build with Ninja in build-gpu pointed at it, build, unpack .gpu/traces.tar.xz; with
+#             TILEVIS_GPU_PREBUILT=1, unpack .gpu/prebuilt.tar.xz (binaries built on the preparing
+#             machine: prepare_gpu_run.sh --prebuilt) into build-gpu instead of compiling
 #   test      ctest: cuda_ref's GPU tests (label gpu; they must run, not skip) and its host tests
 #   baselines every scene's z-buffers: the exact truth (CPU), OpenGL through EGL (gl_raster; .gl
 #             carried: the loader .debs, unpacked into / as the device README says), the CUDA
 #             z-buffers tiled (exact) and naive, each compared with the truth
+#   baselines_4k4, cross_4k4   the same on the 4K 4 spp traces (.gpu traces/4k4) into
+#             build-gpu/work/4k4: GL with 4x multisample targets, tiles 32 only, no golden
+#             (TILEVIS_GPU_RUNS_4K4 runs, default 5)
+#   profile   Nsight Compute's time per kernel (ncu --clock-control none) of tilevis cuda on the
+#             scenes of TILEVIS_NCU (default "slivers:float million:float million:zb_tiled"):
+#             $OUT/ncu_<scene>_<what>.txt
 #   cross     every scene at tiles 16, 32, 64: golden on the CPU (in parallel, first), then
 #             tilevis cuda exact and float on the GPU one at a time (--runs 20 after warm-up),
 #             tilevis compare of each against golden and of float against exact
@@ -41,6 +50,21 @@ RUNS="${TILEVIS_GPU_RUNS:-20}"
 JOBS="${JOBS:-$(nproc)}"
 DEVICE="${TILEVIS_GPU_DEVICE:-gpu}"  # cpu: the host emulation, to try this script without a GPU
 BIN="$BUILD/model/app/tilevis"
+# The trace set the baselines and cross phases work on: 1080p (the traces as made, into $WORK) or
+# 4k4 (3840x2160, 4 samples, into $WORK/4k4).
+SET=1080p
+SET_TRACES="$TRACES"
+SET_WORK="$WORK"
+use_set() {
+  SET="$1"
+  case "$1" in
+    1080p) SET_TRACES="$TRACES"; SET_WORK="$WORK" ;;
+    4k4) SET_TRACES="$TRACES/4k4"; SET_WORK="$WORK/4k4" ;;
+  esac
+  mkdir -p "$SET_WORK"
+}
+PREBUILT="${TILEVIS_GPU_PREBUILT:-0}"
+[ -d "$BUILD/prebuilt_lib" ] && export LD_LIBRARY_PATH="$BUILD/prebuilt_lib:${LD_LIBRARY_PATH:-}"
 export PATH="/usr/local/cuda/bin:/usr/local/cuda/compute-sanitizer:$PATH"
 export LD_LIBRARY_PATH="$SYSROOT/usr/lib/x86_64-linux-gnu:$SYSROOT/lib/x86_64-linux-gnu${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
 mkdir -p "$LOGS" "$WORK/meta" "$REPORT_DIR"
@@ -53,8 +77,29 @@ die() { say "error: $*"; exit 1; }
 t_start=$SECONDS
 elapsed() { echo "$((SECONDS - t_start)) s"; }
 
+unpack_traces() {
+  if [ ! -f "$TRACES/bunny.tvt" ]; then
+    say "unpack traces"
+    mkdir -p "$TRACES" && tar -C "$TRACES" --strip-components=1 -xJf .gpu/traces.tar.xz
+  fi
+}
+
 phase_build() {
   [ -d .gpu/debs ] && [ -f .gpu/traces.tar.xz ] || die ".gpu/ missing: run cuda_ref/prepare_gpu_run.sh on a build machine and carry .gpu"
+  if [ "$PREBUILT" = 1 ]; then
+    [ -f .gpu/prebuilt.tar.xz ] || die "TILEVIS_GPU_PREBUILT=1 but no .gpu/prebuilt.tar.xz (prepare_gpu_run.sh --prebuilt DIR)"
+    say "unpack prebuilt binaries ($(cat .gpu/commit.txt 2>/dev/null))"
+    mkdir -p "$BUILD"
+    tar -C "$BUILD" -xJf .gpu/prebuilt.tar.xz
+    cp -a "$BUILD/prebuilt/bin/." "$BUILD/"
+    rm -rf "$BUILD/prebuilt_lib" && mv "$BUILD/prebuilt/lib" "$BUILD/prebuilt_lib"
+    cp "$BUILD/prebuilt/commit.txt" "$WORK/meta/prebuilt_commit.txt"
+    export LD_LIBRARY_PATH="$BUILD/prebuilt_lib:${LD_LIBRARY_PATH:-}"
+    "$BIN" cuda --help | grep -q precision || die "the prebuilt tilevis does not run here"
+    unpack_traces
+    say "build done: prebuilt ($(elapsed))"
+    return
+  fi
   mkdir -p "$SYSROOT"
   for d in .gpu/debs/*.deb; do dpkg -x "$d" "$SYSROOT"; done
   # Debian's libz.so is an absolute link into /lib: name the library and headers explicitly.
@@ -88,10 +133,7 @@ phase_build() {
     echo "standalone cuda_ref build: FAILED (see logs/standalone.log)" >"$WORK/meta/standalone.txt"
   say "$(cat "$WORK/meta/standalone.txt")"
   "$BIN" cuda --help | grep -q precision || die "tilevis has no cuda command"
-  if [ ! -f "$TRACES/bunny.tvt" ]; then
-    say "unpack traces"
-    mkdir -p "$TRACES" && tar -C "$TRACES" --strip-components=1 -xJf .gpu/traces.tar.xz
-  fi
+  unpack_traces
   say "build done ($(elapsed))"
 }
 
@@ -100,6 +142,19 @@ phase_test() {
   local log="$LOGS/ctest.log" rc=0
   # The built-in scenes' traces (GpuBuiltInScenes: exact hybrid = golden hybrid, float signs).
   export TILEVIS_GPU_TRACES="$TRACES"
+  if [ "$PREBUILT" = 1 ]; then
+    # No CTest files with prebuilt binaries: the GPU tests' binary itself (the host emulation
+    # tests ran where the binaries were built).
+    "$BUILD/tests/cuda/cuda_gpu_tests" ${TILEVIS_GTEST_FILTER:+--gtest_filter="$TILEVIS_GTEST_FILTER"} >"$log" 2>&1 || rc=$?
+    local passed failed
+    passed="$(grep -oE '\[  PASSED  \] [0-9]+' "$log" | grep -oE '[0-9]+$' || echo 0)"
+    failed="$(grep -cE '^\[  FAILED  \] [A-Za-z]' "$log" || true)"
+    echo "cuda_gpu_tests (prebuilt): $passed passed, $failed failed; $(grep -c '\[  SKIPPED \]' "$log" || true) skipped (exit $rc)" \
+      >"$WORK/meta/gpu_tests.txt"
+    say "$(cat "$WORK/meta/gpu_tests.txt")"
+    [ "$rc" -eq 0 ] || { grep -E "FAILED|Failure" "$log" | head -n 20 >&2; say "tests FAILED (continuing: see $log)"; }
+    return
+  fi
   ctest --test-dir "$BUILD" -L "${TILEVIS_TEST_LABEL:-gpu|cuda}" -j 4 --output-on-failure >"$log" 2>&1 || rc=$?
   local summary skipped
   summary="$(grep -E "tests passed|tests failed" "$log" | tail -n 1 || true)"
@@ -112,44 +167,46 @@ phase_test() {
 
 scenes() {
   if [ -n "${TILEVIS_GPU_SCENES:-}" ]; then echo "$TILEVIS_GPU_SCENES"; return; fi
-  for t in "$TRACES"/*.tvt; do basename "$t" .tvt; done
+  for t in "$SET_TRACES"/*.tvt; do basename "$t" .tvt; done
 }
 
 phase_cross() {
   [ -x "$BIN" ] || die "not built: run the build phase first"
-  local s t jobs=()
+  local s t jobs=() tiles="$TILES" runs="$RUNS" tag=""
+  [ "$SET" = 1080p ] || { tiles=32; runs="${TILEVIS_GPU_RUNS_4K4:-5}"; tag="${SET}_"; }
   # Golden (CPU) first and all at once, so that no CPU load overlaps the timed GPU runs.
   for s in $(scenes); do
-    for t in $TILES; do
-      [ -f "$WORK/$s/t$t/golden/stats.json" ] || jobs+=("$s $t analytic golden")
-      [ -f "$WORK/$s/t$t/golden_hybrid/stats.json" ] || jobs+=("$s $t hybrid golden_hybrid")
+    for t in $tiles; do
+      [ "$SET" = 1080p ] || continue  # no golden at 4K 4 spp (its CPU time): timings and ratios only
+      [ -f "$SET_WORK/$s/t$t/golden/stats.json" ] || jobs+=("$s $t analytic golden")
+      [ -f "$SET_WORK/$s/t$t/golden_hybrid/stats.json" ] || jobs+=("$s $t hybrid golden_hybrid")
     done
   done
   if [ ${#jobs[@]} -gt 0 ]; then
     say "golden: ${#jobs[@]} runs on $JOBS cores"
     printf '%s\n' "${jobs[@]}" | xargs -P "$JOBS" -L 1 bash -c \
       '"$0" golden "$1/$4.tvt" --tile "$5" --mode "$6" -o "$2/$4/t$5/$7" >"$3/$7_$4_$5.log" 2>&1 || echo "golden $4 $5 $6 failed" >&2' \
-      "$BIN" "$TRACES" "$WORK" "$LOGS" 2>&1 | tee -a "$LOGS/errors.log" >&2 || true
+      "$BIN" "$SET_TRACES" "$SET_WORK" "$LOGS" 2>&1 | tee -a "$LOGS/errors.log" >&2 || true
   fi
   say "golden done ($(elapsed))"
   for s in $(scenes); do
-    for t in $TILES; do
-      local d="$WORK/$s/t$t"
+    for t in $tiles; do
+      local d="$SET_WORK/$s/t$t"
       for p in exact float hybrid_exact hybrid_float; do
         local mode=analytic prec="$p" ref=golden
         case "$p" in hybrid_*) mode=hybrid prec="${p#hybrid_}" ref=golden_hybrid ;; esac
         if [ ! -f "$d/$p/stats.json" ]; then
           local hw; hw="$(hw_ms "$s")"
-          "$BIN" cuda "$TRACES/$s.tvt" --tile "$t" --mode "$mode" --precision "$prec" --runs "$RUNS" --device "$DEVICE" \
+          "$BIN" cuda "$SET_TRACES/$s.tvt" --tile "$t" --mode "$mode" --precision "$prec" --runs "$runs" --device "$DEVICE" \
             -o "$d/$p" ${hw:+--hw-raster-ms "$hw"} \
-            >"$LOGS/cuda_${s}_${t}_$p.log" 2>&1 || { say "cuda $s $t $p failed: $(tail -n 1 "$LOGS/cuda_${s}_${t}_$p.log")"; continue; }
+            >"$LOGS/cuda_${tag}${s}_${t}_$p.log" 2>&1 || { say "cuda $s $t $p failed: $(tail -n 1 "$LOGS/cuda_${tag}${s}_${t}_$p.log")"; continue; }
         fi
         if [ -f "$d/$ref/stats.json" ] && [ ! -f "$d/cmp_$p/compare.json" ]; then
-          "$BIN" compare "$d/$ref" "$d/$p" -o "$d/cmp_$p" >"$LOGS/compare_${s}_${t}_$p.log" 2>&1 || say "compare $s $t $p failed"
+          "$BIN" compare "$d/$ref" "$d/$p" -o "$d/cmp_$p" >"$LOGS/compare_${tag}${s}_${t}_$p.log" 2>&1 || say "compare $s $t $p failed"
         fi
         # Hybrid against the exact truth (ids): float hybrid's disagreement measured too.
-        if [ "$mode" = hybrid ] && [ -f "$WORK/$s/truth/stats.json" ] && [ ! -f "$d/cmp_truth_$p/compare.json" ]; then
-          "$BIN" compare "$WORK/$s/truth" "$d/$p" -o "$d/cmp_truth_$p" >/dev/null 2>&1 || say "compare truth $s $t $p failed"
+        if [ "$mode" = hybrid ] && [ -f "$SET_WORK/$s/truth/stats.json" ] && [ ! -f "$d/cmp_truth_$p/compare.json" ]; then
+          "$BIN" compare "$SET_WORK/$s/truth" "$d/$p" -o "$d/cmp_truth_$p" >/dev/null 2>&1 || say "compare truth $s $t $p failed"
         fi
       done
       if [ -f "$d/exact/stats.json" ] && [ -f "$d/float/stats.json" ] && [ ! -f "$d/cmp_float_exact/compare.json" ]; then
@@ -161,10 +218,10 @@ phase_cross() {
       fi
       if grep -qE '"(mismatched_samples|tile_counter_mismatches)": [1-9]' "$d/cmp_exact/compare.json" 2>/dev/null; then
         say "MISMATCH: $s at $t (exact vs golden): explaining"
-        "$BIN" compare "$d/golden" "$d/exact" --explain "$TRACES/$s.tvt" -o "$d/cmp_exact_explain" \
-          >"$LOGS/explain_${s}_$t.txt" 2>&1 || true
+        "$BIN" compare "$d/golden" "$d/exact" --explain "$SET_TRACES/$s.tvt" -o "$d/cmp_exact_explain" \
+          >"$LOGS/explain_${tag}${s}_$t.txt" 2>&1 || true
       fi
-      say "$s at $t done ($(elapsed))"
+      say "$SET $s at $t done ($(elapsed))"
     done
   done
 }
@@ -175,36 +232,38 @@ phase_cross() {
 # naive) compared with the truth. The cross phase passes the GL time on (hw_raster_ratio).
 phase_baselines() {
   [ -x "$BIN" ] || die "not built: run the build phase first"
-  local s jobs=()
+  local s jobs=() runs="$RUNS" tag=""
+  [ "$SET" = 1080p ] || { runs="${TILEVIS_GPU_RUNS_4K4:-5}"; tag="${SET}_"; }
   if [ -d .gl ] && ! ldconfig -p | grep -q libEGL.so.1; then
     for f in .gl/*.deb; do dpkg -x "$f" /; done
     ldconfig
   fi
   local vendor=/usr/local/nvidia/share/glvnd/egl_vendor.d/10_nvidia.json
   [ -f "$vendor" ] && export __EGL_VENDOR_LIBRARY_FILENAMES="$vendor"
-  for s in $(scenes); do [ -f "$WORK/$s/truth/stats.json" ] || jobs+=("$s"); done
+  for s in $(scenes); do [ -f "$SET_WORK/$s/truth/stats.json" ] || jobs+=("$s"); done
   if [ ${#jobs[@]} -gt 0 ]; then
     say "truth: ${#jobs[@]} runs on $JOBS cores"
-    printf '%s\n' "${jobs[@]}" | xargs -P "$JOBS" -L 1 bash -c \
-      '"$0" golden "$1/$4.tvt" --truth -o "$2/$4/truth" >"$3/truth_$4.log" 2>&1 || echo "truth $4 failed" >&2' \
-      "$BIN" "$TRACES" "$WORK" "$LOGS" 2>&1 | tee -a "$LOGS/errors.log" >&2 || true
+    printf '%s\n' "${jobs[@]}" | TAG="$tag" xargs -P "$JOBS" -L 1 bash -c \
+      '"$0" golden "$1/$4.tvt" --truth -o "$2/$4/truth" >"$3/truth_$TAG$4.log" 2>&1 || echo "truth $4 failed" >&2' \
+      "$BIN" "$SET_TRACES" "$SET_WORK" "$LOGS" 2>&1 | tee -a "$LOGS/errors.log" >&2 || true
   fi
   for s in $(scenes); do
-    local d="$WORK/$s"
+    local d="$SET_WORK/$s" truth_arg=(--truth "$SET_WORK/$s/truth")
+    [ "$SET" = 1080p ] || truth_arg=()  # multisample: the GL's ids are not read back
     if [ ! -f "$d/gl/stats.json" ]; then
-      "$BUILD/cuda_ref/gl_raster" "$TRACES/$s.tvt" --runs "$RUNS" --truth "$d/truth" -o "$d/gl" >"$LOGS/gl_$s.log" 2>&1 ||
-        say "gl_raster $s: $(tail -n 1 "$LOGS/gl_$s.log")"
+      "$BUILD/cuda_ref/gl_raster" "$SET_TRACES/$s.tvt" --runs "$runs" "${truth_arg[@]}" -o "$d/gl" >"$LOGS/gl_$tag$s.log" 2>&1 ||
+        say "gl_raster $SET $s: $(tail -n 1 "$LOGS/gl_$tag$s.log")"
     fi
     for z in tiled naive; do
       if [ ! -f "$d/zb_$z/stats.json" ]; then
-        "$BIN" cuda "$TRACES/$s.tvt" --zbuffer "$z" --runs "$RUNS" --device "$DEVICE" -o "$d/zb_$z" \
-          >"$LOGS/zb_${s}_$z.log" 2>&1 || say "zbuffer $z $s failed: $(tail -n 1 "$LOGS/zb_${s}_$z.log")"
+        "$BIN" cuda "$SET_TRACES/$s.tvt" --zbuffer "$z" --runs "$runs" --device "$DEVICE" -o "$d/zb_$z" \
+          >"$LOGS/zb_$tag${s}_$z.log" 2>&1 || say "zbuffer $z $SET $s failed: $(tail -n 1 "$LOGS/zb_$tag${s}_$z.log")"
       fi
       if [ -f "$d/zb_$z/stats.json" ] && [ -f "$d/truth/stats.json" ] && [ ! -f "$d/cmp_zb_$z/compare.json" ]; then
         "$BIN" compare "$d/truth" "$d/zb_$z" -o "$d/cmp_zb_$z" >/dev/null 2>&1 || say "compare zbuffer $z $s failed"
       fi
     done
-    say "$s baselines: $(grep -ho '"hw_raster_ms": [0-9.e-]*' "$d/gl/stats.json" 2>/dev/null || echo 'no GL'); $(grep -ho '"mismatched_samples": [0-9]*' "$d/cmp_zb_tiled/compare.json" 2>/dev/null || echo 'no tiled compare') ($(elapsed))"
+    say "$SET $s baselines: $(grep -ho '"hw_raster_ms": [0-9.e-]*' "$d/gl/stats.json" 2>/dev/null || echo 'no GL'); $(grep -ho '"mismatched_samples": [0-9]*' "$d/cmp_zb_tiled/compare.json" 2>/dev/null || echo 'no tiled compare') ($(elapsed))"
   done
 }
 
@@ -236,8 +295,8 @@ phase_orbit() {
   say "orbit done ($(elapsed))"
 }
 
-hw_ms() {  # the GL time of a scene, or nothing
-  { grep -ho '"hw_raster_ms": [0-9.e+-]*' "$WORK/$1/gl/stats.json" 2>/dev/null || true; } | head -n 1 | sed 's/.*: //'
+hw_ms() {  # the GL time of a scene in the current set, or nothing
+  { grep -ho '"hw_raster_ms": [0-9.e+-]*' "$SET_WORK/$1/gl/stats.json" 2>/dev/null || true; } | head -n 1 | sed 's/.*: //'
 }
 
 phase_sanitize() {
@@ -266,6 +325,50 @@ phase_sanitize() {
   rm -f "$WORK/meta/sanitizer.txt.tmp"
 }
 
+# Nsight Compute (ncu in CUDA 13; --clock-control none: the clocks as found) per kernel of tilevis cuda:
+# TILEVIS_NCU names scene:what items (what: exact, float, hybrid_exact, hybrid_float, zb_tiled,
+# zb_naive; a scene 4k4/NAME takes the 4K 4 spp trace): the time per kernel over every launch of
+# one run (synchronous runs, graph replays); TILEVIS_NCU_DETAIL names scene:what:kernel items: that
+# kernel's first launch after a warm-up run with the speed-of-light, occupancy, launch, warp-state
+# and memory sections. Outputs in $OUT/ncu.tar.xz.
+phase_profile() {
+  [ -x "$BIN" ] || die "not built: run the build phase first"
+  local ncu_bin=ncu item
+  command -v ncu >/dev/null || ncu_bin=/usr/local/cuda/bin/ncu
+  [ -x "$(command -v "$ncu_bin")" ] || { say "no ncu"; echo "ncu not found" >"$WORK/meta/ncu.txt"; return; }
+  mkdir -p "$LOGS/ncu"
+  "$ncu_bin" --version | tail -n 1 >"$WORK/meta/ncu.txt"
+  args_of() {  # what -> tilevis cuda arguments
+    case "$1" in
+      zb_*) echo "--zbuffer ${1#zb_} --runs 1 --warmup 1" ;;
+      hybrid_*) echo "--tile 32 --mode hybrid --precision ${1#hybrid_} --runs 1 --warmup 1 --baselines off" ;;
+      *) echo "--tile 32 --precision $1 --runs 1 --warmup 1 --baselines off" ;;
+    esac
+  }
+  for item in ${TILEVIS_NCU-slivers:float million:float million:zb_tiled}; do
+    local scene="${item%%:*}" what="${item#*:}" trace="$TRACES/${item%%:*}.tvt"
+    local name="${scene//\//_}_$what"
+    # shellcheck disable=SC2046
+    timeout 240 "$ncu_bin" --clock-control none --metrics gpu__time_duration.sum --print-summary per-kernel \
+      "$BIN" cuda "$trace" $(args_of "$what") -o "$WORK/ncu/$name" >"$LOGS/ncu/summary_$name.txt" 2>&1 ||
+      say "ncu $item failed: $(tail -n 2 "$LOGS/ncu/summary_$name.txt")"
+    say "ncu $item ($(elapsed))"
+  done
+  for item in ${TILEVIS_NCU_DETAIL-}; do
+    local scene="${item%%:*}" rest="${item#*:}"
+    local what="${rest%%:*}" kernel="${rest#*:}" trace="$TRACES/${item%%:*}.tvt"
+    local name="${scene//\//_}_${what}_$kernel"
+    # shellcheck disable=SC2046
+    timeout 240 "$ncu_bin" --clock-control none -k "regex:$kernel" --launch-skip 2 --launch-count 1 \
+      --section SpeedOfLight --section Occupancy --section LaunchStats --section WarpStateStats \
+      --section MemoryWorkloadAnalysis --section ComputeWorkloadAnalysis --section SchedulerStats \
+      "$BIN" cuda "$trace" $(args_of "$what") -o "$WORK/ncu/$name" >"$LOGS/ncu/detail_$name.txt" 2>&1 ||
+      say "ncu detail $item failed: $(tail -n 2 "$LOGS/ncu/detail_$name.txt")"
+    say "ncu detail $item ($(elapsed))"
+  done
+  tar -C "$LOGS" -cf - ncu | xz -6 >"$REPORT_DIR/ncu.tar.xz" || true
+}
+
 phase_report() {
   local device commit
   device="$(nvidia-smi --query-gpu=name --format=csv,noheader 2>/dev/null | head -n 1 || true)"
@@ -274,6 +377,8 @@ phase_report() {
   # .gpu/commit.txt first: prepare_gpu_run.sh wrote it from the checkout the traces and the
   # tree came from (a copied tree's own .git, if any, may be older).
   commit="$(cat .gpu/commit.txt 2>/dev/null || git rev-parse --verify -q HEAD 2>/dev/null || echo unknown)"
+  # Prebuilt binaries: the commit they were built at (and what was uncommitted then).
+  [ -f "$WORK/meta/prebuilt_commit.txt" ] && commit="$(cat "$WORK/meta/prebuilt_commit.txt")"
   nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.max.sm,clocks.max.mem --format=csv,noheader \
     >"$WORK/meta/nvidia_smi.txt" 2>/dev/null || true
   nvcc --version | tail -n 1 >"$WORK/meta/nvcc.txt" 2>/dev/null || true
@@ -286,14 +391,18 @@ phases=("$@")
 [ ${#phases[@]} -gt 0 ] || phases=(all)
 for ph in "${phases[@]}"; do
   case "$ph" in
-    all) phase_build; phase_test; phase_baselines; phase_cross; phase_orbit; phase_sanitize; phase_report ;;
+    all) phase_build; phase_test; phase_baselines; phase_cross; use_set 4k4; phase_baselines; phase_cross; use_set 1080p
+         phase_orbit; phase_sanitize; phase_report ;;
     baselines) phase_baselines ;;
+    baselines_4k4) use_set 4k4; phase_baselines; use_set 1080p ;;
+    cross_4k4) use_set 4k4; phase_cross; use_set 1080p ;;
+    profile) phase_profile ;;
     orbit) phase_orbit ;;
     build) phase_build ;;
     test) phase_test ;;
     cross) phase_cross ;;
     sanitize) phase_sanitize ;;
     report) phase_report ;;
-    *) die "unknown phase $ph (all, build, test, baselines, cross, orbit, sanitize, report)" ;;
+    *) die "unknown phase $ph (all, build, test, baselines, cross, baselines_4k4, cross_4k4, orbit, sanitize, profile, report)" ;;
   esac
 done

@@ -9,8 +9,13 @@
 #   .gpu/traces.tar.xz    every traces/scenes/*.json as a trace (`tilevis trace`), plus
 #                         small/dragon_320x240.tvt for compute-sanitizer
 #   .gpu/commit.txt       the commit the traces were made at
+#   .gpu/prebuilt.tar.xz  with --prebuilt DIR: tilevis, cuda_gpu_tests, gl_raster, cuda_gpu_report
+#                         built here in DIR and the shared libraries they need (gpu_run.sh build
+#                         unpacks them when TILEVIS_GPU_PREBUILT=1 instead of compiling there)
 #
 #   bash cuda_ref/prepare_gpu_run.sh            (TILEVIS_BIN=path/to/tilevis to pick the binary)
+#   bash cuda_ref/prepare_gpu_run.sh --prebuilt build-cuda        (also .gpu/prebuilt.tar.xz)
+#   bash cuda_ref/prepare_gpu_run.sh --prebuilt-only build-cuda   (only .gpu/prebuilt.tar.xz)
 #
 # Then, on the GPU machine, from the repository root with .gpu carried along:
 #   bash cuda_ref/gpu_run.sh
@@ -21,6 +26,16 @@ cd "$ROOT"
 say() { printf 'prepare_gpu_run: %s\n' "$*" >&2; }
 die() { say "error: $*"; exit 1; }
 
+PREBUILT=""
+TRACES_TOO=1
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --prebuilt) PREBUILT="$2"; shift 2 ;;
+    --prebuilt-only) PREBUILT="$2"; TRACES_TOO=0; shift 2 ;;
+    *) die "unknown argument $1 (--prebuilt DIR, --prebuilt-only DIR)" ;;
+  esac
+done
+
 BIN="${TILEVIS_BIN:-}"
 if [ -z "$BIN" ]; then
   for b in build/model/app/tilevis build-cuda/model/app/tilevis; do
@@ -28,8 +43,9 @@ if [ -z "$BIN" ]; then
   done
 fi
 [ -n "$BIN" ] && [ -x "$BIN" ] || die "no tilevis binary with the scene generator (build one: ./tilevis info, or set TILEVIS_BIN)"
-LIMIT_MIB=40
+LIMIT_MIB=52
 
+make_traces() {
 # Debian 12 packages: OpenEXR, Imath and zlib headers (OpenEXRConfig.cmake asks for ZLIB), and
 # the rest of what the TILEVIS_MINIMAL build finds (TileVisDeps.cmake): nlohmann-json, fmt,
 # CLI11 and GoogleTest/GMock (static libraries), so the GPU machine needs nothing installed
@@ -45,6 +61,15 @@ for scene in traces/scenes/*.json; do
   name="$(basename "$scene" .json)"
   say "trace $name"
   "$BIN" trace "$scene" -q -o ".gpu/traces/$name.tvt" || die "tilevis trace $scene failed"
+done
+# The 4K 4 spp set (gpu_run.sh baselines_4k4, cross_4k4): every scene at 3840x2160 with 4 samples
+# (all built-in viewports are 16:9, so the clip-space geometry is the 1080p traces').
+mkdir -p .gpu/traces/4k4
+for scene in traces/scenes/*.json; do
+  name="$(basename "$scene" .json)"
+  say "trace $name at 3840x2160, 4 samples"
+  "$BIN" trace "$scene" --viewport 3840x2160 --samples 4 -q -o ".gpu/traces/4k4/$name.tvt" ||
+    die "tilevis trace $scene (4K, 4 samples) failed"
 done
 say "trace dragon at 320x240 (sanitizers)"
 "$BIN" trace traces/scenes/dragon.json --viewport 320x240 -q -o .gpu/traces/small/dragon_320x240.tvt
@@ -70,6 +95,37 @@ say "compressing traces"
 rm -f .gpu/traces.tar.xz
 tar -C .gpu -cf - traces | xz -6 -T2 > .gpu/traces.tar.xz
 rm -rf .gpu/traces
+}
+[ "$TRACES_TOO" = 0 ] || make_traces
+
+# --prebuilt DIR: the binaries gpu_run.sh runs, built HERE in DIR (a Release build with nvcc, sm_90),
+# with the shared libraries they need beyond the C runtime: gpu_run.sh build unpacks them instead of
+# building there (TILEVIS_GPU_PREBUILT=1), so a GPU call spends no time compiling.
+if [ -n "$PREBUILT" ]; then
+  rm -rf .gpu/prebuilt && mkdir -p .gpu/prebuilt/bin .gpu/prebuilt/lib
+  for b in model/app/tilevis tests/cuda/cuda_gpu_tests cuda_ref/gl_raster cuda_ref/cuda_gpu_report; do
+    [ -x "$PREBUILT/$b" ] || die "$PREBUILT/$b missing: build it first"
+    install -D -m 755 "$PREBUILT/$b" ".gpu/prebuilt/bin/$b"
+  done
+  for b in .gpu/prebuilt/bin/model/app/tilevis .gpu/prebuilt/bin/tests/cuda/cuda_gpu_tests .gpu/prebuilt/bin/cuda_ref/gl_raster; do
+    ldd "$b" | awk '$3 ~ /^\// {print $3}'
+  done | sort -u | while read -r lib; do
+    case "$(basename "$lib")" in
+      libc.so* | libm.so* | libpthread.so* | libdl.so* | librt.so* | ld-linux* | libstdc++.so* | libgcc_s.so*) ;;
+      *) cp -L "$lib" .gpu/prebuilt/lib/ ;;
+    esac
+  done
+  # The commit, marked where cuda_ref's own files differ from it; other uncommitted paths named.
+  local_note=""
+  git diff --quiet HEAD -- cuda_ref tests/cuda model/app/cmd_cuda.cpp 2>/dev/null || local_note="+local-changes"
+  others="$(git diff --name-only HEAD -- . ':!cuda_ref' ':!tests/cuda' ':!model/app/cmd_cuda.cpp' ':!reports' ':!README.md' 2>/dev/null |
+            cut -d/ -f1-2 | sort -u | paste -sd, -)"
+  echo "$(git rev-parse HEAD)$local_note${others:+ (uncommitted elsewhere: $others)}" >.gpu/prebuilt/commit.txt
+  rm -f .gpu/prebuilt.tar.xz
+  tar -C .gpu -cf - prebuilt | xz -6 -T2 >.gpu/prebuilt.tar.xz
+  rm -rf .gpu/prebuilt
+  say "$(du -sh .gpu/prebuilt.tar.xz | cut -f1) of prebuilt binaries (from $PREBUILT)"
+fi
 
 total=$(du -sb .gpu | cut -f1)
 say "$(du -sh .gpu/debs | cut -f1) of .debs, $(du -sh .gpu/traces.tar.xz | cut -f1) of traces; $((total / 1048576)) MiB in .gpu"

@@ -1,14 +1,32 @@
 // Z-buffer rasterisers of a trace frame (cuda_ref.h, run_cuda_zbuffer): the baselines the
 // analytic pipeline is measured against on the same GPU.
 //
-// tiled (exact, equal to the z-buffer truth): setup.cu's setup, then the front opaque triangles
-// binned by pixel bounding box into bins of 256 samples (count -> scan -> emit, one stable
-// radix sort by bin: a bin's triangles stay in setup order), then a block per bin, a thread
-// per sample, the bin's triangles staged through shared memory 64 at a time. Per sample the
-// owner's depth numerator N = alpha x + beta y + gamma (area * z) is kept in registers; a
-// covering triangle t passes when N_t area_o < N_o area_t (zbuffer.h: strictly nearer, so at
-// equal depth the earlier triangle keeps the sample). With depth bits D <= 26 every plane is
-// "small" (geom/depth.h): |N| < 2^(51+D), |N area| < 2^(100+D) <= 2^126: I128.
+// tiled (exact, equal to the z-buffer truth), in the manner of CudaRaster (Laine & Karras 2011):
+// binned, tile-local, hierarchical coverage, and no size read on the host between its stages.
+//  1. vertices: a thread per vertex: inside every clip plane?, and if so its snapped position
+//     (setup.cuh: the pipeline's own arithmetic, so a vertex snaps as in setup.cu).
+//  2. triangles: a thread per trace triangle: exact facing (a double filter, else setup.cuh's
+//     expansion), clipping where a vertex is outside (setup.cuh), the front opaque setup
+//     triangles appended as 48-byte records. A triangle whose pixel box spans at most
+//     kInlineTiles tiles of 64 samples (8x8 pixels at 1 sample) bins itself: per tile, the
+//     exact edge test over the tile's rectangle, then a rank in the tile's list (atomic count)
+//     and a (tile, rank, record) pair. A larger one appends a unit per coarse bin of 8x8 tiles.
+//  3. units: a warp per (big triangle, coarse bin): the coarse bin's rectangle first (one edge
+//     test for 64 tiles), then its tiles, a lane per two, as in 2.
+//  4. an exclusive scan of the tiles' counts; a thread per pair puts its record at offset + rank.
+//  5. raster: a warp per tile, a lane per two samples: the tile's records staged 32 at a time
+//     in shared memory, edge functions (int64, top-left rule) and the exact depth test per
+//     sample, the nearest kept in registers. The order of a tile's list does not matter: at
+//     equal depth the earlier setup triangle (trace triangle, then fan position) wins, as in
+//     the truth (zbuffer.h: strictly nearer replaces). A list longer than kSegment is split:
+//     the tile's warp takes the first kSegment records and queues the rest as helper items; a
+//     warp per helper merges its nearest into the tile's per-sample owner word by CAS (the
+//     order is total, so the merge is order-free), and the last helper of a tile writes its ids.
+// Per sample the depth numerator N = alpha x + beta y + gamma (area z) is exact: with depth
+// bits D <= 26 every plane is "small" (geom/depth.h): |N| < 2^(51+D), |N area| < 2^(100+D) <=
+// 2^126: I128. Every buffer is sized from capacities learned by earlier frames; device counters
+// keep counting past them and the host reads them once, after the frame: an overflow grows the
+// buffers and the frame runs again.
 //
 // naive: a thread per trace triangle, from clip space in float, snapped to the sub-pixel grid,
 // top-left coverage, float depth, one 64-bit atomicMin of (depth bits << 32 | id) per sample.
@@ -16,139 +34,307 @@
 #include <chrono>
 #include <cstring>
 
-#include "pipeline.cuh"
+#include "setup.cuh"
 
 namespace tilevis::cuda {
 namespace {
 
-constexpr uint32_t kZBinSamples = 256;  // samples per bin: a block of threads, one per sample
+constexpr uint32_t kTileSamples = 64;  // a fine tile: a warp, two samples a lane
+constexpr uint32_t kCoarse = 8;        // a coarse bin: 8x8 tiles (a big triangle's unit of work)
+constexpr uint32_t kInlineTiles = 16;  // at most this many tiles in its box: a triangle bins itself
+constexpr uint32_t kRasterBlock = 128;
+constexpr uint32_t kWarpsPerBlock = kRasterBlock / 32;
 
-// A front opaque triangle as the bins hold it (128 bytes).
-struct alignas(16) ZTri {
-  int64_t c[3];
-  int32_t a[3], b[3];      // |a|, |b| <= 2^24 (exact.cuh ILine)
-  int64_t alpha, beta;
-  I128 gamma;
-  int64_t area;            // > 0
-  int32_t px0, py0, px1, py1;  // pixel bounding box, inside the screen
-  uint32_t id;             // trace triangle
-  uint32_t owns;           // bit i: edge i owns its boundary (top-left rule)
+// Device counters (ZArgs::ctr).
+enum ZCounter : uint32_t { kZRecords, kZPairs, kZUnits, kZHelpers, kZDrawn, kZCounterCount };
+constexpr uint32_t kZCounterWords = 8;  // uint64 words before the tile counts in one allocation
+
+// A front opaque setup triangle (48 bytes): its snapped vertices and its setup order,
+// trace triangle << 3 | fan position (a fan has at most 7 triangles).
+struct alignas(16) ZRec {
+  Vtx v[3];
+  uint32_t order;
+  uint32_t unit0;  // big triangles: the first of its units
+  uint32_t pad[2];
 };
 
-// Per sample: the nearest covering triangle so far.
-struct Owner {
-  I128 n = 0;
-  int64_t area = 0;
-  int32_t tri = -1;  // index into the ZTri array
+// A record as the raster tests it (edges with inside > 0, the top-left rule's owned edges,
+// the depth plane, the pixel box), staged in shared memory.
+struct alignas(16) ZDer {
+  I128 gamma;
+  int64_t c[3];
+  int64_t alpha, beta, area;
+  int32_t a[3], b[3];
+  int32_t px0, py0, px1, py1;
+  uint32_t order, owns, slot, pad;
 };
 
 struct ZArgs {
-  const SetupTri* setup;
-  ZTri* tris;
-  uint32_t* bin_count;
-  const uint64_t* bin_offset;
-  uint64_t* pair_key;
-  uint32_t* pair_tri;
-  const uint64_t* key_sorted;
-  const uint32_t* tri_sorted;
-  uint64_t* bin_begin;  // n_bins + 1
-  uint64_t n_pairs, n_setup;
+  FrameDev f;
+  double gx, gy;
+  const float4* vertices;
+  const uint32_t* indices;
+  const uint32_t* tri_draw;
+  const DrawInfo* draws;
   const uint32_t* sample_xy;
+  int4* vtx;            // per vertex: snapped x, y, z, 1 when inside every plane
+  ZRec* rec;
+  uint64_t* ctr;        // ZCounter
+  uint32_t* tile_count; // per tile: its list's length
+  uint32_t* tile_off;   // exclusive scan of tile_count (n_tiles + 1)
+  uint64_t* pair;       // tile << 32 | rank
+  uint32_t* pair_rec;
+  uint32_t* unit_rec;   // per unit: its record
+  uint32_t* sorted;     // the tiles' lists, one after another
+  uint64_t* helper;     // tile << 32 | first entry
+  uint32_t* owner;      // per sample of a split tile: the nearest record so far (kNone: none)
+  uint32_t* tile_need;  // per split tile: its helpers, and how many are done
+  uint32_t* tile_done;
   int32_t* ids;
-  uint32_t width, height, samples, sb, bin_w, bin_h, bins_x, bins_y;
+  uint64_t rec_cap, pair_cap, unit_cap, helper_cap;
+  uint32_t width, height, samples, sb, tw, th, tiles_x, tiles_y, coarse_x, segment;
 };
 
-TV_HD inline bool is_drawn(const SetupTri& s) {
-  return s.front && s.opaque && orient2d(s.v[0].xy(), s.v[1].xy(), s.v[2].xy()) != 0;
+TV_HD inline bool overflowed(const ZArgs& a) {
+  return a.ctr[kZRecords] > a.rec_cap || a.ctr[kZPairs] > a.pair_cap || a.ctr[kZUnits] > a.unit_cap ||
+         a.ctr[kZHelpers] > a.helper_cap;
 }
 
-TV_HD void zb_prepare(const ZArgs& a, uint64_t i) {
-  const SetupTri& s = a.setup[i];
-  a.bin_count[i] = 0;
-  if (!is_drawn(s)) return;
-  const TileTri<ExactP> t = make_tile_tri<ExactP>(s.v[0], s.v[1], s.v[2], s.id, true);
-  ZTri z;
+// ---- 1, 2: setup and binning -----------------------------------------------------------
+
+TV_HD void zb_vertex(const ZArgs& a, uint64_t i) {
+  const float4 fv = a.vertices[i];
+  const ClipV v{double(fv.x), double(fv.y), double(fv.z), double(fv.w), uint32_t(i)};
+  bool inside = true;
+  for (int p = 0; p < 6; ++p) inside &= distance(p, a.gx, a.gy, v) >= 0;
+  const Vtx s = inside ? snap(a.f, a.gx, a.gy, v) : Vtx{0, 0, 0};
+  a.vtx[i] = make_int4(s.x, s.y, int32_t(s.z), inside ? 1 : 0);
+}
+
+// Sign of det[x y w] (setup.cuh clip_facing): the six triple products in double (x y is exact,
+// times w rounds by at most 2^-53 relative) and their sum are within 2^-48 of the total of their
+// magnitudes; only when the sum is that close to zero is the exact expansion taken.
+TV_HD inline int facing_of(const float4& a, const float4& b, const float4& c) {
+  const double t[6] = {dmul(dmul(double(a.x), double(b.y)), double(c.w)),
+                       dmul(dmul(-double(a.x), double(c.y)), double(b.w)),
+                       dmul(dmul(double(b.x), double(c.y)), double(a.w)),
+                       dmul(dmul(-double(b.x), double(a.y)), double(c.w)),
+                       dmul(dmul(double(c.x), double(a.y)), double(b.w)),
+                       dmul(dmul(-double(c.x), double(b.y)), double(a.w))};
+  double sum = 0, mag = 0;
+  for (double v : t) {
+    sum = dadd(sum, v);
+    mag = dadd(mag, dabs(v));
+  }
+  const double bound = dmul(mag, 0x1p-48);
+  if (sum > bound) return 1;
+  if (sum < -bound) return -1;
+  return clip_facing(a, b, c);
+}
+
+struct Edges {
+  ILine e[3];  // inside: eval > 0, or 0 on an owned edge
+};
+
+TV_HD inline Edges edges_of(const Vtx& v0, const Vtx& v1, const Vtx& v2) {
+  Edges r;
+  if (orient2d(v0.xy(), v1.xy(), v2.xy()) > 0) {
+    r.e[0] = ILine::through(v0.xy(), v1.xy());
+    r.e[1] = ILine::through(v1.xy(), v2.xy());
+    r.e[2] = ILine::through(v2.xy(), v0.xy());
+  } else {
+    r.e[0] = ILine::through(v0.xy(), v2.xy());
+    r.e[1] = ILine::through(v2.xy(), v1.xy());
+    r.e[2] = ILine::through(v1.xy(), v0.xy());
+  }
+  return r;
+}
+
+// The closed rectangle of tile (tx, ty) in sub-pixel units: every sample of the tile lies in it.
+TV_HD inline Rect tile_rect(const ZArgs& a, int64_t tx0, int64_t ty0, int64_t tx1, int64_t ty1) {
+  return {int32_t((tx0 * a.tw) << a.sb), int32_t((ty0 * a.th) << a.sb), int32_t(((tx1 + 1) * a.tw) << a.sb),
+          int32_t(((ty1 + 1) * a.th) << a.sb)};
+}
+
+// Hierarchical coverage: no sample of r can be inside when an edge is negative over all of r.
+TV_HD inline bool may_cover(const Edges& t, const Rect& r) {
+  return t.e[0].max_over(r) >= 0 && t.e[1].max_over(r) >= 0 && t.e[2].max_over(r) >= 0;
+}
+
+// The pixel box of a triangle cut at the screen, in tiles; false when it leaves the screen.
+struct TileBox {
+  int64_t px0, py0, px1, py1, tx0, ty0, tx1, ty1;
+};
+TV_HD inline bool tile_box(const ZArgs& a, const Vtx& v0, const Vtx& v1, const Vtx& v2, TileBox& b) {
+  b.px0 = tmax<int64_t>(0, tmin(tmin(v0.x, v1.x), v2.x) >> a.sb);
+  b.py0 = tmax<int64_t>(0, tmin(tmin(v0.y, v1.y), v2.y) >> a.sb);
+  b.px1 = tmin<int64_t>(int64_t(a.width) - 1, tmax(tmax(v0.x, v1.x), v2.x) >> a.sb);
+  b.py1 = tmin<int64_t>(int64_t(a.height) - 1, tmax(tmax(v0.y, v1.y), v2.y) >> a.sb);
+  if (b.px0 > b.px1 || b.py0 > b.py1) return false;
+  b.tx0 = b.px0 / a.tw;
+  b.ty0 = b.py0 / a.th;
+  b.tx1 = b.px1 / a.tw;
+  b.ty1 = b.py1 / a.th;
+  return true;
+}
+
+TV_HD inline void emit_pair(const ZArgs& a, uint32_t tile, uint32_t slot) {
+  const uint32_t rank = atomic_add(&a.tile_count[tile], 1u);
+  const uint64_t p = bump_one(&a.ctr[kZPairs], a.pair_cap);
+  if (p == ~uint64_t{0}) return;  // the frame runs again with more room
+  a.pair[p] = uint64_t(tile) << 32 | rank;
+  a.pair_rec[p] = slot;
+}
+
+// One setup triangle (fan position k of trace triangle t), if front-facing (facing > 0 is the
+// trace triangle's; the snapped triangle must turn the same way: negative area, y down).
+TV_HD inline void zb_triangle(const ZArgs& a, uint64_t t, uint32_t k, const Vtx& v0, const Vtx& v1, const Vtx& v2) {
+  if (!(orient2d(v0.xy(), v1.xy(), v2.xy()) < 0)) return;
+  count_add(&a.ctr[kZDrawn], 1);
+  TileBox b;
+  if (!tile_box(a, v0, v1, v2, b)) return;
+  const uint64_t slot = bump_one(&a.ctr[kZRecords], a.rec_cap);
+  if (slot == ~uint64_t{0}) return;
+  ZRec r;
+  r.v[0] = v0;
+  r.v[1] = v1;
+  r.v[2] = v2;
+  r.order = uint32_t(t) << 3 | k;
+  r.unit0 = 0;
+  r.pad[0] = r.pad[1] = 0;
+  const uint64_t n_tiles = uint64_t(b.tx1 - b.tx0 + 1) * uint64_t(b.ty1 - b.ty0 + 1);
+  if (n_tiles > kInlineTiles) {
+    const int64_t cx0 = b.tx0 / kCoarse, cx1 = b.tx1 / kCoarse, cy0 = b.ty0 / kCoarse, cy1 = b.ty1 / kCoarse;
+    const uint64_t n_units = uint64_t(cx1 - cx0 + 1) * uint64_t(cy1 - cy0 + 1);
+    const uint64_t u0 = bump(&a.ctr[kZUnits], n_units, a.unit_cap);
+    r.unit0 = uint32_t(u0);
+    a.rec[slot] = r;
+    if (u0 == ~uint64_t{0}) return;
+    for (uint64_t u = 0; u < n_units; ++u) a.unit_rec[u0 + u] = uint32_t(slot);
+    return;
+  }
+  a.rec[slot] = r;
+  const Edges e = edges_of(v0, v1, v2);
+  for (int64_t ty = b.ty0; ty <= b.ty1; ++ty)
+    for (int64_t tx = b.tx0; tx <= b.tx1; ++tx)
+      if (n_tiles == 1 || may_cover(e, tile_rect(a, tx, ty, tx, ty)))
+        emit_pair(a, uint32_t(ty * a.tiles_x + tx), uint32_t(slot));
+}
+
+TV_HD inline Vtx vtx_of(const int4& q) { return {q.x, q.y, uint32_t(q.z)}; }
+
+TV_HD __noinline__ void zb_clipped(const ZArgs& a, uint64_t t) {
+  ClipV poly[kMaxClipVerts];
+  bool cut = false;
+  const uint32_t n = clip_triangle(a.vertices, a.indices, a.gx, a.gy, t, poly, cut);
+  Vtx sv[kMaxClipVerts];
+  for (uint32_t k = 0; k < n; ++k) sv[k] = snap(a.f, a.gx, a.gy, poly[k]);
+  for (uint32_t k = 1; k + 1 < n; ++k) zb_triangle(a, t, k - 1, sv[0], sv[k], sv[k + 1]);
+}
+
+TV_HD void zb_trace_triangle(const ZArgs& a, uint64_t t) {
+  if (!a.draws[a.tri_draw[t]].opaque) return;
+  const uint32_t i0 = a.indices[3 * t], i1 = a.indices[3 * t + 1], i2 = a.indices[3 * t + 2];
+  if (facing_of(a.vertices[i0], a.vertices[i1], a.vertices[i2]) <= 0) return;  // back-facing or edge-on
+  const int4 q0 = a.vtx[i0], q1 = a.vtx[i1], q2 = a.vtx[i2];
+  if (q0.w & q1.w & q2.w) zb_triangle(a, t, 0, vtx_of(q0), vtx_of(q1), vtx_of(q2));
+  else zb_clipped(a, t);
+}
+
+// A big triangle's unit: the coarse bin's tiles inside its box, lane, lane + lanes, ...
+TV_HD void zb_unit(const ZArgs& a, uint64_t u, uint32_t lane, uint32_t lanes) {
+  const uint32_t slot = a.unit_rec[u];
+  const ZRec& r = a.rec[slot];
+  TileBox b{};
+  tile_box(a, r.v[0], r.v[1], r.v[2], b);
+  const int64_t cx0 = b.tx0 / kCoarse, cx1 = b.tx1 / kCoarse, cy0 = b.ty0 / kCoarse;
+  const uint64_t k = u - r.unit0;
+  const int64_t cx = cx0 + int64_t(k % uint64_t(cx1 - cx0 + 1)), cy = cy0 + int64_t(k / uint64_t(cx1 - cx0 + 1));
+  const int64_t tx0 = tmax(b.tx0, cx * kCoarse), tx1 = tmin(b.tx1, cx * kCoarse + kCoarse - 1);
+  const int64_t ty0 = tmax(b.ty0, cy * kCoarse), ty1 = tmin(b.ty1, cy * kCoarse + kCoarse - 1);
+  const Edges e = edges_of(r.v[0], r.v[1], r.v[2]);
+  if (!may_cover(e, tile_rect(a, tx0, ty0, tx1, ty1))) return;
+  const int64_t w = tx1 - tx0 + 1, n = w * (ty1 - ty0 + 1);
+  for (int64_t i = lane; i < n; i += lanes) {
+    const int64_t tx = tx0 + i % w, ty = ty0 + i / w;
+    if (may_cover(e, tile_rect(a, tx, ty, tx, ty))) emit_pair(a, uint32_t(ty * a.tiles_x + tx), slot);
+  }
+}
+
+// ---- 4: the tiles' lists ------------------------------------------------------------------
+
+TV_HD void zb_scatter(const ZArgs& a, uint64_t i) {
+  const uint64_t p = a.pair[i];
+  a.sorted[a.tile_off[p >> 32] + uint32_t(p)] = a.pair_rec[i];
+}
+
+// ---- 5: raster ------------------------------------------------------------------------------
+
+TV_HD inline ZDer derive(const ZRec& r, uint32_t slot, uint32_t sb) {
+  const Vtx &v0 = r.v[0], &v1 = r.v[1], &v2 = r.v[2];
+  const Edges e = edges_of(v0, v1, v2);
+  ZDer d;
+  d.owns = 0;
   for (int k = 0; k < 3; ++k) {
-    z.a[k] = int32_t(t.edge[k].a);
-    z.b[k] = int32_t(t.edge[k].b);
-    z.c[k] = t.edge[k].c;
+    d.a[k] = int32_t(e.e[k].a);
+    d.b[k] = int32_t(e.e[k].b);
+    d.c[k] = e.e[k].c;
+    d.owns |= e.e[k].owns_boundary() ? 1u << k : 0u;
   }
-  z.owns = (t.edge[0].owns_boundary() ? 1u : 0u) | (t.edge[1].owns_boundary() ? 2u : 0u) |
-           (t.edge[2].owns_boundary() ? 4u : 0u);
-  z.alpha = t.plane.alpha;
-  z.beta = t.plane.beta;
-  z.gamma = t.plane.gamma;
-  z.area = t.plane.area;
-  z.id = s.id;
-  // zbuffer.h for_covered_samples: pixels bbox >> sb, cut at the screen.
-  const int64_t px0 = tmax<int64_t>(0, t.bbox.x0 >> a.sb), px1 = tmin<int64_t>(int64_t(a.width) - 1, t.bbox.x1 >> a.sb);
-  const int64_t py0 = tmax<int64_t>(0, t.bbox.y0 >> a.sb), py1 = tmin<int64_t>(int64_t(a.height) - 1, t.bbox.y1 >> a.sb);
-  z.px0 = int32_t(px0);
-  z.py0 = int32_t(py0);
-  z.px1 = int32_t(px1);
-  z.py1 = int32_t(py1);
-  a.tris[i] = z;
-  if (px0 > px1 || py0 > py1) return;
-  a.bin_count[i] = uint32_t((px1 / a.bin_w - px0 / a.bin_w + 1) * (py1 / a.bin_h - py0 / a.bin_h + 1));
+  // exact.cuh plane_of, its integer part.
+  int64_t area = orient2d(v0.xy(), v1.xy(), v2.xy());
+  const int64_t dx1 = int64_t{v1.x} - v0.x, dy1 = int64_t{v1.y} - v0.y, dz1 = int64_t{v1.z} - v0.z;
+  const int64_t dx2 = int64_t{v2.x} - v0.x, dy2 = int64_t{v2.y} - v0.y, dz2 = int64_t{v2.z} - v0.z;
+  int64_t alpha = -(dy1 * dz2 - dz1 * dy2), beta = -(dz1 * dx2 - dx1 * dz2);
+  I128 gamma = mul64(area, int64_t{v0.z}) - mul64(alpha, v0.x) - mul64(beta, v0.y);
+  if (area < 0) {
+    area = -area;
+    alpha = -alpha;
+    beta = -beta;
+    gamma = -gamma;
+  }
+  d.alpha = alpha;
+  d.beta = beta;
+  d.gamma = gamma;
+  d.area = area;
+  // The pixel box (not cut at the screen: samples outside the screen are never written).
+  d.px0 = tmin(tmin(v0.x, v1.x), v2.x) >> sb;
+  d.py0 = tmin(tmin(v0.y, v1.y), v2.y) >> sb;
+  d.px1 = tmax(tmax(v0.x, v1.x), v2.x) >> sb;
+  d.py1 = tmax(tmax(v0.y, v1.y), v2.y) >> sb;
+  d.order = r.order;
+  d.slot = slot;
+  d.pad = 0;
+  return d;
 }
 
-// A thread per (bin, triangle) pair, so a triangle over many bins costs no more than many
-// small ones: the pair's triangle is the last whose offset is <= it (binary search), its bin
-// the pair's rank in the triangle's bins, row-major.
-TV_HD void zb_emit(const ZArgs& a, uint64_t o) {
-  uint64_t lo = 0, hi = a.n_setup;  // bin_offset[lo] <= o < bin_offset[hi]
-  while (hi - lo > 1) {
-    const uint64_t mid = (lo + hi) / 2;
-    if (a.bin_offset[mid] <= o) lo = mid;
-    else hi = mid;
-  }
-  const ZTri& z = a.tris[lo];
-  const uint64_t r = o - a.bin_offset[lo];
-  const uint32_t bx0 = uint32_t(z.px0) / a.bin_w, by0 = uint32_t(z.py0) / a.bin_h;
-  const uint32_t w = uint32_t(z.px1) / a.bin_w - bx0 + 1;
-  a.pair_key[o] = uint64_t(by0 + uint32_t(r / w)) * a.bins_x + (bx0 + uint32_t(r % w));
-  a.pair_tri[o] = uint32_t(lo);
+// Per sample: the nearest covering record so far.
+struct Owner {
+  I128 n = 0;
+  int64_t area = 0;
+  uint32_t order = kNone, slot = kNone;
+};
+
+// Nearer than o: smaller depth n / area (areas > 0), or equal depth and earlier in setup order.
+TV_HD inline bool nearer(const I128& n, int64_t area, uint32_t order, const Owner& o) {
+  if (o.order == kNone) return true;
+  const I128 l = n * o.area, r = o.n * area;
+  return l < r || (l == r && order < o.order);
 }
 
-// bin_begin[b]: the first sorted pair of bin b or after (lower bound), for b in [0, n_bins].
-TV_HD void zb_bounds(const ZArgs& a, uint64_t b) {
-  uint64_t lo = 0, hi = a.n_pairs;
-  while (lo < hi) {
-    const uint64_t mid = (lo + hi) / 2;
-    if (a.key_sorted[mid] < b) lo = mid + 1;
-    else hi = mid;
-  }
-  a.bin_begin[b] = lo;
-}
-
-// One triangle at one sample (x, y sub-pixel; px, py its pixel).
-TV_HD inline void zb_test(const ZTri& z, uint32_t index, int32_t px, int32_t py, int64_t x, int64_t y, Owner& o) {
-  if (px < z.px0 || px > z.px1 || py < z.py0 || py > z.py1) return;
-  for (int k = 0; k < 3; ++k) {
-    const int64_t e = int64_t(z.a[k]) * x + int64_t(z.b[k]) * y + z.c[k];
-    if (e < 0 || (e == 0 && !((z.owns >> k) & 1u))) return;
-  }
-  const I128 n = I128{z.alpha} * x + I128{z.beta} * y + z.gamma;
-  if (o.tri < 0 || n * o.area < o.n * z.area) {
-    o.n = n;
-    o.area = z.area;
-    o.tri = int32_t(index);
-  }
-}
-
-// The sample a thread of a bin owns: u = pixel_in_bin * samples + k.
-struct SampleAt {
+// A sample of a tile: u = pixel_in_tile * samples + k.
+struct ZSample {
   int32_t px, py;
   int64_t x, y;
   uint64_t out;
   bool inside;
 };
 
-TV_HD inline SampleAt sample_at(const ZArgs& a, uint64_t bin, uint32_t u) {
+TV_HD inline ZSample sample_of(const ZArgs& a, uint64_t tile, uint32_t u) {
   const uint32_t k = u % a.samples, p = u / a.samples;
-  SampleAt s;
-  s.px = int32_t((bin % a.bins_x) * a.bin_w + p % a.bin_w);
-  s.py = int32_t((bin / a.bins_x) * a.bin_h + p / a.bin_w);
+  ZSample s;
+  s.px = int32_t((tile % a.tiles_x) * a.tw + p % a.tw);
+  s.py = int32_t((tile / a.tiles_x) * a.th + p / a.tw);
   s.inside = s.px < int32_t(a.width) && s.py < int32_t(a.height);
   const uint32_t sxy = a.sample_xy[k];
   s.x = (int64_t(s.px) << a.sb) + (sxy & 0xffffu);
@@ -157,49 +343,179 @@ TV_HD inline SampleAt sample_at(const ZArgs& a, uint64_t bin, uint32_t u) {
   return s;
 }
 
-// Host emulation of a bin (cpu device): every sample walks the bin's list from global memory.
-void zb_raster_host(const ZArgs& a, uint64_t bin) {
-  for (uint32_t u = 0; u < kZBinSamples; ++u) {
-    const SampleAt s = sample_at(a, bin, u);
+TV_HD inline void test_sample(const ZDer& d, const ZSample& s, Owner& o) {
+  if (s.px < d.px0 || s.px > d.px1 || s.py < d.py0 || s.py > d.py1) return;
+  for (int k = 0; k < 3; ++k) {
+    const int64_t e = int64_t(d.a[k]) * s.x + int64_t(d.b[k]) * s.y + d.c[k];
+    if (e < 0 || (e == 0 && !((d.owns >> k) & 1u))) return;
+  }
+  const I128 n = I128{d.alpha} * s.x + I128{d.beta} * s.y + d.gamma;
+  if (nearer(n, d.area, d.order, o)) {
+    o.n = n;
+    o.area = d.area;
+    o.order = d.order;
+    o.slot = d.slot;
+  }
+}
+
+TV_HD inline int32_t id_of(uint32_t order) { return order == kNone ? -1 : int32_t(order >> 3); }
+
+// Merges a helper's nearest into the tile's owner word of the sample: replaced while nearer (a
+// total order: the result does not depend on which helper comes first).
+TV_HD inline void merge_owner(const ZArgs& a, const ZSample& s, const Owner& o) {
+  if (o.slot == kNone) return;
+  uint32_t cur = a.owner[s.out];
+  while (true) {
+    if (cur != kNone) {
+      const ZDer c = derive(a.rec[cur], cur, a.sb);
+      const I128 n = I128{c.alpha} * s.x + I128{c.beta} * s.y + c.gamma;
+      const Owner co{n, c.area, c.order, cur};
+      if (!nearer(o.n, o.area, o.order, co)) return;
+    }
+    const uint32_t seen = atomic_cas(&a.owner[s.out], cur, o.slot);
+    if (seen == cur) return;
+    cur = seen;
+  }
+}
+
+// After a tile's list: ids written (the whole list done), or the owner words and its helpers
+// queued (first: the first entry after this warp's part).
+TV_HD inline void queue_helpers(const ZArgs& a, uint64_t tile, uint64_t first, uint64_t end) {
+  const uint64_t n = (end - first + a.segment - 1) / a.segment;
+  a.tile_need[tile] = uint32_t(n);
+  a.tile_done[tile] = 0;
+  const uint64_t h0 = bump(&a.ctr[kZHelpers], n, a.helper_cap);
+  if (h0 == ~uint64_t{0}) return;
+  for (uint64_t h = 0; h < n; ++h) a.helper[h0 + h] = tile << 32 | (first + h * a.segment);
+}
+
+// Host emulation: a tile's part [begin, end) for every sample of the tile.
+void host_part(const ZArgs& a, uint64_t tile, uint64_t begin, uint64_t end, Owner* o) {
+  std::vector<ZDer> ds;
+  for (uint64_t j = begin; j < end; ++j) {
+    const uint32_t slot = a.sorted[j];
+    ds.push_back(derive(a.rec[slot], slot, a.sb));
+  }
+  for (uint32_t u = 0; u < kTileSamples; ++u) {
+    const ZSample s = sample_of(a, tile, u);
+    for (const ZDer& d : ds) test_sample(d, s, o[u]);
+  }
+}
+
+void zb_tile_host(const ZArgs& a, uint64_t tile) {
+  const uint64_t begin = a.tile_off[tile], end = a.tile_off[tile + 1];
+  const uint64_t cut = tmin<uint64_t>(end, begin + a.segment);
+  Owner o[kTileSamples];
+  host_part(a, tile, begin, cut, o);
+  for (uint32_t u = 0; u < kTileSamples; ++u) {
+    const ZSample s = sample_of(a, tile, u);
     if (!s.inside) continue;
-    Owner o;
-    for (uint64_t j = a.bin_begin[bin]; j < a.bin_begin[bin + 1]; ++j) {
-      const uint32_t i = a.tri_sorted[j];
-      zb_test(a.tris[i], i, s.px, s.py, s.x, s.y, o);
-    }
-    a.ids[s.out] = o.tri < 0 ? -1 : int32_t(a.tris[o.tri].id);
+    if (cut < end) a.owner[s.out] = o[u].slot;
+    else a.ids[s.out] = id_of(o[u].order);
+  }
+  if (cut < end) queue_helpers(a, tile, cut, end);
+}
+
+void zb_helper_host(const ZArgs& a, uint64_t h) {
+  const uint64_t tile = a.helper[h] >> 32, begin = uint32_t(a.helper[h]);
+  const uint64_t end = tmin<uint64_t>(a.tile_off[tile + 1], begin + a.segment);
+  Owner o[kTileSamples];
+  host_part(a, tile, begin, end, o);
+  for (uint32_t u = 0; u < kTileSamples; ++u) {
+    const ZSample s = sample_of(a, tile, u);
+    if (s.inside) merge_owner(a, s, o[u]);
+  }
+  if (++a.tile_done[tile] != a.tile_need[tile]) return;
+  for (uint32_t u = 0; u < kTileSamples; ++u) {
+    const ZSample s = sample_of(a, tile, u);
+    if (s.inside) a.ids[s.out] = a.owner[s.out] == kNone ? -1 : id_of(a.rec[a.owner[s.out]].order);
   }
 }
 
-constexpr uint32_t kChunk = 64;
-
-__global__ void __launch_bounds__(kZBinSamples) k_zb_raster(ZArgs a, uint64_t n_bins) {
-  __shared__ ZTri staged[kChunk];
-  __shared__ uint32_t staged_index[kChunk];
-  for (uint64_t bin = blockIdx.x; bin < n_bins; bin += gridDim.x) {
-    const SampleAt s = sample_at(a, bin, threadIdx.x);
-    const uint64_t begin = a.bin_begin[bin], end = a.bin_begin[bin + 1];
-    Owner o;
-    for (uint64_t c = begin; c < end; c += kChunk) {
-      const uint32_t m = uint32_t(tmin<uint64_t>(kChunk, end - c));
-      __syncthreads();  // the previous chunk is done with
-      if (threadIdx.x < m) {
-        const uint32_t i = a.tri_sorted[c + threadIdx.x];
-        staged[threadIdx.x] = a.tris[i];
-        staged_index[threadIdx.x] = i;
-      }
-      __syncthreads();
-      if (s.inside)
-        for (uint32_t j = 0; j < m; ++j) zb_test(staged[j], staged_index[j], s.px, s.py, s.x, s.y, o);
+#if defined(__CUDACC__)
+// A warp's part [begin, end) of a tile's list for its two samples: the records staged 32 at a
+// time (a lane derives one), then every lane tests them all.
+__device__ inline void warp_part(const ZArgs& a, uint64_t begin, uint64_t end, ZDer* stage, const ZSample& s0,
+                                 const ZSample& s1, Owner& o0, Owner& o1) {
+  const uint32_t lane = threadIdx.x & 31u;
+  for (uint64_t c = begin; c < end; c += 32) {
+    const uint32_t m = uint32_t(tmin<uint64_t>(32, end - c));
+    __syncwarp();
+    if (lane < m) {
+      const uint32_t slot = a.sorted[c + lane];
+      stage[lane] = derive(a.rec[slot], slot, a.sb);
     }
-    if (s.inside) a.ids[s.out] = o.tri < 0 ? -1 : int32_t(a.tris[o.tri].id);
-    __syncthreads();
+    __syncwarp();
+    for (uint32_t j = 0; j < m; ++j) {
+      test_sample(stage[j], s0, o0);
+      test_sample(stage[j], s1, o1);
+    }
   }
 }
 
-__global__ void k_zb_prepare(ZArgs a, uint64_t n) { TV_GRID_LOOP(i, n) zb_prepare(a, i); }
-__global__ void k_zb_emit(ZArgs a, uint64_t n) { TV_GRID_LOOP(i, n) zb_emit(a, i); }
-__global__ void k_zb_bounds(ZArgs a, uint64_t n) { TV_GRID_LOOP(i, n) zb_bounds(a, i); }
+__global__ void __launch_bounds__(kRasterBlock) k_zb_tiles(ZArgs a, uint64_t n_tiles) {
+  __shared__ ZDer stage[kWarpsPerBlock][32];
+  if (overflowed(a)) return;
+  const uint32_t lane = threadIdx.x & 31u, w = threadIdx.x / 32;
+  for (uint64_t tile = uint64_t(blockIdx.x) * kWarpsPerBlock + w; tile < n_tiles;
+       tile += uint64_t(gridDim.x) * kWarpsPerBlock) {
+    const uint64_t begin = a.tile_off[tile], end = a.tile_off[tile + 1];
+    const uint64_t cut = tmin<uint64_t>(end, begin + a.segment);
+    const ZSample s0 = sample_of(a, tile, lane), s1 = sample_of(a, tile, lane + 32);
+    Owner o0, o1;
+    warp_part(a, begin, cut, stage[w], s0, s1, o0, o1);
+    if (cut == end) {
+      if (s0.inside) a.ids[s0.out] = id_of(o0.order);
+      if (s1.inside) a.ids[s1.out] = id_of(o1.order);
+    } else {
+      if (s0.inside) a.owner[s0.out] = o0.slot;
+      if (s1.inside) a.owner[s1.out] = o1.slot;
+      if (lane == 0) queue_helpers(a, tile, cut, end);
+    }
+  }
+}
+
+__global__ void __launch_bounds__(kRasterBlock) k_zb_helpers(ZArgs a) {
+  __shared__ ZDer stage[kWarpsPerBlock][32];
+  if (overflowed(a)) return;
+  const uint32_t lane = threadIdx.x & 31u, w = threadIdx.x / 32;
+  const uint64_t n = a.ctr[kZHelpers];
+  for (uint64_t h = uint64_t(blockIdx.x) * kWarpsPerBlock + w; h < n; h += uint64_t(gridDim.x) * kWarpsPerBlock) {
+    const uint64_t tile = a.helper[h] >> 32, begin = uint32_t(a.helper[h]);
+    const uint64_t end = tmin<uint64_t>(a.tile_off[tile + 1], begin + a.segment);
+    const ZSample s0 = sample_of(a, tile, lane), s1 = sample_of(a, tile, lane + 32);
+    Owner o0, o1;
+    warp_part(a, begin, end, stage[w], s0, s1, o0, o1);
+    if (s0.inside) merge_owner(a, s0, o0);
+    if (s1.inside) merge_owner(a, s1, o1);
+    __threadfence();
+    __syncwarp();
+    uint32_t last = 0;
+    if (lane == 0) last = atomicAdd(&a.tile_done[tile], 1u) + 1 == a.tile_need[tile];
+    if (!__shfl_sync(0xffffffffu, last, 0)) continue;
+    __threadfence();
+    for (const ZSample* s : {&s0, &s1}) {
+      if (!s->inside) continue;
+      const uint32_t ow = atomicAdd(&a.owner[s->out], 0u);  // after every helper's merge
+      a.ids[s->out] = ow == kNone ? -1 : id_of(a.rec[ow].order);
+    }
+  }
+}
+
+__global__ void k_zb_units(ZArgs a) {
+  if (overflowed(a)) return;
+  const uint64_t n = a.ctr[kZUnits];
+  TV_WARP_LOOP(u, n) zb_unit(a, u, threadIdx.x & 31u, 32);
+}
+
+__global__ void k_zb_scatter(ZArgs a) {
+  if (overflowed(a)) return;
+  TV_GRID_LOOP(i, a.ctr[kZPairs]) zb_scatter(a, i);
+}
+#endif
+
+__global__ void k_zb_vertex(ZArgs a, uint64_t n) { TV_GRID_LOOP(i, n) zb_vertex(a, i); }
+__global__ void k_zb_trace_triangle(ZArgs a, uint64_t n) { TV_GRID_LOOP(i, n) zb_trace_triangle(a, i); }
 
 // ---- naive ----------------------------------------------------------------------------------
 
@@ -337,17 +653,25 @@ class Marks {
 };
 
 struct ZBufs {
-  Buf<ZTri> tris;
-  Buf<uint32_t> bin_count, pair_tri, tri_sorted;
-  Buf<uint64_t> bin_offset, pair_key, key_sorted, bin_begin;
+  Buf<int4> vtx;
+  Buf<ZRec> rec;
+  Buf<uint64_t> ctr;  // kZCounterWords counters, then the tiles' counts (uint32)
+  Buf<uint32_t> tile_off, pair_rec, unit_rec, sorted, owner, tile_need, tile_done;
+  Buf<uint64_t> pair, helper;
   Buf<unsigned long long> zkey, ncount;
   explicit ZBufs(Exec& e) {
-    for (auto* b : {&bin_count, &pair_tri, &tri_sorted}) b->bind(&e);
-    for (auto* b : {&bin_offset, &pair_key, &key_sorted, &bin_begin}) b->bind(&e);
-    tris.bind(&e);
+    for (auto* b : {&tile_off, &pair_rec, &unit_rec, &sorted, &owner, &tile_need, &tile_done}) b->bind(&e);
+    for (auto* b : {&ctr, &pair, &helper}) b->bind(&e);
+    vtx.bind(&e);
+    rec.bind(&e);
     zkey.bind(&e);
     ncount.bind(&e);
   }
+};
+
+// Capacities the frames so far needed (grow-only).
+struct ZCaps {
+  uint64_t rec = 0, pair = 0, unit = 0, helper = 0;
 };
 
 }  // namespace
@@ -365,7 +689,7 @@ ZBufferResult run_cuda_zbuffer(const trace::Frame& frame, const CudaConfig& cfg,
   p.cfg = cfg;
   upload_frame_common(ex, frame, cfg.depth_bits, p.f, p.draws_host, p.vertices, p.indices, p.tri_draw, p.draws,
                       p.sample_xy);
-  p.counters.need(kCounterCount);
+  if (p.f.n_triangles >= (uint64_t{1} << 29)) throw std::runtime_error("cuda zbuffer: 2^29 trace triangles or more");
   ex.sync();
   ZBufs z(ex);
   ZBufferResult r;
@@ -375,22 +699,32 @@ ZBufferResult run_cuda_zbuffer(const trace::Frame& frame, const CudaConfig& cfg,
   r.samples = S;
   const uint64_t n_samples = uint64_t(r.width) * r.height * S;
   int32_t* ids = p.ids.need(n_samples + 1);
-  // Bins of 256 samples: 16x16 pixels at 1 sample, 16x8 at 2, 8x8 at 4, 8x4 at 8, 4x4 at 16.
-  uint32_t bw = 16, bh = 16;
-  for (uint32_t s = S; s > 1; s >>= 1) (bw > bh ? bw : bh) >>= 1;
-  r.bin_w = bw;
-  r.bin_h = bh;
-  const uint32_t bins_x = (r.width + bw - 1) / bw, bins_y = (r.height + bh - 1) / bh;
-  const uint64_t n_bins = uint64_t(bins_x) * bins_y;
+  // Tiles of 64 samples: 8x8 pixels at 1 sample, 8x4 at 2, 4x4 at 4, 4x2 at 8, 2x2 at 16.
+  uint32_t tw = 8, th = 8;
+  for (uint32_t s = S; s > 1; s >>= 1) (tw > th ? tw : th) >>= 1;
+  r.bin_w = tw;
+  r.bin_h = th;
+  const uint32_t tiles_x = (r.width + tw - 1) / tw, tiles_y = (r.height + th - 1) / th;
+  const uint64_t n_tiles = uint64_t(tiles_x) * tiles_y;
+  const uint64_t n_tri = p.f.n_triangles;
+  // Tests start from tiny capacities (grow and retry) and short list segments (helpers).
+  const bool tiny = cfg.initial_pool != 0;
+  ZCaps caps;
+  caps.rec = tiny ? cfg.initial_pool : n_tri + n_tri / 4 + 1024;
+  caps.pair = tiny ? cfg.initial_pool : 2 * n_tri + n_tiles + 4096;
+  caps.unit = tiny ? cfg.initial_pool : n_tri / 8 + 1024;
+  caps.helper = tiny ? cfg.initial_pool : caps.pair / 64 + 1024;
+  const uint32_t segment = tiny ? 8 : 256;
 
   const bool naive = kind == ZBufferKind::naive;
-  const int n_marks = naive ? 2 : 5;
+  const int n_marks = naive ? 2 : 4;
   Marks marks(ex, n_marks);
   std::vector<std::vector<double>> stage(size_t(n_marks - 1));
   std::vector<double> total;
-  auto once = [&] {
+  uint64_t got[kZCounterCount] = {};
+  // One frame; false when a pool overflowed (capacities grown: run it again).
+  auto once = [&]() -> bool {
     ex.syncs = 0;
-    ex.zero(p.counters.get(), kCounterCount * 8);
     marks.mark(0);
     if (naive) {
       NaiveArgs na{p.f, p.vertices.get(), p.indices.get(), p.tri_draw.get(), p.draws.get(), p.sample_xy.get(),
@@ -400,62 +734,109 @@ ZBufferResult run_cuda_zbuffer(const trace::Frame& frame, const CudaConfig& cfg,
       ex.launch(k_naive_triangle, naive_triangle, p.f.n_triangles, na);
       ex.launch(k_naive_resolve, naive_resolve, n_samples, na);
       marks.mark(1);
-      return;
+      return true;
     }
-    stage_setup(p);
-    marks.mark(1);
+    if (caps.pair >= 0xffffffffull || caps.rec >= 0xffffffffull || caps.unit >= 0xffffffffull)
+      throw std::runtime_error("cuda zbuffer: 2^32 bin entries or more");
     ZArgs a{};
-    a.setup = p.setup.get();
-    a.tris = z.tris.need(p.n_setup + 1);
-    a.bin_count = z.bin_count.need(p.n_setup + 1);
-    a.bin_offset = z.bin_offset.need(p.n_setup + 1);
+    a.f = p.f;
+    a.gx = guard_band(p.f.width);
+    a.gy = guard_band(p.f.height);
+    a.vertices = p.vertices.get();
+    a.indices = p.indices.get();
+    a.tri_draw = p.tri_draw.get();
+    a.draws = p.draws.get();
     a.sample_xy = p.sample_xy.get();
+    a.vtx = z.vtx.need(p.f.n_vertices + 1);
+    a.rec = z.rec.need(caps.rec + 1);
+    a.ctr = z.ctr.need(kZCounterWords + (n_tiles + 1) / 2 + 1);
+    a.tile_count = reinterpret_cast<uint32_t*>(a.ctr + kZCounterWords);
+    a.tile_off = z.tile_off.need(n_tiles + 1);
+    a.pair = z.pair.need(caps.pair + 1);
+    a.pair_rec = z.pair_rec.need(caps.pair + 1);
+    a.unit_rec = z.unit_rec.need(caps.unit + 1);
+    a.sorted = z.sorted.need(caps.pair + 1);
+    a.helper = z.helper.need(caps.helper + 1);
+    a.owner = z.owner.need(n_samples + 1);
+    a.tile_need = z.tile_need.need(n_tiles + 1);
+    a.tile_done = z.tile_done.need(n_tiles + 1);
     a.ids = ids;
+    a.rec_cap = caps.rec;
+    a.pair_cap = caps.pair;
+    a.unit_cap = caps.unit;
+    a.helper_cap = caps.helper;
     a.width = r.width;
     a.height = r.height;
     a.samples = S;
     a.sb = p.f.subpixel_bits;
-    a.bin_w = bw;
-    a.bin_h = bh;
-    a.bins_x = bins_x;
-    a.bins_y = bins_y;
-    ex.launch(k_zb_prepare, zb_prepare, p.n_setup, a);
-    ex.exclusive_scan(a.bin_count, z.bin_offset.get(), p.n_setup);
-    const uint64_t n_pairs = ex.read(z.bin_offset.get() + p.n_setup);  // sync: sizes the bin lists
-    r.bin_entries = n_pairs;
-    a.n_pairs = n_pairs;
-    a.pair_key = z.pair_key.need(n_pairs + 1);
-    a.pair_tri = z.pair_tri.need(n_pairs + 1);
-    a.key_sorted = z.key_sorted.need(n_pairs + 1);
-    a.tri_sorted = z.tri_sorted.need(n_pairs + 1);
-    a.bin_begin = z.bin_begin.need(n_bins + 1);
-    a.n_setup = p.n_setup;
-    ex.launch(k_zb_emit, zb_emit, n_pairs, a);
-    marks.mark(2);
-    ex.sort_pairs(a.pair_key, z.key_sorted.get(), a.pair_tri, z.tri_sorted.get(), n_pairs, int(bits_for(n_bins)));
-    ex.launch(k_zb_bounds, zb_bounds, n_bins + 1, a);
-    marks.mark(3);
-    if (ex.where == Where::cpu) {
-      for (uint64_t b = 0; b < n_bins; ++b) zb_raster_host(a, ex.host_index(b, n_bins));
-    } else {
-      const uint32_t blocks = uint32_t(std::min<uint64_t>(n_bins, uint64_t(ex.grid_blocks) * 16));
-      k_zb_raster<<<blocks, kZBinSamples, 0, ex.main_stream>>>(a, n_bins);
+    a.tw = tw;
+    a.th = th;
+    a.tiles_x = tiles_x;
+    a.tiles_y = tiles_y;
+    a.segment = segment;
+    const bool gpu = ex.where == Where::gpu;
+    ex.zero(a.ctr, (kZCounterWords + (n_tiles + 1) / 2 + 1) * 8);
+    ex.launch(k_zb_vertex, zb_vertex, p.f.n_vertices, a);
+    ex.launch(k_zb_trace_triangle, zb_trace_triangle, n_tri, a);
+    if (gpu) {
+      k_zb_units<<<ex.grid_blocks * 4, 256, 0, ex.main_stream>>>(a);
       TV_CUDA(cudaGetLastError());
+    } else if (!overflowed(a)) {
+      const uint64_t n = a.ctr[kZUnits];
+      for (uint64_t u = 0; u < n; ++u) zb_unit(a, ex.host_index(u, n), 0, 1);
     }
-    marks.mark(4);
+    marks.mark(1);
+    ex.exclusive_scan(a.tile_count, a.tile_off, n_tiles);
+    if (gpu) {
+      k_zb_scatter<<<ex.grid_blocks * 4, 256, 0, ex.main_stream>>>(a);
+      TV_CUDA(cudaGetLastError());
+    } else if (!overflowed(a)) {
+      const uint64_t n = a.ctr[kZPairs];
+      for (uint64_t i = 0; i < n; ++i) zb_scatter(a, ex.host_index(i, n));
+    }
+    marks.mark(2);
+    if (gpu) {
+      const uint64_t want = (n_tiles + kWarpsPerBlock - 1) / kWarpsPerBlock;
+      k_zb_tiles<<<uint32_t(std::min<uint64_t>(want, uint64_t(ex.grid_blocks) * 16)), kRasterBlock, 0,
+                   ex.main_stream>>>(a, n_tiles);
+      TV_CUDA(cudaGetLastError());
+      k_zb_helpers<<<ex.grid_blocks * 2, kRasterBlock, 0, ex.main_stream>>>(a);
+      TV_CUDA(cudaGetLastError());
+    } else if (!overflowed(a)) {
+      for (uint64_t t = 0; t < n_tiles; ++t) zb_tile_host(a, ex.host_index(t, n_tiles));
+      const uint64_t n = overflowed(a) ? 0 : a.ctr[kZHelpers];
+      for (uint64_t h = 0; h < n; ++h) zb_helper_host(a, ex.host_index(h, n));
+    }
+    marks.mark(3);
+    // After the frame's last event: the counters, once (overflow check; not a size any stage waits for).
+    const uint32_t during = ex.syncs;
+    ex.download(got, a.ctr, sizeof(got));
+    ex.syncs = during;
+    const bool over = got[kZRecords] > caps.rec || got[kZPairs] > caps.pair || got[kZUnits] > caps.unit ||
+                      got[kZHelpers] > caps.helper;
+    auto grow = [](uint64_t& cap, uint64_t need) { cap = std::max(cap, need + need / 4 + 16); };
+    grow(caps.rec, got[kZRecords]);
+    grow(caps.pair, got[kZPairs]);
+    grow(caps.unit, got[kZUnits]);
+    grow(caps.helper, got[kZHelpers]);
+    return !over;
   };
   const uint32_t runs = ex.where == Where::cpu ? 1 : std::max<uint32_t>(cfg.runs, 1);
   const uint32_t warm = ex.where == Where::cpu ? 0 : std::max<uint32_t>(cfg.warmup, 1);
-  for (uint32_t k = 0; k < warm + runs; ++k) {
-    once();
+  uint32_t retries = 0;
+  for (uint32_t k = 0; k < warm + runs;) {
+    if (!once()) {
+      if (++retries > 32) throw std::runtime_error("cuda zbuffer: buffers still overflow after 32 retries");
+      continue;
+    }
     ex.sync();
-    if (k < warm) continue;
+    if (k++ < warm) continue;
     for (int s = 0; s + 1 < n_marks; ++s) stage[size_t(s)].push_back(marks.ms(s, s + 1));
     total.push_back(marks.ms(0, n_marks - 1));
   }
   r.runs = runs;
   r.host_syncs = ex.syncs;
-  const char* const names_tiled[] = {"setup", "binning", "sort", "raster"};
+  const char* const names_tiled[] = {"setup_bin", "lists", "raster"};
   const char* const names_naive[] = {"raster"};
   for (int s = 0; s + 1 < n_marks; ++s)
     r.stage_ms.push_back({naive ? names_naive[s] : names_tiled[s], median_of(stage[size_t(s)])});
@@ -468,12 +849,9 @@ ZBufferResult run_cuda_zbuffer(const trace::Frame& frame, const CudaConfig& cfg,
     r.triangles_drawn = c[0];
     r.skipped = c[1];
   } else {
-    uint64_t c[kCounterCount];
-    ex.download(c, p.counters.get(), sizeof(c));
-    r.triangles_drawn = 0;
-    std::vector<SetupTri> st(p.n_setup);
-    ex.download(st.data(), p.setup.get(), p.n_setup * sizeof(SetupTri));
-    for (const SetupTri& s : st) r.triangles_drawn += s.front && s.opaque ? 1 : 0;
+    r.triangles_drawn = got[kZDrawn];
+    r.bin_entries = got[kZPairs];
+    r.retries = retries;
   }
   return r;
 }

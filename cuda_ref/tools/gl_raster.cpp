@@ -5,7 +5,9 @@
 // in NDC, as the trace says), the opaque draws only (as the truth's owners), the triangle id out
 // through gl_PrimitiveID into a 32-bit integer target. Timed with GL_TIME_ELAPSED around the
 // clear and the draws (median of --runs after 3 warm-ups; upload excluded), like the CUDA
-// pipeline's events. Writes DIR/ids.exr and DIR/stats.json (hw_raster_ms, the GL renderer).
+// pipeline's events. Writes DIR/ids.exr and DIR/stats.json (hw_raster_ms, the GL renderer). A
+// trace of more than one sample per pixel is drawn into multisample targets of that many samples
+// (the GL's sample positions) and timed alike; only stats.json is written then.
 //
 // With --truth (a `tilevis golden --truth` directory): every sample whose id differs from the
 // exact truth's is classified by exact geometry on the snapped triangles (visibility/setup):
@@ -27,6 +29,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -117,6 +120,7 @@ struct Egl {
   X(void, GenRenderbuffers, GLsizei, GLuint*)                                           \
   X(void, BindRenderbuffer, GLenum, GLuint)                                             \
   X(void, RenderbufferStorage, GLenum, GLenum, GLsizei, GLsizei)                        \
+  X(void, RenderbufferStorageMultisample, GLenum, GLsizei, GLenum, GLsizei, GLsizei)    \
   X(void, FramebufferRenderbuffer, GLenum, GLenum, GLenum, GLuint)                      \
   X(GLenum, CheckFramebufferStatus, GLenum)                                             \
   X(void, Viewport, GLint, GLint, GLsizei, GLsizei)                                     \
@@ -366,11 +370,9 @@ int main(int argc, char** argv) try {
   const tilevis::trace::Trace tr = tilevis::trace::read(a.trace);
   if (a.frame >= tr.frames.size()) throw std::runtime_error("gl_raster: " + a.trace + ": no frame " + std::to_string(a.frame));
   const tilevis::trace::Frame& f = tr.frames[a.frame];
-  if (f.samples.size() != 1) {
-    std::fprintf(stderr, "gl_raster: %s: %zu samples per pixel; only 1 is drawn here; nothing written\n",
-                 a.trace.c_str(), f.samples.size());
-    return 3;
-  }
+  // More than one sample: a multisample id and depth target of that many samples (the GL's own
+  // sample positions, not the trace's), timed alike; its ids are not read back or compared.
+  const GLsizei S = GLsizei(f.samples.size());
   Egl egl = load_egl();
   const std::string display = make_context(egl);
   Gl g = load_gl(egl);
@@ -413,10 +415,12 @@ int main(int argc, char** argv) try {
   g.BindFramebuffer(GL_FRAMEBUFFER, fbo);
   g.GenRenderbuffers(2, rb);
   g.BindRenderbuffer(GL_RENDERBUFFER, rb[0]);
-  g.RenderbufferStorage(GL_RENDERBUFFER, GL_R32UI, W, H);
+  if (S > 1) g.RenderbufferStorageMultisample(GL_RENDERBUFFER, S, GL_R32UI, W, H);
+  else g.RenderbufferStorage(GL_RENDERBUFFER, GL_R32UI, W, H);
   g.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, rb[0]);
   g.BindRenderbuffer(GL_RENDERBUFFER, rb[1]);
-  g.RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, W, H);
+  if (S > 1) g.RenderbufferStorageMultisample(GL_RENDERBUFFER, S, GL_DEPTH_COMPONENT32F, W, H);
+  else g.RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, W, H);
   g.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, rb[1]);
   if (g.CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
     throw std::runtime_error("gl_raster: framebuffer incomplete");
@@ -460,6 +464,28 @@ int main(int argc, char** argv) try {
     if (r >= 3) ms.push_back(double(ns) / 1e6);
   }
   if (GLenum e = g.GetError()) throw std::runtime_error("gl_raster: GL error " + std::to_string(e));
+  const nlohmann::json timing = {{"renderer", renderer},
+                                 {"gl_version", version},
+                                 {"gl_vendor", vendor},
+                                 {"display", display},
+                                 {"hw_raster_ms", median(ms)},
+                                 {"hw_raster_min_ms", *std::min_element(ms.begin(), ms.end())},
+                                 {"runs", a.runs},
+                                 {"timing", "GL_TIME_ELAPSED around the clear and the draws, median of runs after 3 "
+                                            "warm-ups; upload excluded"}};
+  if (S > 1) {
+    nlohmann::json st = {{"tool", "gl_raster"}, {"trace", a.trace}, {"frame", a.frame},
+                         {"config", {{"depth", "32-bit float, less"}, {"cull", "back"}, {"samples", S},
+                                     {"sample_positions", "the GL's own (multisample renderbuffers)"}}},
+                         {"totals", {{"triangles_in", f.triangle_count()}}},
+                         {"ids", "not read back at more than one sample"}};
+    st.update(timing);
+    std::filesystem::create_directories(a.out);
+    std::ofstream(std::filesystem::path(a.out) / "stats.json") << st.dump(2) << '\n';
+    std::printf("gl_raster %s on %s, %d samples: %.3f ms (median of %u)\n", a.trace.c_str(), renderer.c_str(), int(S),
+                median(ms), a.runs);
+    return 0;
+  }
   std::vector<uint32_t> img(size_t(W) * H);
   g.PixelStorei(GL_PACK_ALIGNMENT, 1);
   g.ReadPixels(0, 0, W, H, GL_RED_INTEGER, GL_UNSIGNED_INT, img.data());
@@ -481,16 +507,8 @@ int main(int argc, char** argv) try {
                {"trace", a.trace},
                {"frame", a.frame},
                {"config", {{"depth", "32-bit float, less"}, {"cull", "back"}, {"samples", 1}}},
-               {"totals", {{"samples_covered", covered}, {"triangles_in", f.triangle_count()}}},
-               {"renderer", renderer},
-               {"gl_version", version},
-               {"gl_vendor", vendor},
-               {"display", display},
-               {"hw_raster_ms", median(ms)},
-               {"hw_raster_min_ms", *std::min_element(ms.begin(), ms.end())},
-               {"runs", a.runs},
-               {"timing", "GL_TIME_ELAPSED around the clear and the draws, median of runs after 3 warm-ups; upload "
-                          "excluded"}};
+               {"totals", {{"samples_covered", covered}, {"triangles_in", f.triangle_count()}}}};
+  out.stats.update(timing);
   if (!a.truth.empty()) {
     const tilevis::outputs::Result t = tilevis::outputs::read_result(a.truth);
     if (t.ids.size() != out.ids.size()) throw std::runtime_error("gl_raster: " + a.truth + ": other size than the trace");

@@ -80,135 +80,143 @@ int main(int argc, char** argv) {
     return e.is_directory() && n.size() > 1 && n[0] == 't' &&
            std::all_of(n.begin() + 1, n.end(), [](char c) { return std::isdigit(static_cast<unsigned char>(c)) != 0; });
   };
-  std::vector<fs::path> scenes;
-  for (const auto& e : fs::directory_iterator(work))
-    if (e.is_directory() && std::any_of(fs::directory_iterator(e.path()), fs::directory_iterator(), is_tile_dir))
-      scenes.push_back(e.path());  // scene folders hold t<tile>/; meta/ and sanitize/ do not
-  std::sort(scenes.begin(), scenes.end());
-  for (const auto& sd : scenes) {
-    std::vector<fs::path> tiles;
-    for (const auto& e : fs::directory_iterator(sd))
-      if (is_tile_dir(e)) tiles.push_back(e.path());
-    std::sort(tiles.begin(), tiles.end(), [](const fs::path& a, const fs::path& b) {
-      return std::stoi(a.filename().string().substr(1)) < std::stoi(b.filename().string().substr(1));
-    });
-    for (const auto& td : tiles) {
-      const json golden = load(td / "golden/stats.json");
-      for (const char* prec : {"exact", "float", "hybrid_exact", "hybrid_float"}) {
-        if (std::string(prec).rfind("hybrid", 0) == 0 && !fs::exists(td / prec)) continue;
-        const json st = load(td / prec / "stats.json");
-        json e = {{"scene", sd.filename().string()},
-                  {"tile", std::stoi(td.filename().string().substr(1))},
-                  {"precision", prec}};
-        if (st.is_null()) {
-          e["error"] = "no result (see the log)";
-          report["entries"].push_back(e);
-          continue;
-        }
-        const json cmp = load(td / (std::string("cmp_") + prec) / "compare.json");
-        const double tris = num(st["totals"], "triangles_in", 0);
-        // total_ms: a new frame (sizes read on the host, no graph); graph_total_ms: the known frame's
-        // graph replayed. Results of before the switch (no graph_total_ms) had the graph as total_ms.
-        const bool has_graph = st.contains("graph_total_ms");
-        e["total_ms"] = has_graph ? st["total_ms"] : st.value("stream_total_ms", json(nullptr));
-        e["graph_total_ms"] = has_graph ? st["graph_total_ms"] : st["total_ms"];
-        e["stage_ms"] = st["stage_ms"];
-        for (const char* k : {"probed_total_ms", "stream_total_ms", "stream_stage_ms", "graph_nodes"})
-          e[k] = st.value(k, json(nullptr));
-        // Every total against the reference's stats.json (golden, or golden hybrid): the names and
-        // values that differ (per_pixel_fallback's too).
-        {
-          const json ref = load(td / (std::string(prec).rfind("hybrid", 0) == 0 ? "golden_hybrid" : "golden") / "stats.json");
-          json diffs = json::array();
-          std::function<void(const json&, const json&, const std::string&)> walk = [&](const json& a, const json& b,
-                                                                                       const std::string& at) {
-            for (const auto& [k, v] : a.items()) {
-              if (!b.contains(k)) continue;
-              if (v.is_object() && b[k].is_object()) walk(v, b[k], at + k + ".");
-              else if (v.is_number() && b[k].is_number() && v != b[k])
-                diffs.push_back(at + k + ": " + v.dump() + " vs " + b[k].dump());
+  // One trace set: WORK (the traces as made: 1080p, hot_tile at 4K) or WORK/4k4 (3840x2160, 4 samples).
+  report["baselines"] = json::array();
+  const auto gather = [&](const fs::path& dir, const std::string& set) {
+    std::vector<fs::path> scenes;
+    for (const auto& e : fs::directory_iterator(dir))
+      if (e.is_directory() && std::any_of(fs::directory_iterator(e.path()), fs::directory_iterator(), is_tile_dir))
+        scenes.push_back(e.path());  // scene folders hold t<tile>/; meta/ and sanitize/ do not
+    std::sort(scenes.begin(), scenes.end());
+    for (const auto& sd : scenes) {
+      std::vector<fs::path> tiles;
+      for (const auto& e : fs::directory_iterator(sd))
+        if (is_tile_dir(e)) tiles.push_back(e.path());
+      std::sort(tiles.begin(), tiles.end(), [](const fs::path& a, const fs::path& b) {
+        return std::stoi(a.filename().string().substr(1)) < std::stoi(b.filename().string().substr(1));
+      });
+      for (const auto& td : tiles) {
+        const json golden = load(td / "golden/stats.json");
+        for (const char* prec : {"exact", "float", "hybrid_exact", "hybrid_float"}) {
+          if (std::string(prec).rfind("hybrid", 0) == 0 && !fs::exists(td / prec)) continue;
+          const json st = load(td / prec / "stats.json");
+          json e = {{"scene", sd.filename().string()},
+                    {"set", set},
+                    {"tile", std::stoi(td.filename().string().substr(1))},
+                    {"precision", prec}};
+          if (st.is_null()) {
+            e["error"] = "no result (see the log)";
+            report["entries"].push_back(e);
+            continue;
+          }
+          const json cmp = load(td / (std::string("cmp_") + prec) / "compare.json");
+          const double tris = num(st["totals"], "triangles_in", 0);
+          // total_ms: a new frame (sizes read on the host, no graph); graph_total_ms: the known frame's
+          // graph replayed. Results of before the switch (no graph_total_ms) had the graph as total_ms.
+          const bool has_graph = st.contains("graph_total_ms");
+          e["total_ms"] = has_graph ? st["total_ms"] : st.value("stream_total_ms", json(nullptr));
+          e["graph_total_ms"] = has_graph ? st["graph_total_ms"] : st["total_ms"];
+          e["stage_ms"] = st["stage_ms"];
+          for (const char* k : {"probed_total_ms", "stream_total_ms", "stream_stage_ms", "graph_nodes"})
+            e[k] = st.value(k, json(nullptr));
+          // Every total against the reference's stats.json (golden, or golden hybrid): the names and
+          // values that differ (per_pixel_fallback's too).
+          {
+            const json ref = load(td / (std::string(prec).rfind("hybrid", 0) == 0 ? "golden_hybrid" : "golden") / "stats.json");
+            json diffs = json::array();
+            std::function<void(const json&, const json&, const std::string&)> walk = [&](const json& a, const json& b,
+                                                                                         const std::string& at) {
+              for (const auto& [k, v] : a.items()) {
+                if (!b.contains(k)) continue;
+                if (v.is_object() && b[k].is_object()) walk(v, b[k], at + k + ".");
+                else if (v.is_number() && b[k].is_number() && v != b[k])
+                  diffs.push_back(at + k + ": " + v.dump() + " vs " + b[k].dump());
+              }
+            };
+            if (!ref.is_null() && ref.contains("totals")) {
+              walk(ref["totals"], st["totals"], "");
+              e["totals_vs_reference"] = diffs;
+            }
+          }
+          e["runs"] = st["runs"];
+          e["triangles_in"] = tris;
+          e["mtri_per_s"] = tris / (num(e, "total_ms") * 1e3);
+          e["sample_agreement_vs_golden"] = cmp.is_null() ? json(nullptr) : cmp["sample_agreement"];
+          e["mismatched_samples_vs_golden"] = cmp.is_null() ? json(nullptr) : cmp["mismatched_samples"];
+          e["tile_counter_mismatches"] = cmp.is_null() ? json(nullptr) : cmp["tile_counter_mismatches"];
+          e["area_mismatches"] = cmp.is_null() ? json(nullptr) : cmp["area_mismatches"];
+          e["max_area_rel_error"] = cmp.is_null() ? json(nullptr) : cmp["max_area_rel_error"];
+          // Ratios to the z-buffers of the same frame on the same GPU (> 1: slower than they).
+          for (const char* k : {"cuda_zbuffer_ms", "naive_zbuffer_ms", "hw_raster_ms"}) e[k] = st.value(k, json(nullptr));
+          // The ratios of the new frame (the headline) and, beside them, of the known frame's graph.
+          auto ratio = [&](const char* base, const char* key) {
+            if (num(st, base, 0) > 0) {
+              e[key] = num(e, "total_ms") / num(st, base);
+              e[std::string(key) + "_graph"] = num(e, "graph_total_ms") / num(st, base);
             }
           };
-          if (!ref.is_null() && ref.contains("totals")) {
-            walk(ref["totals"], st["totals"], "");
-            e["totals_vs_reference"] = diffs;
+          ratio("hw_raster_ms", "hw_raster_ratio");
+          ratio("cuda_zbuffer_ms", "cuda_zbuffer_ratio");
+          ratio("naive_zbuffer_ms", "naive_zbuffer_ratio");
+          if (std::string(prec).rfind("hybrid", 0) == 0) {
+            const json tr = load(td / (std::string("cmp_truth_") + prec) / "compare.json");
+            e["per_pixel_fallback"] = st["totals"].value("per_pixel_fallback", json(nullptr));
+            e["mismatched_samples_vs_truth"] = tr.is_null() ? json(nullptr) : tr["mismatched_samples"];
+            e["area_mismatches_vs_golden_hybrid"] = cmp.is_null() ? json(nullptr) : cmp["area_mismatches"];
           }
-        }
-        e["runs"] = st["runs"];
-        e["triangles_in"] = tris;
-        e["mtri_per_s"] = tris / (num(e, "total_ms") * 1e3);
-        e["sample_agreement_vs_golden"] = cmp.is_null() ? json(nullptr) : cmp["sample_agreement"];
-        e["mismatched_samples_vs_golden"] = cmp.is_null() ? json(nullptr) : cmp["mismatched_samples"];
-        e["tile_counter_mismatches"] = cmp.is_null() ? json(nullptr) : cmp["tile_counter_mismatches"];
-        e["area_mismatches"] = cmp.is_null() ? json(nullptr) : cmp["area_mismatches"];
-        e["max_area_rel_error"] = cmp.is_null() ? json(nullptr) : cmp["max_area_rel_error"];
-        // Ratios to the z-buffers of the same frame on the same GPU (> 1: slower than they).
-        for (const char* k : {"cuda_zbuffer_ms", "naive_zbuffer_ms", "hw_raster_ms"}) e[k] = st.value(k, json(nullptr));
-        // The ratios of the new frame (the headline) and, beside them, of the known frame's graph.
-        auto ratio = [&](const char* base, const char* key) {
-          if (num(st, base, 0) > 0) {
-            e[key] = num(e, "total_ms") / num(st, base);
-            e[std::string(key) + "_graph"] = num(e, "graph_total_ms") / num(st, base);
+          e["peak_device_bytes"] = st["peak_device_bytes"];
+          e["retries"] = st["retries"];
+          e["upload_ms"] = st["upload_ms"];
+          e["golden_host_seconds"] = golden.is_null() ? json(nullptr) : golden["host_seconds"];
+          for (const char* k : {"candidate_pairs", "clip_polygons", "pieces", "visible_pieces", "pair_tests", "float_anomalies",
+                                "float_regularized", "float_negative_areas", "float_exact_areas"})
+            e[k] = st["totals"].value(k, json(nullptr));
+          // Lower bounds: DRAM traffic no implementation avoids, and the launches and host
+          // round trips this implementation makes (at the device's measured costs).
+          const double bw = num(st, "dram_bandwidth_gbs", 0);
+          const double bw_ms = bw > 0 ? num(st, "min_dram_bytes", 0) / (bw * 1e6) : NAN;
+          const double launch_ms = (num(st, "queued_operations", 0) * num(st, "launch_us", 0) +
+                                    num(st, "host_syncs", 0) * num(st, "round_trip_us", 0)) / 1e3;
+          e["floor"] = {{"min_dram_bytes", st["min_dram_bytes"]},   {"dram_bandwidth_gbs", bw},
+                        {"bandwidth_ms", bw_ms},                    {"queued_operations", st["queued_operations"]},
+                        {"host_syncs", st["host_syncs"]},           {"launch_us", st["launch_us"]},
+                        {"round_trip_us", st["round_trip_us"]},     {"launch_and_sync_ms", launch_ms}};
+          if (std::string(prec) == "float") {
+            const json fe = load(td / "cmp_float_exact/compare.json");
+            if (!fe.is_null())
+              e["float_vs_exact"] = {{"sample_agreement", fe["sample_agreement"]},
+                                     {"mismatched_samples", fe["mismatched_samples"]},
+                                     {"tile_counter_mismatches", fe["tile_counter_mismatches"]},
+                                     {"max_area_rel_error", fe["max_area_rel_error"]}};
           }
-        };
-        ratio("hw_raster_ms", "hw_raster_ratio");
-        ratio("cuda_zbuffer_ms", "cuda_zbuffer_ratio");
-        ratio("naive_zbuffer_ms", "naive_zbuffer_ratio");
-        if (std::string(prec).rfind("hybrid", 0) == 0) {
-          const json tr = load(td / (std::string("cmp_truth_") + prec) / "compare.json");
-          e["per_pixel_fallback"] = st["totals"].value("per_pixel_fallback", json(nullptr));
-          e["mismatched_samples_vs_truth"] = tr.is_null() ? json(nullptr) : tr["mismatched_samples"];
-          e["area_mismatches_vs_golden_hybrid"] = cmp.is_null() ? json(nullptr) : cmp["area_mismatches"];
+          report["entries"].push_back(e);
         }
-        e["peak_device_bytes"] = st["peak_device_bytes"];
-        e["retries"] = st["retries"];
-        e["upload_ms"] = st["upload_ms"];
-        e["golden_host_seconds"] = golden.is_null() ? json(nullptr) : golden["host_seconds"];
-        for (const char* k : {"candidate_pairs", "clip_polygons", "pieces", "visible_pieces", "pair_tests", "float_anomalies",
-                              "float_regularized", "float_negative_areas", "float_exact_areas"})
-          e[k] = st["totals"].value(k, json(nullptr));
-        // Lower bounds: DRAM traffic no implementation avoids, and the launches and host
-        // round trips this implementation makes (at the device's measured costs).
-        const double bw = num(st, "dram_bandwidth_gbs", 0);
-        const double bw_ms = bw > 0 ? num(st, "min_dram_bytes", 0) / (bw * 1e6) : NAN;
-        const double launch_ms = (num(st, "queued_operations", 0) * num(st, "launch_us", 0) +
-                                  num(st, "host_syncs", 0) * num(st, "round_trip_us", 0)) / 1e3;
-        e["floor"] = {{"min_dram_bytes", st["min_dram_bytes"]},   {"dram_bandwidth_gbs", bw},
-                      {"bandwidth_ms", bw_ms},                    {"queued_operations", st["queued_operations"]},
-                      {"host_syncs", st["host_syncs"]},           {"launch_us", st["launch_us"]},
-                      {"round_trip_us", st["round_trip_us"]},     {"launch_and_sync_ms", launch_ms}};
-        if (std::string(prec) == "float") {
-          const json fe = load(td / "cmp_float_exact/compare.json");
-          if (!fe.is_null())
-            e["float_vs_exact"] = {{"sample_agreement", fe["sample_agreement"]},
-                                   {"mismatched_samples", fe["mismatched_samples"]},
-                                   {"tile_counter_mismatches", fe["tile_counter_mismatches"]},
-                                   {"max_area_rel_error", fe["max_area_rel_error"]}};
-        }
-        report["entries"].push_back(e);
       }
     }
-  }
 
-  // Per scene, the z-buffer baselines (gpu_run.sh baselines): the GL's and the CUDA z-buffers'
-  // times and their ids against the exact truth.
-  report["baselines"] = json::array();
-  for (const auto& sd : scenes) {
-    const json gl = load(sd / "gl/stats.json"), zt = load(sd / "zb_tiled/stats.json"), zn = load(sd / "zb_naive/stats.json");
-    const json ct = load(sd / "cmp_zb_tiled/compare.json"), cn = load(sd / "cmp_zb_naive/compare.json");
-    json b = {{"scene", sd.filename().string()}};
-    b["hw_raster_ms"] = gl.is_null() ? json(nullptr) : gl.value("hw_raster_ms", json(nullptr));
-    b["gl_renderer"] = gl.is_null() ? json(nullptr) : gl.value("renderer", json(nullptr));
-    b["gl_vs_truth"] = gl.is_null() ? json(nullptr) : gl.value("vs_truth", json(nullptr));
-    b["cuda_zbuffer_ms"] = zt.is_null() ? json(nullptr) : zt["total_ms"];
-    b["cuda_zbuffer_stage_ms"] = zt.is_null() ? json(nullptr) : zt["zbuffer"]["stage_ms"];
-    b["cuda_zbuffer_vs_truth_mismatched"] = ct.is_null() ? json(nullptr) : ct["mismatched_samples"];
-    b["cuda_zbuffer_vs_truth_compared"] = ct.is_null() ? json(nullptr) : ct["samples_compared"];
-    b["naive_zbuffer_ms"] = zn.is_null() ? json(nullptr) : zn["total_ms"];
-    b["naive_zbuffer_skipped"] = zn.is_null() ? json(nullptr) : zn["zbuffer"]["skipped"];
-    b["naive_zbuffer_vs_truth_mismatched"] = cn.is_null() ? json(nullptr) : cn["mismatched_samples"];
-    report["baselines"].push_back(b);
-  }
+    // Per scene, the z-buffer baselines (gpu_run.sh baselines): the GL's and the CUDA z-buffers'
+    // times and their ids against the exact truth.
+    for (const auto& sd : scenes) {
+      const json gl = load(sd / "gl/stats.json"), zt = load(sd / "zb_tiled/stats.json"), zn = load(sd / "zb_naive/stats.json");
+      const json ct = load(sd / "cmp_zb_tiled/compare.json"), cn = load(sd / "cmp_zb_naive/compare.json");
+      json b = {{"scene", sd.filename().string()}, {"set", set}};
+      b["hw_raster_ms"] = gl.is_null() ? json(nullptr) : gl.value("hw_raster_ms", json(nullptr));
+      b["gl_renderer"] = gl.is_null() ? json(nullptr) : gl.value("renderer", json(nullptr));
+      b["gl_vs_truth"] = gl.is_null() ? json(nullptr) : gl.value("vs_truth", json(nullptr));
+      b["cuda_zbuffer_ms"] = zt.is_null() ? json(nullptr) : zt["total_ms"];
+      b["cuda_zbuffer_stage_ms"] = zt.is_null() ? json(nullptr) : zt["zbuffer"]["stage_ms"];
+      b["cuda_zbuffer_bin_entries"] = zt.is_null() ? json(nullptr) : zt["zbuffer"].value("bin_entries", json(nullptr));
+      b["gl_samples"] = gl.is_null() ? json(nullptr) : gl["config"].value("samples", json(nullptr));
+      b["cuda_zbuffer_vs_truth_mismatched"] = ct.is_null() ? json(nullptr) : ct["mismatched_samples"];
+      b["cuda_zbuffer_vs_truth_compared"] = ct.is_null() ? json(nullptr) : ct["samples_compared"];
+      b["naive_zbuffer_ms"] = zn.is_null() ? json(nullptr) : zn["total_ms"];
+      b["naive_zbuffer_skipped"] = zn.is_null() ? json(nullptr) : zn["zbuffer"]["skipped"];
+      b["naive_zbuffer_vs_truth_mismatched"] = cn.is_null() ? json(nullptr) : cn["mismatched_samples"];
+      report["baselines"].push_back(b);
+    }
+  };
+  gather(work, "1080p");
+  if (fs::exists(work / "4k4")) gather(work / "4k4", "4k4");
 
   // The orbit (gpu_run.sh orbit): per frame, GL, the graph replay and the new-frame (stream) time.
   report["orbit"] = json::array();
@@ -245,6 +253,10 @@ int main(int argc, char** argv) {
   const std::string name = slug(device);
   std::ofstream(out / (name + ".json")) << report.dump(2) << '\n';
 
+  // A row's scene as the tables name it: the 4K 4 spp set marked.
+  const auto label = [](const json& e) {
+    return e["scene"].get<std::string>() + (e.value("set", std::string("1080p")) == "4k4" ? " (4K 4spp)" : "");
+  };
   std::ostringstream md;
   md << "# cuda_ref on " << device << "\n\ncommit `" << commit << "`; times are CUDA-event medians, trace in device "
      << "memory to id raster (upload and download excluded). `total` (the headline) is a new frame: the work queued "
@@ -258,14 +270,14 @@ int main(int argc, char** argv) {
         "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& e : report["entries"]) {
     if (e.contains("error")) {
-      md << "| " << e["scene"].get<std::string>() << " | " << e["tile"] << " | " << e["precision"].get<std::string>()
+      md << "| " << label(e) << " | " << e["tile"] << " | " << e["precision"].get<std::string>()
          << " | " << e["error"].get<std::string>() << " | | | | | | | | |\n";
       continue;
     }
     const double agree = num(e, "sample_agreement_vs_golden");
     std::string fve = "";
     if (e.contains("float_vs_exact")) fve = fmt(100 * num(e["float_vs_exact"], "sample_agreement"), 4) + " %";
-    md << "| " << e["scene"].get<std::string>() << " | " << e["tile"] << " | " << e["precision"].get<std::string>()
+    md << "| " << label(e) << " | " << e["tile"] << " | " << e["precision"].get<std::string>()
        << " | " << fmt(num(e, "total_ms")) << " | " << fmt(num(e, "graph_total_ms")) << " | "
        << fmt(num(e, "mtri_per_s"), 1) << " | "
        << (std::isnan(agree) ? "n/a" : fmt(100 * agree, 4) + " %") << " | " << e["tile_counter_mismatches"].dump()
@@ -284,7 +296,7 @@ int main(int argc, char** argv) {
   for (const auto& e : report["entries"]) {
     if (e.contains("error") || e["precision"].get<std::string>().find("float") == std::string::npos) continue;
     const double rel = e.contains("float_vs_exact") ? num(e["float_vs_exact"], "max_area_rel_error") : NAN;
-    md << "| " << e["scene"].get<std::string>() << " | " << e["tile"] << " | " << e["precision"].get<std::string>()
+    md << "| " << label(e) << " | " << e["tile"] << " | " << e["precision"].get<std::string>()
        << " | " << e["float_anomalies"].dump() << " | " << e["float_regularized"].dump() << " | "
        << e.value("float_exact_areas", json(nullptr)).dump() << " | " << e["float_negative_areas"].dump() << " | "
        << (std::isnan(rel) ? std::string("") : fmt(rel, 4)) << " | "
@@ -301,7 +313,7 @@ int main(int argc, char** argv) {
   for (const auto& e : report["entries"]) {
     if (e.contains("error") || !e.contains("per_pixel_fallback")) continue;
     const json& fb = e["per_pixel_fallback"];
-    md << "| " << e["scene"].get<std::string>() << " | " << e["tile"] << " | " << e["precision"].get<std::string>()
+    md << "| " << label(e) << " | " << e["tile"] << " | " << e["precision"].get<std::string>()
        << " | " << fmt(num(e, "total_ms")) << " | " << fmt(num(e, "graph_total_ms")) << " | "
        << fmt(100 * num(e, "sample_agreement_vs_golden"), 4) << " % | " << e["tile_counter_mismatches"].dump() << " | "
        << e["area_mismatches_vs_golden_hybrid"].dump() << " | "
@@ -314,34 +326,44 @@ int main(int argc, char** argv) {
                           : std::string("n/a"))
        << " |\n";
   }
-  md << "\n## Z-buffer baselines on the same GPU (1080p or the trace's viewport, 1 sample)\n\n"
-        "`gl`: the GPU's own rasteriser through OpenGL/EGL (GL_TIME_ELAPSED around clear + draws), ids against the "
-        "exact truth, differences classified (edge_tie: the sample lies on an edge, where GL's fill rule is not "
-        "top-left; edge_snap: within one sub-pixel unit of one, GL's own snap; depth_tie: exact depths within 2^-20; "
-        "other). `tiled`: the exact CUDA z-buffer (setup, bins, a thread per sample; every run a new frame, host "
-        "reads included). `naive`: a thread per triangle, float depth, 64-bit atomicMin. Mismatches are against "
-        "the truth.\n\n"
-        "| scene | gl ms | gl mismatches (edge_tie / edge_snap / depth_tie / other) | tiled ms | tiled mismatches | "
-        "naive ms | naive mismatches (skipped tris) |\n|---|---|---|---|---|---|---|\n";
+  md << "\n## Z-buffer baselines on the same GPU (1080p 1 spp, hot_tile 4K 1 spp; and every scene at 4K 4 spp)\n\n"
+        "`gl`: the GPU's own rasteriser through OpenGL/EGL (GL_TIME_ELAPSED around clear + draws; at 4 spp into "
+        "4x multisample targets, the GL's own sample positions, ids not read back), ids against the exact truth, "
+        "differences classified (edge_tie: the sample lies on an edge, where GL's fill rule is not top-left; "
+        "edge_snap: within one sub-pixel unit of one, GL's own snap; depth_tie: exact depths within 2^-20; other). "
+        "`tiled`: the exact CUDA z-buffer (tiles of 64 samples, a warp per tile; every run a new frame, no size read "
+        "on the host between its stages; `stages`: setup and binning / the tiles' lists / raster). `naive`: a "
+        "thread per triangle, float depth, 64-bit atomicMin. Mismatches are against the truth.\n\n"
+        "| scene | gl ms | gl mismatches (edge_tie / edge_snap / depth_tie / other) | tiled ms | tiled stages ms | "
+        "tiled mismatches | naive ms | naive mismatches (skipped tris) | tiled / naive |\n"
+        "|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& b : report["baselines"]) {
     const json& v = b["gl_vs_truth"];
-    md << "| " << b["scene"].get<std::string>() << " | " << fmt(num(b, "hw_raster_ms")) << " | "
+    md << "| " << label(b) << " | " << fmt(num(b, "hw_raster_ms")) << " | "
        << (v.is_object() ? v["mismatched_samples"].dump() + " of " + v["samples_compared"].dump() + " (" +
                                v["edge_tie"].dump() + " / " + v["edge_snap"].dump() + " / " + v["depth_tie"].dump() +
                                " / " + v["other"].dump() + ")"
                          : std::string("n/a"))
-       << " | " << fmt(num(b, "cuda_zbuffer_ms")) << " | " << b["cuda_zbuffer_vs_truth_mismatched"].dump() << " of "
-       << b["cuda_zbuffer_vs_truth_compared"].dump() << " | " << fmt(num(b, "naive_zbuffer_ms")) << " | "
-       << b["naive_zbuffer_vs_truth_mismatched"].dump() << " (" << b["naive_zbuffer_skipped"].dump() << ") |\n";
+       << " | " << fmt(num(b, "cuda_zbuffer_ms")) << " | ";
+    const json& zs = b["cuda_zbuffer_stage_ms"];
+    if (zs.is_object()) {
+      std::string sep;
+      for (const char* k : {"setup_bin", "lists", "raster"})
+        if (zs.contains(k)) md << sep << fmt(num(zs, k)), sep = " / ";
+    }
+    md << " | " << b["cuda_zbuffer_vs_truth_mismatched"].dump() << " of " << b["cuda_zbuffer_vs_truth_compared"].dump()
+       << " | " << fmt(num(b, "naive_zbuffer_ms")) << " | " << b["naive_zbuffer_vs_truth_mismatched"].dump() << " ("
+       << b["naive_zbuffer_skipped"].dump() << ") | " << fmt(num(b, "cuda_zbuffer_ms") / num(b, "naive_zbuffer_ms"), 2)
+       << " |\n";
   }
-  md << "\n## Ratios at 32x32 tiles (analytic time / baseline time; > 1: slower)\n\n"
+  md << "\n## Ratios at 32x32 tiles (analytic time / baseline time; > 1: slower), 1080p 1 spp and 4K 4 spp\n\n"
         "`new frame` (the headline): sizes read on the host, no graph; `graph`: the recorded frame replayed; the "
         "z-buffers are timed as new frames.\n\n"
         "| scene | precision | new frame ms | graph ms | hw_raster_ratio (new frame / graph) | cuda_zbuffer_ratio (new "
         "frame / graph) | naive_zbuffer_ratio (new frame / graph) |\n|---|---|---|---|---|---|---|\n";
   for (const auto& e : report["entries"]) {
     if (e.contains("error") || e["tile"] != 32) continue;
-    md << "| " << e["scene"].get<std::string>() << " | " << e["precision"].get<std::string>() << " | "
+    md << "| " << label(e) << " | " << e["precision"].get<std::string>() << " | "
        << fmt(num(e, "total_ms")) << " | " << fmt(num(e, "graph_total_ms")) << " | " << fmt(num(e, "hw_raster_ratio"), 2)
        << " / " << fmt(num(e, "hw_raster_ratio_graph"), 2) << " | " << fmt(num(e, "cuda_zbuffer_ratio"), 2) << " / "
        << fmt(num(e, "cuda_zbuffer_ratio_graph"), 2) << " | " << fmt(num(e, "naive_zbuffer_ratio"), 2) << " / "
@@ -396,11 +418,11 @@ int main(int argc, char** argv) {
         "| SVGPU hash / clip / occlusion / total |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& e : report["entries"]) {
     if (e.contains("error") || e["tile"] != 32) continue;
-    md << "| " << e["scene"].get<std::string>() << " | " << e["precision"].get<std::string>();
+    md << "| " << label(e) << " | " << e["precision"].get<std::string>();
     for (const char* s : {"setup", "silhouettes", "binning", "cull", "clip", "occlusion", "raster", "unclipped_pieces"})
       md << " | " << fmt(num(e["stage_ms"], s), 3);
     md << " | " << fmt(num(e, "probed_total_ms"), 3) << " | " << fmt(num(e, "graph_total_ms"), 3) << " | ";
-    const auto it = kSvgpu.find(e["scene"].get<std::string>());
+    const auto it = kSvgpu.find(e.value("set", std::string("1080p")) == "1080p" ? e["scene"].get<std::string>() : "");
     if (it != kSvgpu.end())
       md << it->second[0] << " / " << it->second[1] << " / " << it->second[2] << " / " << it->second[3];
     md << " |\n";
@@ -412,16 +434,22 @@ int main(int argc, char** argv) {
               "tile_mism", "float_vs_ex");
   for (const auto& e : report["entries"]) {
     if (e.contains("error")) {
-      std::printf("%-16s %5d %-6s %s\n", e["scene"].get<std::string>().c_str(), e["tile"].get<int>(),
+      std::printf("%-16s %5d %-6s %s\n", label(e).c_str(), e["tile"].get<int>(),
                   e["precision"].get<std::string>().c_str(), "ERROR");
       continue;
     }
     const double fv = e.contains("float_vs_exact") ? num(e["float_vs_exact"], "sample_agreement") : NAN;
-    std::printf("%-16s %5d %-6s %10.3f %9.1f %12.6f %9s %11s\n", e["scene"].get<std::string>().c_str(),
+    std::printf("%-16s %5d %-6s %10.3f %9.1f %12.6f %9s %11s\n", label(e).c_str(),
                 e["tile"].get<int>(), e["precision"].get<std::string>().c_str(), num(e, "total_ms"),
                 num(e, "mtri_per_s"), num(e, "sample_agreement_vs_golden"), e["tile_counter_mismatches"].dump().c_str(),
                 std::isnan(fv) ? "" : fmt(fv, 6).c_str());
   }
+  std::printf("\n%-28s %9s %9s %9s %12s %14s\n", "baselines", "gl_ms", "tiled_ms", "naive_ms", "tiled/naive",
+              "tiled_mism");
+  for (const auto& b : report["baselines"])
+    std::printf("%-28s %9.3f %9.3f %9.3f %12.2f %14s\n", label(b).c_str(), num(b, "hw_raster_ms"),
+                num(b, "cuda_zbuffer_ms"), num(b, "naive_zbuffer_ms"),
+                num(b, "cuda_zbuffer_ms") / num(b, "naive_zbuffer_ms"), b["cuda_zbuffer_vs_truth_mismatched"].dump().c_str());
   std::printf("wrote %s and %s\n", (out / (name + ".json")).c_str(), (out / (name + ".md")).c_str());
   return 0;
 }

@@ -33,6 +33,7 @@ nlohmann::json zbuffer_json(const cuda::ZBufferResult& z) {
   for (const auto& s : z.stage_ms) st[s.name] = s.ms;
   return {{"total_ms", z.total_ms}, {"stage_ms", st}, {"runs", z.runs}, {"host_syncs", z.host_syncs},
           {"triangles_drawn", z.triangles_drawn}, {"bin_entries", z.bin_entries}, {"skipped", z.skipped},
+          {"retries", z.retries},
           {"bin", std::to_string(z.bin_w) + "x" + std::to_string(z.bin_h)}};
 }
 
@@ -61,7 +62,8 @@ int run_zbuffer(const CudaArgs& a, const trace::Frame& frame, const cuda::CudaCo
                {"total_ms", z.total_ms},
                {"zbuffer", zbuffer_json(z)},
                {"timing", a.device == "gpu" ? "CUDA events on the stream, median of runs after warm-up; every run a "
-                                              "frame the rasteriser sizes anew (host reads included)"
+                                              "new frame queued anew (tiled: no size read on the host between its "
+                                              "stages; its overflow counters are read once, after the last event)"
                                             : "host clock (emulation)"},
                {"host_seconds", secs}};
   outputs::write_result(out, a.out);

@@ -150,6 +150,20 @@ TEST_P(ZBufferGpu, TiledEqualsTruth) {
   }
 }
 
+// From tiny pools and list segments of 8 records: grow and retry, and long tile lists split over
+// helper warps that merge per sample by CAS (the merge order must not matter).
+TEST_P(ZBufferGpu, TiledFromTinyPoolsEqualsTruth) {
+  REQUIRE_GPU();
+  const auto& [name, samples] = GetParam();
+  const trace::Frame f = ct::scene(name, samples);
+  auto cfg = ct::config(cuda::Device::gpu, cuda::Precision::exact, 32, 32);
+  cfg.runs = 3;
+  cfg.initial_pool = 4;
+  const auto z = cuda::run_cuda_zbuffer(f, cfg, cuda::ZBufferKind::tiled);
+  EXPECT_GT(z.retries, 0u);
+  EXPECT_EQ(z.ids, ct::truth_ids_of(f));
+}
+
 INSTANTIATE_TEST_SUITE_P(Scenes, ZBufferGpu,
                          ::testing::Combine(::testing::ValuesIn(ct::scene_names()), ::testing::Values(1u, 4u)));
 
@@ -214,6 +228,16 @@ TEST(GpuBuiltInScenes, HybridEqualsGoldenHybridAndFloatKeepsSigns) {
     uint64_t negative = 0;
     for (double a : fl.visible_area) negative += a < 0 ? 1 : 0;
     EXPECT_EQ(negative, 0u);
+    // The tiled z-buffer = the truth, from tiny pools and segments of 8 (helpers merging by CAS).
+    auto zc = ct::config(cuda::Device::gpu, cuda::Precision::exact, 32, 32);
+    zc.runs = 1;
+    zc.initial_pool = 4;
+    const auto z = cuda::run_cuda_zbuffer(frames[k], zc, cuda::ZBufferKind::tiled);
+    const std::vector<int32_t> truth = ct::truth_ids_of(frames[k]);
+    ASSERT_EQ(z.ids.size(), truth.size());
+    uint64_t z_differ = 0;
+    for (size_t i = 0; i < truth.size(); ++i) z_differ += truth[i] != z.ids[i] ? 1 : 0;
+    EXPECT_EQ(z_differ, 0u);
     cfg.precision = cuda::Precision::exact;
     cfg.hybrid = true;
     const auto r = cuda::run_cuda(frames[k], cfg);

@@ -133,12 +133,14 @@ CudaResult run_cuda(const trace::Frame& frame, const CudaConfig& config);
 
 // Z-buffer rasterisers of the same frame on the same GPU: the baselines analytic visibility is
 // measured against (cuda_ref/src/zbuffer.cu).
-//  - tiled: exact. The pipeline's setup (clip-space clipping, snap, facing), the front opaque
-//    triangles binned by bounding box into screen bins of 256 samples (16x16 pixels at 1
-//    sample) in setup order, then a block per bin with a thread per sample walking the bin's
-//    list through shared memory: coverage by the top-left rule at the snapped sample position,
-//    the exact depth test of zbuffer.h (strictly nearer wins: at equal depth the earlier
-//    triangle keeps the sample). Its ids equal the z-buffer truth's.
+//  - tiled: exact, in the manner of CudaRaster. The pipeline's setup arithmetic (clip-space
+//    clipping, snap, facing), the front opaque triangles binned into tiles of 64 samples (8x8
+//    pixels at 1 sample) by an exact edge test over each tile's rectangle (a triangle over more
+//    than 16 tiles through coarse bins of 8x8 tiles first), then a warp per tile, a lane per two
+//    samples: coverage by the top-left rule at the snapped sample position, the exact depth test
+//    of zbuffer.h (strictly nearer wins; at equal depth the earlier setup triangle). No size is
+//    read on the host between its stages (device counters; capacities learned by earlier frames,
+//    checked once after the frame). Its ids equal the z-buffer truth's.
 //  - naive: one thread per trace triangle from clip space, float depth, a 64-bit atomicMin of
 //    (depth bits, id) per sample; no near-plane clipping (triangles with a vertex at w <= 0 or
 //    outside the guard band are not drawn: `skipped`). A speed baseline; its ids are measured.
@@ -149,10 +151,11 @@ struct ZBufferResult {
   std::vector<int32_t> ids;  // as CudaResult::ids
   std::vector<StageTime> stage_ms;
   double total_ms = 0;       // median of runs: trace in device memory -> id raster, a frame not
-                             // seen before (sizes read on the host: host_syncs round trips)
+                             // seen before (every run queued anew: host_syncs round trips inside it)
   uint32_t runs = 0, host_syncs = 0;
+  uint32_t retries = 0;          // tiled: frames run again after a pool overflowed (learning capacities)
   uint64_t triangles_drawn = 0;  // tiled: front opaque setup triangles; naive: trace triangles rastered
-  uint64_t bin_entries = 0;      // tiled: (bin, triangle) pairs
+  uint64_t bin_entries = 0;      // tiled: (tile, triangle) pairs
   uint64_t skipped = 0;          // naive: opaque triangles not drawn (near plane, guard band)
   uint32_t bin_w = 0, bin_h = 0;
   std::string device_name;
