@@ -48,6 +48,8 @@ void TileSampler::observe_cluster(double occupancy_sum, uint64_t tiles_observed,
   m_x.push_back(triangles);
 }
 
+void TileSampler::observe_exact(double cycles) { m_exact_sum += cycles; }
+
 void TileSampler::observe_fill(double cycles) {
   m_fill_sum += cycles;
   ++m_fills;
@@ -100,7 +102,7 @@ RenderEstimate TileSampler::estimate(uint32_t cores) const {
   const Fit f = fit(cores);
   const double fill = m_fills ? m_fill_sum / double(m_fills) : 0.0;
   const double per_core = 1.0 / double(std::max<uint32_t>(cores, 1));
-  e.cycles = fill + std::max(0.0, f.total) * per_core;
+  e.cycles = fill + (std::max(0.0, f.total) + m_exact_sum) * per_core;
   const size_t n = m_y.size();
   const double k = double(m_order.size());
   if (!e.complete && n >= 3) {

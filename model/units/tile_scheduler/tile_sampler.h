@@ -32,6 +32,10 @@ struct SamplingConfig {
   double confidence = 0.95;    // two-sided confidence of the interval
   uint32_t cluster_tiles = 8;  // tiles per sampling unit (4 left a locality bias at 8x8 tiles)
   uint32_t first_clusters = 16;  // the first round's clusters
+  // Tiles with more than this many times the segment's mean binned triangles are simulated,
+  // all of them, in the first round (a take-all stratum): a skewed scene's few heavy tiles
+  // would otherwise be missed by a small sample, and its interval be falsely narrow.
+  double certainty_ratio = 4.0;
   uint64_t seed = 1;
 };
 
@@ -66,6 +70,8 @@ class TileSampler {
   // `triangles`: the auxiliary summed over the same tiles.
   void observe_cluster(double occupancy_sum, uint64_t tiles_observed, double triangles);
   void observe_fill(double cycles);
+  // A take-all tile's occupancy (not its core's first): added as it is, not estimated.
+  void observe_exact(double cycles);
 
   RenderEstimate estimate(uint32_t cores) const;
   // Clusters needed in all (taken included) for a half-width of `target` cycles, from the
@@ -80,7 +86,7 @@ class TileSampler {
   std::vector<uint64_t> m_order;  // a random permutation of the clusters
   uint64_t m_taken = 0;
   std::vector<double> m_y, m_m, m_x;  // per observed cluster: occupancy sum, tiles, triangles
-  double m_fill_sum = 0;
+  double m_fill_sum = 0, m_exact_sum = 0;
   uint64_t m_fills = 0;
 
   struct Fit {

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <tuple>
 
 namespace tilevis::sim {
 namespace {
@@ -89,33 +91,56 @@ void TileScheduler::dispatch() {
 }
 
 void TileScheduler::dispatch_sampled(uint32_t segment, const std::vector<uint32_t>& tiles) {
+  // The take-all stratum: heavy tiles (tile_sampler.h); the others are sampled in clusters.
   std::vector<double> triangles(tiles.size());
-  for (size_t i = 0; i < tiles.size(); ++i) triangles[i] = double(m_work.tile_triangle_count(tiles[i]));
-  TileSampler sampler(triangles, m_cfg.sampling, segment);
+  double mean = 0;
+  for (size_t i = 0; i < tiles.size(); ++i) mean += triangles[i] = double(m_work.tile_triangle_count(tiles[i]));
+  mean /= double(std::max<size_t>(tiles.size(), 1));
+  std::vector<size_t> sampled_pos, certain_pos;
+  std::vector<double> sampled_tris;
+  for (size_t i = 0; i < tiles.size(); ++i) {
+    if (triangles[i] > m_cfg.sampling.certainty_ratio * mean) {
+      certain_pos.push_back(i);
+    } else {
+      sampled_pos.push_back(i);
+      sampled_tris.push_back(triangles[i]);
+    }
+  }
+  TileSampler sampler(sampled_tris, m_cfg.sampling, segment);
   SegmentSample rec;
   rec.segment = segment;
+  rec.certain_tiles = certain_pos.size();
   rec.start_cycle = cycles(sc_core::sc_time_stamp());
   uint64_t want = std::min<uint64_t>(sampler.clusters(), std::max<uint32_t>(1, m_cfg.sampling.first_clusters));
-  while (want > 0) {
+  bool first_round = true;
+  while (want > 0 || first_round) {
     const std::vector<uint64_t> round = sampler.next_round(want);
     const uint64_t round_start = cycles(sc_core::sc_time_stamp());
     struct Sent {
       uint32_t tile, core;
-      uint64_t cluster;
+      uint64_t cluster;  // kCertain: a take-all tile
       double triangles;
     };
-    std::vector<Sent> sent;
-    size_t i = 0;
+    constexpr uint64_t kCertain = ~uint64_t{0};
+    // This round's tiles in the scheduler's order: its clusters, and in the first round every take-all tile.
+    std::vector<std::pair<size_t, uint64_t>> order_pos;  // (position, cluster)
     for (uint64_t c : round)
-      for (uint64_t p = sampler.cluster_begin(c); p < sampler.cluster_end(c); ++p, ++i) {
-        const uint32_t core = next_core(i);
-        Item it;
-        it.segment = segment;
-        it.tile = m_work.open_tile(tiles[p]);
-        count(core);
-        push(to_core[core], it);
-        sent.push_back({tiles[p], core, c, triangles[p]});
-      }
+      for (uint64_t q = sampler.cluster_begin(c); q < sampler.cluster_end(c); ++q) order_pos.push_back({sampled_pos[q], c});
+    if (first_round)
+      for (size_t p : certain_pos) order_pos.push_back({p, kCertain});
+    std::sort(order_pos.begin(), order_pos.end());
+    first_round = false;
+    std::vector<Sent> sent;
+    for (size_t i = 0; i < order_pos.size(); ++i) {
+      const size_t p = order_pos[i].first;
+      const uint32_t core = next_core(i);
+      Item it;
+      it.segment = segment;
+      it.tile = m_work.open_tile(tiles[p]);
+      count(core);
+      push(to_core[core], it);
+      sent.push_back({tiles[p], core, order_pos[i].second, triangles[p]});
+    }
     // The round ends when its last tile is written: every core empty again.
     for (const Sent& s : sent)
       while (!m_work.tile_closed(s.tile)) sc_core::wait(m_tile_closed);
@@ -124,28 +149,28 @@ void TileScheduler::dispatch_sampled(uint32_t segment, const std::vector<uint32_
     // Occupancies: a core's tiles end in the order it got them.
     std::vector<uint64_t> last(m_cfg.cores, round_start);
     std::vector<bool> started(m_cfg.cores, false);
-    double y = 0, x = 0;
-    uint64_t m = 0;
-    for (size_t j = 0; j < sent.size(); ++j) {
-      const Sent& s = sent[j];
+    std::map<uint64_t, std::tuple<double, uint64_t, double>> clusters;  // y, m, x per sampled cluster
+    for (uint64_t c : round) clusters[c] = {0.0, 0, 0.0};
+    for (const Sent& s : sent) {
       const uint64_t end = m_work.tile_end_cycle(s.tile);
       const double occupancy = double(end - last[s.core]);
       last[s.core] = end;
       if (!started[s.core]) {
         sampler.observe_fill(occupancy);
         started[s.core] = true;
+      } else if (s.cluster == kCertain) {
+        sampler.observe_exact(occupancy);
       } else {
+        auto& [y, m, x] = clusters[s.cluster];
         y += occupancy;
-        x += s.triangles;
         ++m;
-      }
-      if (j + 1 == sent.size() || sent[j + 1].cluster != s.cluster) {
-        sampler.observe_cluster(y, m, x);
-        y = x = 0;
-        m = 0;
+        x += s.triangles;
       }
     }
+    for (const auto& [c, v] : clusters) sampler.observe_cluster(std::get<0>(v), std::get<1>(v), std::get<2>(v));
     rec.estimate = sampler.estimate(m_cfg.cores);
+    rec.estimate.tiles += certain_pos.size();
+    rec.estimate.tiles_observed += certain_pos.size();
     if (rec.estimate.complete && rec.rounds == 1) break;  // the whole segment in one round: simulated, not estimated
     // The budget is a share of the frame: what is simulated before this segment, earlier
     // segments' corrections, this segment's render as estimated.
@@ -173,6 +198,7 @@ nlohmann::json TileScheduler::sampling_json() const {
     segs.push_back({{"segment", s.segment},
                     {"tiles", s.estimate.tiles},
                     {"tiles_simulated", s.estimate.tiles_observed},
+                    {"tiles_taken_whole", s.certain_tiles},
                     {"clusters", s.estimate.clusters},
                     {"clusters_simulated", s.estimate.clusters_observed},
                     {"rounds", s.rounds},
@@ -188,6 +214,7 @@ nlohmann::json TileScheduler::sampling_json() const {
           {"error_budget", m_cfg.sampling.error_budget},
           {"confidence", m_cfg.sampling.confidence},
           {"cluster_tiles", m_cfg.sampling.cluster_tiles},
+          {"certainty_ratio", m_cfg.sampling.certainty_ratio},
           {"seed", m_cfg.sampling.seed},
           {"frame_cycles_simulated", m_frame_end},
           {"frame_cycles_estimated", frame},

@@ -71,7 +71,7 @@ class TileScheduler : public UnitBase {
   struct SegmentSample {
     uint32_t segment = 0;
     RenderEstimate estimate;
-    uint64_t rounds = 0, simulated_render = 0, start_cycle = 0;
+    uint64_t rounds = 0, simulated_render = 0, start_cycle = 0, certain_tiles = 0;
   };
   std::vector<SegmentSample> m_samples;
 };
