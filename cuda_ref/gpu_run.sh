@@ -240,7 +240,12 @@ phase_baselines() {
   fi
   local vendor=/usr/local/nvidia/share/glvnd/egl_vendor.d/10_nvidia.json
   [ -f "$vendor" ] && export __EGL_VENDOR_LIBRARY_FILENAMES="$vendor"
-  for s in $(scenes); do [ -f "$SET_WORK/$s/truth/stats.json" ] || jobs+=("$s"); done
+  # TILEVIS_GPU_TRUTH_4K4=0: no truth at 4K 4 spp (its CPU time: stack's alone is minutes), so no
+  # comparison there either.
+  for s in $(scenes); do
+    [ "$SET" = 1080p ] || [ "${TILEVIS_GPU_TRUTH_4K4:-1}" = 1 ] || break
+    [ -f "$SET_WORK/$s/truth/stats.json" ] || jobs+=("$s")
+  done
   if [ ${#jobs[@]} -gt 0 ]; then
     say "truth: ${#jobs[@]} runs on $JOBS cores"
     printf '%s\n' "${jobs[@]}" | TAG="$tag" xargs -P "$JOBS" -L 1 bash -c \
@@ -359,7 +364,7 @@ phase_profile() {
     local what="${rest%%:*}" kernel="${rest#*:}" trace="$TRACES/${item%%:*}.tvt"
     local name="${scene//\//_}_${what}_$kernel"
     # shellcheck disable=SC2046
-    timeout 240 "$ncu_bin" --clock-control none -k "regex:$kernel" --launch-skip 2 --launch-count 1 \
+    timeout 240 "$ncu_bin" --clock-control none -k "regex:$kernel" --launch-skip 1 --launch-count 1 \
       --section SpeedOfLight --section Occupancy --section LaunchStats --section WarpStateStats \
       --section MemoryWorkloadAnalysis --section ComputeWorkloadAnalysis --section SchedulerStats \
       "$BIN" cuda "$trace" $(args_of "$what") -o "$WORK/ncu/$name" >"$LOGS/ncu/detail_$name.txt" 2>&1 ||
@@ -383,7 +388,8 @@ phase_report() {
     >"$WORK/meta/nvidia_smi.txt" 2>/dev/null || true
   nvcc --version | tail -n 1 >"$WORK/meta/nvcc.txt" 2>/dev/null || true
   # Small per-run files for whoever reads the report (no images: they stay on the machine).
-  (cd "$WORK" && find . -name '*.json' -not -path './sanitize/*' | tar -cf - -T - | xz -6 >"$REPORT_DIR/work_json.tar.xz") || true
+  (cd "$WORK" && find . \( -name '*.json' -o -path './meta/*.txt' \) -not -path './sanitize/*' | tar -cf - -T - |
+     xz -6 >"$REPORT_DIR/work_json.tar.xz") || true
   "$BUILD/cuda_ref/cuda_gpu_report" "$WORK" "$REPORT_DIR" "$device" "$commit"
 }
 

@@ -46,8 +46,12 @@ constexpr uint32_t kRasterBlock = 128;
 constexpr uint32_t kWarpsPerBlock = kRasterBlock / 32;
 
 // Device counters (ZArgs::ctr).
-enum ZCounter : uint32_t { kZRecords, kZPairs, kZUnits, kZHelpers, kZDrawn, kZCounterCount };
-constexpr uint32_t kZCounterWords = 8;  // uint64 words before the tile counts in one allocation
+// Device counters (ZArgs::ctr): kZRecords counts the clipped pool's records (a trace triangle's
+// own record is slot t), then kZSpread words of the drawn triangles' count (spread: no word is
+// shared by every thread), then the tiles' counts (uint32), all in one allocation, one memset.
+enum ZCounter : uint32_t { kZRecords, kZPairs, kZUnits, kZHelpers, kZCounterCount };
+constexpr uint32_t kZSpread = 32;
+constexpr uint32_t kZCounterWords = kZCounterCount + kZSpread;
 
 // A front opaque setup triangle (48 bytes): its snapped vertices and its setup order,
 // trace triangle << 3 | fan position (a fan has at most 7 triangles).
@@ -178,23 +182,74 @@ TV_HD inline bool tile_box(const ZArgs& a, const Vtx& v0, const Vtx& v1, const V
   return true;
 }
 
-TV_HD inline void emit_pair(const ZArgs& a, uint32_t tile, uint32_t slot) {
-  const uint32_t rank = atomic_add(&a.tile_count[tile], 1u);
-  const uint64_t p = bump_one(&a.ctr[kZPairs], a.pair_cap);
-  if (p == ~uint64_t{0}) return;  // the frame runs again with more room
+// A rank in the tile's list: the lanes of a warp that bin into the same tile take their ranks
+// with one atomic (neighbouring triangles of a mesh share tiles).
+TV_HD inline uint32_t tile_rank(const ZArgs& a, uint32_t tile) {
+#if defined(__CUDA_ARCH__)
+  const unsigned peers = __match_any_sync(__activemask(), tile);
+  const int leader = __ffs(peers) - 1;
+  const unsigned lane = threadIdx.x & 31u;
+  uint32_t base = 0;
+  if (int(lane) == leader) base = atomicAdd(&a.tile_count[tile], uint32_t(__popc(peers)));
+  base = __shfl_sync(peers, base, leader);
+  return base + uint32_t(__popc(peers & ((1u << lane) - 1u)));
+#else
+  return a.tile_count[tile]++;
+#endif
+}
+
+TV_HD inline void put_pair(const ZArgs& a, uint64_t p, uint32_t tile, uint32_t slot) {
+  const uint32_t rank = tile_rank(a, tile);
+  if (p >= a.pair_cap) return;  // the frame runs again with more room
   a.pair[p] = uint64_t(tile) << 32 | rank;
   a.pair_rec[p] = slot;
 }
 
-// One setup triangle (fan position k of trace triangle t), if front-facing (facing > 0 is the
-// trace triangle's; the snapped triangle must turn the same way: negative area, y down).
-TV_HD inline void zb_triangle(const ZArgs& a, uint64_t t, uint32_t k, const Vtx& v0, const Vtx& v1, const Vtx& v2) {
+TV_HD inline uint32_t lowest_bit(uint32_t m) {  // m != 0
+#if defined(__CUDA_ARCH__)
+  return uint32_t(__ffs(m) - 1);
+#else
+  return uint32_t(__builtin_ctz(m));
+#endif
+}
+
+// A small triangle's tiles: those of its box (at most kInlineTiles) that the exact edge test
+// keeps, as bits of the box in row-major order.
+struct Inline {
+  uint32_t slot = kNone, mask = 0;
+  int32_t tx0 = 0, ty0 = 0, w = 1;
+  TV_HD uint32_t count() const { return popc(mask); }
+  TV_HD uint32_t tile(const ZArgs& a, uint32_t bit) const {
+    return uint32_t(ty0 + int32_t(bit) / w) * a.tiles_x + uint32_t(tx0 + int32_t(bit) % w);
+  }
+};
+
+// The counters every thread adds to: one of kZSpread words picked by the block (on the host:
+// the first), summed after the frame.
+TV_HD inline uint64_t* spread(const ZArgs& a, uint32_t which) {
+#if defined(__CUDA_ARCH__)
+  return a.ctr + kZCounterCount + which * kZSpread + (blockIdx.x % kZSpread);
+#else
+  return a.ctr + kZCounterCount + which * kZSpread;
+#endif
+}
+
+// One setup triangle (fan position k of trace triangle t) into record `slot` (kNone: take one
+// from the clipped pool), if front-facing (facing > 0 is the trace triangle's; the snapped
+// triangle must turn the same way: negative area, y down). A small one returns its tiles in
+// `in` (its pairs are the caller's); a big one queues a unit per coarse bin; `now`: emit a small
+// one's pairs here (the clipped path, rare).
+TV_HD inline void zb_triangle(const ZArgs& a, uint64_t t, uint32_t k, const Vtx& v0, const Vtx& v1, const Vtx& v2,
+                              uint32_t slot, Inline& in, bool now) {
   if (!(orient2d(v0.xy(), v1.xy(), v2.xy()) < 0)) return;
-  count_add(&a.ctr[kZDrawn], 1);
+  count_add(spread(a, 0), 1);
   TileBox b;
   if (!tile_box(a, v0, v1, v2, b)) return;
-  const uint64_t slot = bump_one(&a.ctr[kZRecords], a.rec_cap);
-  if (slot == ~uint64_t{0}) return;
+  if (slot == kNone) {
+    const uint64_t c = bump(&a.ctr[kZRecords], 1, a.rec_cap);
+    if (c == ~uint64_t{0}) return;
+    slot = uint32_t(a.f.n_triangles + c);
+  }
   ZRec r;
   r.v[0] = v0;
   r.v[1] = v1;
@@ -210,15 +265,27 @@ TV_HD inline void zb_triangle(const ZArgs& a, uint64_t t, uint32_t k, const Vtx&
     r.unit0 = uint32_t(u0);
     a.rec[slot] = r;
     if (u0 == ~uint64_t{0}) return;
-    for (uint64_t u = 0; u < n_units; ++u) a.unit_rec[u0 + u] = uint32_t(slot);
+    for (uint64_t u = 0; u < n_units; ++u) a.unit_rec[u0 + u] = slot;
     return;
   }
   a.rec[slot] = r;
   const Edges e = edges_of(v0, v1, v2);
+  in.slot = slot;
+  in.tx0 = int32_t(b.tx0);
+  in.ty0 = int32_t(b.ty0);
+  in.w = int32_t(b.tx1 - b.tx0 + 1);
+  in.mask = 0;
+  uint32_t bit = 0;
   for (int64_t ty = b.ty0; ty <= b.ty1; ++ty)
-    for (int64_t tx = b.tx0; tx <= b.tx1; ++tx)
-      if (n_tiles == 1 || may_cover(e, tile_rect(a, tx, ty, tx, ty)))
-        emit_pair(a, uint32_t(ty * a.tiles_x + tx), uint32_t(slot));
+    for (int64_t tx = b.tx0; tx <= b.tx1; ++tx, ++bit)
+      if (n_tiles == 1 || may_cover(e, tile_rect(a, tx, ty, tx, ty))) in.mask |= 1u << bit;
+  if (now) {
+    const uint64_t p0 = bump(&a.ctr[kZPairs], in.count(), a.pair_cap);
+    uint32_t j = 0;
+    for (uint32_t m = in.mask; m; m &= m - 1, ++j)
+      put_pair(a, p0 == ~uint64_t{0} ? a.pair_cap : p0 + j, in.tile(a, lowest_bit(m)), slot);
+    in.mask = 0;
+  }
 }
 
 TV_HD inline Vtx vtx_of(const int4& q) { return {q.x, q.y, uint32_t(q.z)}; }
@@ -229,17 +296,68 @@ TV_HD __noinline__ void zb_clipped(const ZArgs& a, uint64_t t) {
   const uint32_t n = clip_triangle(a.vertices, a.indices, a.gx, a.gy, t, poly, cut);
   Vtx sv[kMaxClipVerts];
   for (uint32_t k = 0; k < n; ++k) sv[k] = snap(a.f, a.gx, a.gy, poly[k]);
-  for (uint32_t k = 1; k + 1 < n; ++k) zb_triangle(a, t, k - 1, sv[0], sv[k], sv[k + 1]);
+  for (uint32_t k = 1; k + 1 < n; ++k) {
+    Inline unused;
+    zb_triangle(a, t, k - 1, sv[0], sv[k], sv[k + 1], kNone, unused, true);
+  }
 }
 
-TV_HD void zb_trace_triangle(const ZArgs& a, uint64_t t) {
-  if (!a.draws[a.tri_draw[t]].opaque) return;
+// A trace triangle: its record is slot t unless clipping cuts it into a fan (the clipped pool).
+TV_HD Inline zb_trace_triangle(const ZArgs& a, uint64_t t) {
+  Inline in;
+  if (!a.draws[a.tri_draw[t]].opaque) return in;
   const uint32_t i0 = a.indices[3 * t], i1 = a.indices[3 * t + 1], i2 = a.indices[3 * t + 2];
-  if (facing_of(a.vertices[i0], a.vertices[i1], a.vertices[i2]) <= 0) return;  // back-facing or edge-on
+  if (facing_of(a.vertices[i0], a.vertices[i1], a.vertices[i2]) <= 0) return in;  // back-facing or edge-on
   const int4 q0 = a.vtx[i0], q1 = a.vtx[i1], q2 = a.vtx[i2];
-  if (q0.w & q1.w & q2.w) zb_triangle(a, t, 0, vtx_of(q0), vtx_of(q1), vtx_of(q2));
+  if (q0.w & q1.w & q2.w) zb_triangle(a, t, 0, vtx_of(q0), vtx_of(q1), vtx_of(q2), uint32_t(t), in, false);
   else zb_clipped(a, t);
+  return in;
 }
+
+// Host emulation: the pairs as they come.
+void zb_trace_triangle_host(const ZArgs& a, uint64_t t) {
+  const Inline in = zb_trace_triangle(a, t);
+  const uint64_t p0 = bump(&a.ctr[kZPairs], in.count(), a.pair_cap);
+  uint32_t j = 0;
+  for (uint32_t m = in.mask; m; m &= m - 1, ++j)
+    put_pair(a, p0 == ~uint64_t{0} ? a.pair_cap : p0 + j, in.tile(a, lowest_bit(m)), in.slot);
+}
+
+#if defined(__CUDACC__)
+// A block of 256 trace triangles at a time: the block's pairs take one atomic (a scan over the
+// block gives each thread its first), so no counter is shared by every thread of the frame.
+constexpr uint32_t kTriBlock = 256;
+__global__ void __launch_bounds__(kTriBlock) k_zb_triangles(ZArgs a, uint64_t n) {
+  __shared__ uint32_t warp_total[kTriBlock / 32];
+  __shared__ uint64_t block_base;
+  const uint32_t lane = threadIdx.x & 31u, w = threadIdx.x / 32;
+  for (uint64_t base = uint64_t(blockIdx.x) * kTriBlock; base < n; base += uint64_t(gridDim.x) * kTriBlock) {
+    const uint64_t t = base + threadIdx.x;
+    const Inline in = t < n ? zb_trace_triangle(a, t) : Inline{};
+    const uint32_t c = in.count();
+    uint32_t incl = c;
+    for (uint32_t d = 1; d < 32; d <<= 1) {
+      const uint32_t v = __shfl_up_sync(0xffffffffu, incl, d);
+      if (lane >= d) incl += v;
+    }
+    if (lane == 31) warp_total[w] = incl;
+    __syncthreads();
+    if (threadIdx.x == 0) {
+      uint32_t sum = 0;
+      for (uint32_t k = 0; k < kTriBlock / 32; ++k) {
+        const uint32_t v = warp_total[k];
+        warp_total[k] = sum;
+        sum += v;
+      }
+      block_base = sum ? atomicAdd(reinterpret_cast<unsigned long long*>(&a.ctr[kZPairs]), sum) : 0;
+    }
+    __syncthreads();
+    uint64_t p = block_base + warp_total[w] + incl - c;
+    for (uint32_t m = in.mask; m; m &= m - 1, ++p) put_pair(a, p, in.tile(a, lowest_bit(m)), in.slot);
+    __syncthreads();
+  }
+}
+#endif
 
 // A big triangle's unit: the coarse bin's tiles inside its box, lane, lane + lanes, ...
 TV_HD void zb_unit(const ZArgs& a, uint64_t u, uint32_t lane, uint32_t lanes) {
@@ -257,7 +375,10 @@ TV_HD void zb_unit(const ZArgs& a, uint64_t u, uint32_t lane, uint32_t lanes) {
   const int64_t w = tx1 - tx0 + 1, n = w * (ty1 - ty0 + 1);
   for (int64_t i = lane; i < n; i += lanes) {
     const int64_t tx = tx0 + i % w, ty = ty0 + i / w;
-    if (may_cover(e, tile_rect(a, tx, ty, tx, ty))) emit_pair(a, uint32_t(ty * a.tiles_x + tx), slot);
+    if (may_cover(e, tile_rect(a, tx, ty, tx, ty))) {
+      const uint64_t p = bump_one(&a.ctr[kZPairs], a.pair_cap);
+      put_pair(a, p == ~uint64_t{0} ? a.pair_cap : p, uint32_t(ty * a.tiles_x + tx), slot);
+    }
   }
 }
 
@@ -433,28 +554,109 @@ void zb_helper_host(const ZArgs& a, uint64_t h) {
 }
 
 #if defined(__CUDACC__)
-// A warp's part [begin, end) of a tile's list for its two samples: the records staged 32 at a
-// time (a lane derives one), then every lane tests them all.
-__device__ inline void warp_part(const ZArgs& a, uint64_t begin, uint64_t end, ZDer* stage, const ZSample& s0,
-                                 const ZSample& s1, Owner& o0, Owner& o1) {
+// A sample's nearest so far, in a warp's shared memory (Owner without initialisers).
+struct alignas(16) OwnerS {
+  I128 n;
+  int64_t area;
+  uint32_t order, slot;
+};
+
+// The samples of a tile that a record covers, as bits u = pixel_in_tile * samples + k, by the
+// same tests as test_sample; a tile inside all three edges is covered whole (`screen`: its
+// samples on the screen). Only the record's box is visited.
+__device__ inline uint64_t coverage(const ZArgs& a, const ZDer& d, int32_t x0, int32_t y0, uint64_t screen) {
+  const int32_t tx1 = x0 + int32_t(a.tw) - 1, ty1 = y0 + int32_t(a.th) - 1;
+  if (d.px0 <= x0 && d.px1 >= tx1 && d.py0 <= y0 && d.py1 >= ty1) {
+    const int64_t rx0 = int64_t(x0) << a.sb, ry0 = int64_t(y0) << a.sb;
+    const int64_t rx1 = int64_t(tx1 + 1) << a.sb, ry1 = int64_t(ty1 + 1) << a.sb;
+    bool inside = true;
+    for (int k = 0; k < 3; ++k)
+      inside &= int64_t(d.a[k]) * (d.a[k] > 0 ? rx0 : rx1) + int64_t(d.b[k]) * (d.b[k] > 0 ? ry0 : ry1) + d.c[k] > 0;
+    if (inside) return screen;
+  }
+  const int32_t px0 = tmax(d.px0, x0), px1 = tmin(tmin(d.px1, tx1), int32_t(a.width) - 1);
+  const int32_t py0 = tmax(d.py0, y0), py1 = tmin(tmin(d.py1, ty1), int32_t(a.height) - 1);
+  uint64_t m = 0;
+  for (int32_t py = py0; py <= py1; ++py)
+    for (int32_t px = px0; px <= px1; ++px)
+      for (uint32_t k = 0; k < a.samples; ++k) {
+        const uint32_t sxy = a.sample_xy[k];
+        const int64_t x = (int64_t(px) << a.sb) + (sxy & 0xffffu), y = (int64_t(py) << a.sb) + (sxy >> 16);
+        bool in = true;
+        for (int e = 0; e < 3; ++e) {
+          const int64_t v = int64_t(d.a[e]) * x + int64_t(d.b[e]) * y + d.c[e];
+          in &= v > 0 || (v == 0 && ((d.owns >> e) & 1u));
+        }
+        if (in) m |= uint64_t{1} << ((uint32_t(py - y0) * a.tw + uint32_t(px - x0)) * a.samples + k);
+      }
+  return m;
+}
+
+// A warp's part [begin, end) of a tile's list, fragment-parallel as CudaRaster's fine raster: a
+// lane per record (its coverage over the tile's samples), then rounds in which every lane takes
+// its next covered sample and, where lanes meet at one sample, they take turns; the nearest per
+// sample in shared memory. The order does not matter (nearer is a total order), so no lane
+// waits for another except at a shared sample.
+__device__ inline void warp_part(const ZArgs& a, uint64_t tile, uint64_t begin, uint64_t end, OwnerS* sm,
+                                 uint64_t screen) {
   const uint32_t lane = threadIdx.x & 31u;
+  const int32_t x0 = int32_t((tile % a.tiles_x) * a.tw), y0 = int32_t((tile / a.tiles_x) * a.th);
   for (uint64_t c = begin; c < end; c += 32) {
     const uint32_t m = uint32_t(tmin<uint64_t>(32, end - c));
-    __syncwarp();
+    ZDer d{};
+    uint64_t cov = 0;
     if (lane < m) {
       const uint32_t slot = a.sorted[c + lane];
-      stage[lane] = derive(a.rec[slot], slot, a.sb);
+      d = derive(a.rec[slot], slot, a.sb);
+      cov = coverage(a, d, x0, y0, screen);
     }
-    __syncwarp();
-    for (uint32_t j = 0; j < m; ++j) {
-      test_sample(stage[j], s0, o0);
-      test_sample(stage[j], s1, o1);
+    while (__any_sync(0xffffffffu, cov != 0)) {
+      int u = -1;
+      I128 n = 0;
+      if (cov) {
+        u = __ffsll(static_cast<long long>(cov)) - 1;
+        cov &= cov - 1;
+        const uint32_t k = uint32_t(u) % a.samples, p = uint32_t(u) / a.samples;
+        const uint32_t sxy = a.sample_xy[k];
+        const int64_t x = (int64_t(x0 + int32_t(p % a.tw)) << a.sb) + (sxy & 0xffffu);
+        const int64_t y = (int64_t(y0 + int32_t(p / a.tw)) << a.sb) + (sxy >> 16);
+        n = I128{d.alpha} * x + I128{d.beta} * y + d.gamma;
+      }
+      const unsigned act = __ballot_sync(0xffffffffu, u >= 0);
+      if (u >= 0) {
+        const unsigned peers = __match_any_sync(act, u);
+        for (unsigned pend = peers; pend; pend &= pend - 1) {
+          if (int(lane) == __ffs(pend) - 1) {
+            OwnerS& o = sm[u];
+            const Owner cur{o.n, o.area, o.order, o.slot};
+            if (nearer(n, d.area, d.order, cur)) {
+              o.n = n;
+              o.area = d.area;
+              o.order = d.order;
+              o.slot = d.slot;
+            }
+          }
+          __syncwarp(peers);
+        }
+      }
     }
   }
+  __syncwarp();
+}
+
+__device__ inline void sm_clear(OwnerS* sm) {
+  const uint32_t lane = threadIdx.x & 31u;
+  for (uint32_t u : {lane, lane + 32}) {
+    sm[u].order = kNone;
+    sm[u].slot = kNone;
+    sm[u].n = 0;
+    sm[u].area = 0;
+  }
+  __syncwarp();
 }
 
 __global__ void __launch_bounds__(kRasterBlock) k_zb_tiles(ZArgs a, uint64_t n_tiles) {
-  __shared__ ZDer stage[kWarpsPerBlock][32];
+  __shared__ OwnerS sm[kWarpsPerBlock][kTileSamples];
   if (overflowed(a)) return;
   const uint32_t lane = threadIdx.x & 31u, w = threadIdx.x / 32;
   for (uint64_t tile = uint64_t(blockIdx.x) * kWarpsPerBlock + w; tile < n_tiles;
@@ -462,8 +664,16 @@ __global__ void __launch_bounds__(kRasterBlock) k_zb_tiles(ZArgs a, uint64_t n_t
     const uint64_t begin = a.tile_off[tile], end = a.tile_off[tile + 1];
     const uint64_t cut = tmin<uint64_t>(end, begin + a.segment);
     const ZSample s0 = sample_of(a, tile, lane), s1 = sample_of(a, tile, lane + 32);
-    Owner o0, o1;
-    warp_part(a, begin, cut, stage[w], s0, s1, o0, o1);
+    if (begin == end) {
+      if (s0.inside) a.ids[s0.out] = -1;
+      if (s1.inside) a.ids[s1.out] = -1;
+      continue;
+    }
+    const uint64_t screen =
+        uint64_t(__ballot_sync(0xffffffffu, s0.inside)) | uint64_t(__ballot_sync(0xffffffffu, s1.inside)) << 32;
+    sm_clear(sm[w]);
+    warp_part(a, tile, begin, cut, sm[w], screen);
+    const OwnerS &o0 = sm[w][lane], &o1 = sm[w][lane + 32];
     if (cut == end) {
       if (s0.inside) a.ids[s0.out] = id_of(o0.order);
       if (s1.inside) a.ids[s1.out] = id_of(o1.order);
@@ -472,11 +682,12 @@ __global__ void __launch_bounds__(kRasterBlock) k_zb_tiles(ZArgs a, uint64_t n_t
       if (s1.inside) a.owner[s1.out] = o1.slot;
       if (lane == 0) queue_helpers(a, tile, cut, end);
     }
+    __syncwarp();
   }
 }
 
 __global__ void __launch_bounds__(kRasterBlock) k_zb_helpers(ZArgs a) {
-  __shared__ ZDer stage[kWarpsPerBlock][32];
+  __shared__ OwnerS sm[kWarpsPerBlock][kTileSamples];
   if (overflowed(a)) return;
   const uint32_t lane = threadIdx.x & 31u, w = threadIdx.x / 32;
   const uint64_t n = a.ctr[kZHelpers];
@@ -484,10 +695,13 @@ __global__ void __launch_bounds__(kRasterBlock) k_zb_helpers(ZArgs a) {
     const uint64_t tile = a.helper[h] >> 32, begin = uint32_t(a.helper[h]);
     const uint64_t end = tmin<uint64_t>(a.tile_off[tile + 1], begin + a.segment);
     const ZSample s0 = sample_of(a, tile, lane), s1 = sample_of(a, tile, lane + 32);
-    Owner o0, o1;
-    warp_part(a, begin, end, stage[w], s0, s1, o0, o1);
-    if (s0.inside) merge_owner(a, s0, o0);
-    if (s1.inside) merge_owner(a, s1, o1);
+    const uint64_t screen =
+        uint64_t(__ballot_sync(0xffffffffu, s0.inside)) | uint64_t(__ballot_sync(0xffffffffu, s1.inside)) << 32;
+    sm_clear(sm[w]);
+    warp_part(a, tile, begin, end, sm[w], screen);
+    const OwnerS &o0 = sm[w][lane], &o1 = sm[w][lane + 32];
+    if (s0.inside) merge_owner(a, s0, Owner{o0.n, o0.area, o0.order, o0.slot});
+    if (s1.inside) merge_owner(a, s1, Owner{o1.n, o1.area, o1.order, o1.slot});
     __threadfence();
     __syncwarp();
     uint32_t last = 0;
@@ -515,7 +729,6 @@ __global__ void k_zb_scatter(ZArgs a) {
 #endif
 
 __global__ void k_zb_vertex(ZArgs a, uint64_t n) { TV_GRID_LOOP(i, n) zb_vertex(a, i); }
-__global__ void k_zb_trace_triangle(ZArgs a, uint64_t n) { TV_GRID_LOOP(i, n) zb_trace_triangle(a, i); }
 
 // ---- naive ----------------------------------------------------------------------------------
 
@@ -710,7 +923,7 @@ ZBufferResult run_cuda_zbuffer(const trace::Frame& frame, const CudaConfig& cfg,
   // Tests start from tiny capacities (grow and retry) and short list segments (helpers).
   const bool tiny = cfg.initial_pool != 0;
   ZCaps caps;
-  caps.rec = tiny ? cfg.initial_pool : n_tri + n_tri / 4 + 1024;
+  caps.rec = tiny ? cfg.initial_pool : n_tri / 8 + 1024;  // the clipped pool (records n_tri, ...)
   caps.pair = tiny ? cfg.initial_pool : 2 * n_tri + n_tiles + 4096;
   caps.unit = tiny ? cfg.initial_pool : n_tri / 8 + 1024;
   caps.helper = tiny ? cfg.initial_pool : caps.pair / 64 + 1024;
@@ -721,7 +934,7 @@ ZBufferResult run_cuda_zbuffer(const trace::Frame& frame, const CudaConfig& cfg,
   Marks marks(ex, n_marks);
   std::vector<std::vector<double>> stage(size_t(n_marks - 1));
   std::vector<double> total;
-  uint64_t got[kZCounterCount] = {};
+  uint64_t got[kZCounterWords] = {};
   // One frame; false when a pool overflowed (capacities grown: run it again).
   auto once = [&]() -> bool {
     ex.syncs = 0;
@@ -736,7 +949,7 @@ ZBufferResult run_cuda_zbuffer(const trace::Frame& frame, const CudaConfig& cfg,
       marks.mark(1);
       return true;
     }
-    if (caps.pair >= 0xffffffffull || caps.rec >= 0xffffffffull || caps.unit >= 0xffffffffull)
+    if (caps.pair >= 0xffffffffull || n_tri + caps.rec >= 0xffffffffull || caps.unit >= 0xffffffffull)
       throw std::runtime_error("cuda zbuffer: 2^32 bin entries or more");
     ZArgs a{};
     a.f = p.f;
@@ -748,7 +961,7 @@ ZBufferResult run_cuda_zbuffer(const trace::Frame& frame, const CudaConfig& cfg,
     a.draws = p.draws.get();
     a.sample_xy = p.sample_xy.get();
     a.vtx = z.vtx.need(p.f.n_vertices + 1);
-    a.rec = z.rec.need(caps.rec + 1);
+    a.rec = z.rec.need(n_tri + caps.rec + 1);
     a.ctr = z.ctr.need(kZCounterWords + (n_tiles + 1) / 2 + 1);
     a.tile_count = reinterpret_cast<uint32_t*>(a.ctr + kZCounterWords);
     a.tile_off = z.tile_off.need(n_tiles + 1);
@@ -777,7 +990,15 @@ ZBufferResult run_cuda_zbuffer(const trace::Frame& frame, const CudaConfig& cfg,
     const bool gpu = ex.where == Where::gpu;
     ex.zero(a.ctr, (kZCounterWords + (n_tiles + 1) / 2 + 1) * 8);
     ex.launch(k_zb_vertex, zb_vertex, p.f.n_vertices, a);
-    ex.launch(k_zb_trace_triangle, zb_trace_triangle, n_tri, a);
+    ++ex.queued;
+    if (gpu) {
+      const uint64_t want = (n_tri + kTriBlock - 1) / kTriBlock;
+      if (want) k_zb_triangles<<<uint32_t(std::min<uint64_t>(want, uint64_t(ex.grid_blocks) * 8)), kTriBlock, 0,
+                                 ex.main_stream>>>(a, n_tri);
+      TV_CUDA(cudaGetLastError());
+    } else {
+      for (uint64_t t = 0; t < n_tri; ++t) zb_trace_triangle_host(a, ex.host_index(t, n_tri));
+    }
     if (gpu) {
       k_zb_units<<<ex.grid_blocks * 4, 256, 0, ex.main_stream>>>(a);
       TV_CUDA(cudaGetLastError());
@@ -849,7 +1070,8 @@ ZBufferResult run_cuda_zbuffer(const trace::Frame& frame, const CudaConfig& cfg,
     r.triangles_drawn = c[0];
     r.skipped = c[1];
   } else {
-    r.triangles_drawn = got[kZDrawn];
+    r.triangles_drawn = 0;
+    for (uint32_t k = 0; k < kZSpread; ++k) r.triangles_drawn += got[kZCounterCount + k];
     r.bin_entries = got[kZPairs];
     r.retries = retries;
   }

@@ -230,6 +230,7 @@ int run(const CudaArgs& a, const trace::Frame& frame, uint32_t tw, uint32_t th) 
                {"graph_total_ms", r.graph_total_ms},
                {"stream_stage_ms", stage_json(r.stream_stage_ms)},
                {"stream_total_ms", r.stream_total_ms},
+               {"presized_total_ms", r.presized_total_ms},
                {"probed_total_ms", r.probed_total_ms},
                {"graph_nodes", r.graph_nodes},
                {"timing", a.device == "gpu" ? "CUDA events, median of runs after warm-up. total_ms: a new frame, "
@@ -238,7 +239,9 @@ int run(const CudaArgs& a, const trace::Frame& frame, uint32_t tw, uint32_t th) 
                                               "frame as one CUDA graph (sizes as the first runs read them; every "
                                               "replay checked) with events at its ends only; stage_ms from a second "
                                               "graph with an event at every stage boundary (its total: "
-                                              "probed_total_ms); stream_stage_ms: the new frame's stages"
+                                              "probed_total_ms); stream_stage_ms: the new frame's stages; "
+                                              "presized_total_ms: the new frame's launches with no host round trip "
+                                              "(its reads answered by the last run's, checked after)"
                                             : "host clock (emulation)"},
                {"runs", r.runs},
                {"upload_ms", r.upload_ms},

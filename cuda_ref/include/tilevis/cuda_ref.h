@@ -88,6 +88,10 @@ struct CudaResult {
   // stage boundary (its own total: probed_total_ms). cpu: every time is the host emulation's.
   std::vector<StageTime> stage_ms, stream_stage_ms;
   double total_ms = 0, stream_total_ms = 0, graph_total_ms = 0, probed_total_ms = 0;
+  // presized_total_ms: the new frame's launches, queued the same way, with no host round trip
+  // (each host read answered by the last run's, checked after): total_ms - presized_total_ms is
+  // what the host round trips cost, presized_total_ms - graph_total_ms what the launches do.
+  double presized_total_ms = 0;
   uint32_t graph_nodes = 0;
   double upload_ms = 0, download_ms = 0;
   uint32_t runs = 0;
