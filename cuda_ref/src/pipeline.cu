@@ -318,10 +318,15 @@ class Timer {
   void mark(int k) {
     if (!all && k != 0 && k != kStageCount) return;
     // While a graph is captured, an external event record becomes a node of the graph.
-    if (m_ex.where == Where::cpu) m_host[k] = std::chrono::steady_clock::now();
-    else if (m_ex.reads == Exec::Reads::replay)
+    if (m_ex.where == Where::cpu) {
+      m_host[k] = std::chrono::steady_clock::now();
+      return;
+    }
+    cudaStreamCaptureStatus capture = cudaStreamCaptureStatusNone;
+    if (m_ex.reads == Exec::Reads::replay) TV_CUDA(cudaStreamIsCapturing(m_ex.stream, &capture));
+    if (capture == cudaStreamCaptureStatusActive)
       TV_CUDA(cudaEventRecordWithFlags(m_ev[k], m_ex.stream, cudaEventRecordExternal));
-    else TV_CUDA(cudaEventRecord(m_ev[k], m_ex.stream));
+    else TV_CUDA(cudaEventRecord(m_ev[k], m_ex.stream));  // presized runs replay reads without a capture
   }
   // Stage k's time (between marks k and k + 1), after the stream has finished.
   double ms(int a, int b) {

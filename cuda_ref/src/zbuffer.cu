@@ -49,7 +49,7 @@ constexpr uint32_t kWarpsPerBlock = kRasterBlock / 32;
 // Device counters (ZArgs::ctr): kZRecords counts the clipped pool's records (a trace triangle's
 // own record is slot t), then kZSpread words of the drawn triangles' count (spread: no word is
 // shared by every thread), then the tiles' counts (uint32), all in one allocation, one memset.
-enum ZCounter : uint32_t { kZRecords, kZPairs, kZUnits, kZHelpers, kZCounterCount };
+enum ZCounter : uint32_t { kZRecords, kZPairs, kZUnits, kZHelpers, kZRare, kZCounterCount };
 constexpr uint32_t kZSpread = 32;
 constexpr uint32_t kZCounterWords = kZCounterCount + kZSpread;
 
@@ -95,13 +95,15 @@ struct ZArgs {
   uint32_t* tile_need;  // per split tile: its helpers, and how many are done
   uint32_t* tile_done;
   int32_t* ids;
-  uint64_t rec_cap, pair_cap, unit_cap, helper_cap;
+  uint32_t* rare;       // trace triangles left to k_zb_rare (clipped, or facing not settled by the filter)
+  uint64_t rec_cap, pair_cap, unit_cap, helper_cap, rare_cap;
   uint32_t width, height, samples, sb, tw, th, tiles_x, tiles_y, coarse_x, segment;
+  uint32_t ls, ltw, lth;  // log2 of samples, tw, th (powers of two: shifts, no division per sample)
 };
 
 TV_HD inline bool overflowed(const ZArgs& a) {
   return a.ctr[kZRecords] > a.rec_cap || a.ctr[kZPairs] > a.pair_cap || a.ctr[kZUnits] > a.unit_cap ||
-         a.ctr[kZHelpers] > a.helper_cap;
+         a.ctr[kZHelpers] > a.helper_cap || a.ctr[kZRare] > a.rare_cap;
 }
 
 // ---- 1, 2: setup and binning -----------------------------------------------------------
@@ -115,10 +117,11 @@ TV_HD void zb_vertex(const ZArgs& a, uint64_t i) {
   a.vtx[i] = make_int4(s.x, s.y, int32_t(s.z), inside ? 1 : 0);
 }
 
-// Sign of det[x y w] (setup.cuh clip_facing): the six triple products in double (x y is exact,
-// times w rounds by at most 2^-53 relative) and their sum are within 2^-48 of the total of their
-// magnitudes; only when the sum is that close to zero is the exact expansion taken.
-TV_HD inline int facing_of(const float4& a, const float4& b, const float4& c) {
+// Sign of det[x y w] (setup.cuh clip_facing) where a filter settles it: the six triple products
+// in double (x y is exact, times w rounds by at most 2^-53 relative) and their sum are within
+// 2^-48 of the total of their magnitudes; 0 when the sum is that close to zero (then only the
+// exact expansion decides).
+TV_HD inline int facing_filter(const float4& a, const float4& b, const float4& c) {
   const double t[6] = {dmul(dmul(double(a.x), double(b.y)), double(c.w)),
                        dmul(dmul(-double(a.x), double(c.y)), double(b.w)),
                        dmul(dmul(double(b.x), double(c.y)), double(a.w)),
@@ -131,9 +134,7 @@ TV_HD inline int facing_of(const float4& a, const float4& b, const float4& c) {
     mag = dadd(mag, dabs(v));
   }
   const double bound = dmul(mag, 0x1p-48);
-  if (sum > bound) return 1;
-  if (sum < -bound) return -1;
-  return clip_facing(a, b, c);
+  return sum > bound ? 1 : sum < -bound ? -1 : 0;  // 0: not settled (the exact expansion decides)
 }
 
 struct Edges {
@@ -156,8 +157,8 @@ TV_HD inline Edges edges_of(const Vtx& v0, const Vtx& v1, const Vtx& v2) {
 
 // The closed rectangle of tile (tx, ty) in sub-pixel units: every sample of the tile lies in it.
 TV_HD inline Rect tile_rect(const ZArgs& a, int64_t tx0, int64_t ty0, int64_t tx1, int64_t ty1) {
-  return {int32_t((tx0 * a.tw) << a.sb), int32_t((ty0 * a.th) << a.sb), int32_t(((tx1 + 1) * a.tw) << a.sb),
-          int32_t(((ty1 + 1) * a.th) << a.sb)};
+  return {int32_t(tx0 << (a.ltw + a.sb)), int32_t(ty0 << (a.lth + a.sb)), int32_t((tx1 + 1) << (a.ltw + a.sb)),
+          int32_t((ty1 + 1) << (a.lth + a.sb))};
 }
 
 // Hierarchical coverage: no sample of r can be inside when an edge is negative over all of r.
@@ -175,10 +176,10 @@ TV_HD inline bool tile_box(const ZArgs& a, const Vtx& v0, const Vtx& v1, const V
   b.px1 = tmin<int64_t>(int64_t(a.width) - 1, tmax(tmax(v0.x, v1.x), v2.x) >> a.sb);
   b.py1 = tmin<int64_t>(int64_t(a.height) - 1, tmax(tmax(v0.y, v1.y), v2.y) >> a.sb);
   if (b.px0 > b.px1 || b.py0 > b.py1) return false;
-  b.tx0 = b.px0 / a.tw;
-  b.ty0 = b.py0 / a.th;
-  b.tx1 = b.px1 / a.tw;
-  b.ty1 = b.py1 / a.th;
+  b.tx0 = b.px0 >> a.ltw;  // px0, py0 >= 0 here
+  b.ty0 = b.py0 >> a.lth;
+  b.tx1 = b.px1 >> a.ltw;
+  b.ty1 = b.py1 >> a.lth;
   return true;
 }
 
@@ -303,20 +304,40 @@ TV_HD __noinline__ void zb_clipped(const ZArgs& a, uint64_t t) {
 }
 
 // A trace triangle: its record is slot t unless clipping cuts it into a fan (the clipped pool).
-TV_HD Inline zb_trace_triangle(const ZArgs& a, uint64_t t) {
+// `defer`: a triangle that needs clipping or the exact facing goes to the rare list instead, so
+// the common path carries neither the clipper's nor the expansion's arrays (k_zb_rare).
+TV_HD Inline zb_trace_triangle(const ZArgs& a, uint64_t t, bool defer) {
   Inline in;
   if (!a.draws[a.tri_draw[t]].opaque) return in;
   const uint32_t i0 = a.indices[3 * t], i1 = a.indices[3 * t + 1], i2 = a.indices[3 * t + 2];
-  if (facing_of(a.vertices[i0], a.vertices[i1], a.vertices[i2]) <= 0) return in;  // back-facing or edge-on
   const int4 q0 = a.vtx[i0], q1 = a.vtx[i1], q2 = a.vtx[i2];
+  int facing = facing_filter(a.vertices[i0], a.vertices[i1], a.vertices[i2]);
+  if (facing < 0) return in;  // back-facing
+  if (defer && (facing == 0 || !(q0.w & q1.w & q2.w))) {
+    const uint64_t r = bump_one(&a.ctr[kZRare], a.rare_cap);
+    if (r != ~uint64_t{0}) a.rare[r] = uint32_t(t);
+    return in;
+  }
+  if (facing == 0) facing = clip_facing(a.vertices[i0], a.vertices[i1], a.vertices[i2]);
+  if (facing <= 0) return in;  // back-facing or edge-on
   if (q0.w & q1.w & q2.w) zb_triangle(a, t, 0, vtx_of(q0), vtx_of(q1), vtx_of(q2), uint32_t(t), in, false);
   else zb_clipped(a, t);
   return in;
 }
 
+// A deferred trace triangle: as zb_trace_triangle, its pairs emitted here.
+TV_HD void zb_rare(const ZArgs& a, uint64_t r) {
+  const uint64_t t = a.rare[r];
+  const Inline in = zb_trace_triangle(a, t, false);
+  const uint64_t p0 = bump(&a.ctr[kZPairs], in.count(), a.pair_cap);
+  uint32_t j = 0;
+  for (uint32_t m = in.mask; m; m &= m - 1, ++j)
+    put_pair(a, p0 == ~uint64_t{0} ? a.pair_cap : p0 + j, in.tile(a, lowest_bit(m)), in.slot);
+}
+
 // Host emulation: the pairs as they come.
 void zb_trace_triangle_host(const ZArgs& a, uint64_t t) {
-  const Inline in = zb_trace_triangle(a, t);
+  const Inline in = zb_trace_triangle(a, t, false);
   const uint64_t p0 = bump(&a.ctr[kZPairs], in.count(), a.pair_cap);
   uint32_t j = 0;
   for (uint32_t m = in.mask; m; m &= m - 1, ++j)
@@ -333,7 +354,7 @@ __global__ void __launch_bounds__(kTriBlock) k_zb_triangles(ZArgs a, uint64_t n)
   const uint32_t lane = threadIdx.x & 31u, w = threadIdx.x / 32;
   for (uint64_t base = uint64_t(blockIdx.x) * kTriBlock; base < n; base += uint64_t(gridDim.x) * kTriBlock) {
     const uint64_t t = base + threadIdx.x;
-    const Inline in = t < n ? zb_trace_triangle(a, t) : Inline{};
+    const Inline in = t < n ? zb_trace_triangle(a, t, true) : Inline{};
     const uint32_t c = in.count();
     uint32_t incl = c;
     for (uint32_t d = 1; d < 32; d <<= 1) {
@@ -366,8 +387,8 @@ TV_HD void zb_unit(const ZArgs& a, uint64_t u, uint32_t lane, uint32_t lanes) {
   TileBox b{};
   tile_box(a, r.v[0], r.v[1], r.v[2], b);
   const int64_t cx0 = b.tx0 / kCoarse, cx1 = b.tx1 / kCoarse, cy0 = b.ty0 / kCoarse;
-  const uint64_t k = u - r.unit0;
-  const int64_t cx = cx0 + int64_t(k % uint64_t(cx1 - cx0 + 1)), cy = cy0 + int64_t(k / uint64_t(cx1 - cx0 + 1));
+  const uint32_t k = uint32_t(u - r.unit0), cw = uint32_t(cx1 - cx0 + 1);
+  const int64_t cx = cx0 + int64_t(k % cw), cy = cy0 + int64_t(k / cw);
   const int64_t tx0 = tmax(b.tx0, cx * kCoarse), tx1 = tmin(b.tx1, cx * kCoarse + kCoarse - 1);
   const int64_t ty0 = tmax(b.ty0, cy * kCoarse), ty1 = tmin(b.ty1, cy * kCoarse + kCoarse - 1);
   const Edges e = edges_of(r.v[0], r.v[1], r.v[2]);
@@ -452,10 +473,11 @@ struct ZSample {
 };
 
 TV_HD inline ZSample sample_of(const ZArgs& a, uint64_t tile, uint32_t u) {
-  const uint32_t k = u % a.samples, p = u / a.samples;
+  const uint32_t k = u & (a.samples - 1), p = u >> a.ls;
+  const uint32_t ty = uint32_t(tile) / a.tiles_x, tx = uint32_t(tile) - ty * a.tiles_x;
   ZSample s;
-  s.px = int32_t((tile % a.tiles_x) * a.tw + p % a.tw);
-  s.py = int32_t((tile / a.tiles_x) * a.th + p / a.tw);
+  s.px = int32_t((tx << a.ltw) + (p & (a.tw - 1)));
+  s.py = int32_t((ty << a.lth) + (p >> a.ltw));
   s.inside = s.px < int32_t(a.width) && s.py < int32_t(a.height);
   const uint32_t sxy = a.sample_xy[k];
   s.x = (int64_t(s.px) << a.sb) + (sxy & 0xffffu);
@@ -587,39 +609,51 @@ __device__ inline uint64_t coverage(const ZArgs& a, const ZDer& d, int32_t x0, i
           const int64_t v = int64_t(d.a[e]) * x + int64_t(d.b[e]) * y + d.c[e];
           in &= v > 0 || (v == 0 && ((d.owns >> e) & 1u));
         }
-        if (in) m |= uint64_t{1} << ((uint32_t(py - y0) * a.tw + uint32_t(px - x0)) * a.samples + k);
+        if (in) m |= uint64_t{1} << ((((uint32_t(py - y0) << a.ltw) + uint32_t(px - x0)) << a.ls) + k);
       }
   return m;
 }
 
-// A warp's part [begin, end) of a tile's list, fragment-parallel as CudaRaster's fine raster: a
-// lane per record (its coverage over the tile's samples), then rounds in which every lane takes
-// its next covered sample and, where lanes meet at one sample, they take turns; the nearest per
-// sample in shared memory. The order does not matter (nearer is a total order), so no lane
-// waits for another except at a shared sample.
+// A warp's part [begin, end) of a tile's list, in the manner of CudaRaster's fine raster: a
+// lane per record. A small record (at most kFragMax samples of its box in the tile) is
+// rastered fragment-parallel: its coverage over the tile's samples, then rounds in which every
+// lane takes its next covered sample and lanes meeting at one sample take turns. The large ones
+// are staged in shared memory and every lane tests its two samples against each (a large
+// triangle's fragments would otherwise fall on one lane). The nearest per sample lives in shared
+// memory; the order does not matter (nearer is a total order).
+constexpr uint32_t kFragMax = 16;
 __device__ inline void warp_part(const ZArgs& a, uint64_t tile, uint64_t begin, uint64_t end, OwnerS* sm,
-                                 uint64_t screen) {
+                                 ZDer* stage, uint64_t screen, const ZSample& s0, const ZSample& s1) {
   const uint32_t lane = threadIdx.x & 31u;
-  const int32_t x0 = int32_t((tile % a.tiles_x) * a.tw), y0 = int32_t((tile / a.tiles_x) * a.th);
+  const uint32_t ty = uint32_t(tile) / a.tiles_x, tx = uint32_t(tile) - ty * a.tiles_x;
+  const int32_t x0 = int32_t(tx << a.ltw), y0 = int32_t(ty << a.lth);
+  const int32_t tx1 = tmin(x0 + int32_t(a.tw), int32_t(a.width)) - 1, ty1 = tmin(y0 + int32_t(a.th), int32_t(a.height)) - 1;
   for (uint64_t c = begin; c < end; c += 32) {
     const uint32_t m = uint32_t(tmin<uint64_t>(32, end - c));
     ZDer d{};
     uint64_t cov = 0;
+    bool large = false;
     if (lane < m) {
       const uint32_t slot = a.sorted[c + lane];
       d = derive(a.rec[slot], slot, a.sb);
-      cov = coverage(a, d, x0, y0, screen);
+      const int32_t nx = tmin(d.px1, tx1) - tmax(d.px0, x0) + 1, ny = tmin(d.py1, ty1) - tmax(d.py0, y0) + 1;
+      if (nx > 0 && ny > 0) {
+        if ((uint32_t(nx * ny) << a.ls) <= kFragMax) cov = coverage(a, d, x0, y0, screen);
+        else large = true;
+      }
     }
+    const unsigned lm = __ballot_sync(0xffffffffu, large);
+    if (large) stage[__popc(lm & ((1u << lane) - 1u))] = d;
     while (__any_sync(0xffffffffu, cov != 0)) {
       int u = -1;
       I128 n = 0;
       if (cov) {
         u = __ffsll(static_cast<long long>(cov)) - 1;
         cov &= cov - 1;
-        const uint32_t k = uint32_t(u) % a.samples, p = uint32_t(u) / a.samples;
+        const uint32_t k = uint32_t(u) & (a.samples - 1), p = uint32_t(u) >> a.ls;
         const uint32_t sxy = a.sample_xy[k];
-        const int64_t x = (int64_t(x0 + int32_t(p % a.tw)) << a.sb) + (sxy & 0xffffu);
-        const int64_t y = (int64_t(y0 + int32_t(p / a.tw)) << a.sb) + (sxy >> 16);
+        const int64_t x = (int64_t(x0 + int32_t(p & (a.tw - 1))) << a.sb) + (sxy & 0xffffu);
+        const int64_t y = (int64_t(y0 + int32_t(p >> a.ltw)) << a.sb) + (sxy >> 16);
         n = I128{d.alpha} * x + I128{d.beta} * y + d.gamma;
       }
       const unsigned act = __ballot_sync(0xffffffffu, u >= 0);
@@ -640,8 +674,19 @@ __device__ inline void warp_part(const ZArgs& a, uint64_t tile, uint64_t begin, 
         }
       }
     }
+    __syncwarp();
+    if (lm) {
+      Owner o0{sm[lane].n, sm[lane].area, sm[lane].order, sm[lane].slot};
+      Owner o1{sm[lane + 32].n, sm[lane + 32].area, sm[lane + 32].order, sm[lane + 32].slot};
+      for (uint32_t j = 0, nl = uint32_t(__popc(lm)); j < nl; ++j) {
+        test_sample(stage[j], s0, o0);
+        test_sample(stage[j], s1, o1);
+      }
+      sm[lane] = {o0.n, o0.area, o0.order, o0.slot};
+      sm[lane + 32] = {o1.n, o1.area, o1.order, o1.slot};
+      __syncwarp();
+    }
   }
-  __syncwarp();
 }
 
 __device__ inline void sm_clear(OwnerS* sm) {
@@ -655,8 +700,9 @@ __device__ inline void sm_clear(OwnerS* sm) {
   __syncwarp();
 }
 
-__global__ void __launch_bounds__(kRasterBlock) k_zb_tiles(ZArgs a, uint64_t n_tiles) {
+__global__ void __launch_bounds__(kRasterBlock, 5) k_zb_tiles(ZArgs a, uint64_t n_tiles) {
   __shared__ OwnerS sm[kWarpsPerBlock][kTileSamples];
+  __shared__ ZDer stage[kWarpsPerBlock][32];
   if (overflowed(a)) return;
   const uint32_t lane = threadIdx.x & 31u, w = threadIdx.x / 32;
   for (uint64_t tile = uint64_t(blockIdx.x) * kWarpsPerBlock + w; tile < n_tiles;
@@ -672,7 +718,7 @@ __global__ void __launch_bounds__(kRasterBlock) k_zb_tiles(ZArgs a, uint64_t n_t
     const uint64_t screen =
         uint64_t(__ballot_sync(0xffffffffu, s0.inside)) | uint64_t(__ballot_sync(0xffffffffu, s1.inside)) << 32;
     sm_clear(sm[w]);
-    warp_part(a, tile, begin, cut, sm[w], screen);
+    warp_part(a, tile, begin, cut, sm[w], stage[w], screen, s0, s1);
     const OwnerS &o0 = sm[w][lane], &o1 = sm[w][lane + 32];
     if (cut == end) {
       if (s0.inside) a.ids[s0.out] = id_of(o0.order);
@@ -686,8 +732,9 @@ __global__ void __launch_bounds__(kRasterBlock) k_zb_tiles(ZArgs a, uint64_t n_t
   }
 }
 
-__global__ void __launch_bounds__(kRasterBlock) k_zb_helpers(ZArgs a) {
+__global__ void __launch_bounds__(kRasterBlock, 5) k_zb_helpers(ZArgs a) {
   __shared__ OwnerS sm[kWarpsPerBlock][kTileSamples];
+  __shared__ ZDer stage[kWarpsPerBlock][32];
   if (overflowed(a)) return;
   const uint32_t lane = threadIdx.x & 31u, w = threadIdx.x / 32;
   const uint64_t n = a.ctr[kZHelpers];
@@ -698,7 +745,7 @@ __global__ void __launch_bounds__(kRasterBlock) k_zb_helpers(ZArgs a) {
     const uint64_t screen =
         uint64_t(__ballot_sync(0xffffffffu, s0.inside)) | uint64_t(__ballot_sync(0xffffffffu, s1.inside)) << 32;
     sm_clear(sm[w]);
-    warp_part(a, tile, begin, end, sm[w], screen);
+    warp_part(a, tile, begin, end, sm[w], stage[w], screen, s0, s1);
     const OwnerS &o0 = sm[w][lane], &o1 = sm[w][lane + 32];
     if (s0.inside) merge_owner(a, s0, Owner{o0.n, o0.area, o0.order, o0.slot});
     if (s1.inside) merge_owner(a, s1, Owner{o1.n, o1.area, o1.order, o1.slot});
@@ -714,6 +761,11 @@ __global__ void __launch_bounds__(kRasterBlock) k_zb_helpers(ZArgs a) {
       a.ids[s->out] = ow == kNone ? -1 : id_of(a.rec[ow].order);
     }
   }
+}
+
+__global__ void k_zb_rare(ZArgs a) {
+  if (a.ctr[kZRare] > a.rare_cap) return;
+  TV_GRID_LOOP(r, a.ctr[kZRare]) zb_rare(a, r);
 }
 
 __global__ void k_zb_units(ZArgs a) {
@@ -869,11 +921,11 @@ struct ZBufs {
   Buf<int4> vtx;
   Buf<ZRec> rec;
   Buf<uint64_t> ctr;  // kZCounterWords counters, then the tiles' counts (uint32)
-  Buf<uint32_t> tile_off, pair_rec, unit_rec, sorted, owner, tile_need, tile_done;
+  Buf<uint32_t> tile_off, pair_rec, unit_rec, sorted, owner, tile_need, tile_done, rare;
   Buf<uint64_t> pair, helper;
   Buf<unsigned long long> zkey, ncount;
   explicit ZBufs(Exec& e) {
-    for (auto* b : {&tile_off, &pair_rec, &unit_rec, &sorted, &owner, &tile_need, &tile_done}) b->bind(&e);
+    for (auto* b : {&tile_off, &pair_rec, &unit_rec, &sorted, &owner, &tile_need, &tile_done, &rare}) b->bind(&e);
     for (auto* b : {&ctr, &pair, &helper}) b->bind(&e);
     vtx.bind(&e);
     rec.bind(&e);
@@ -884,7 +936,7 @@ struct ZBufs {
 
 // Capacities the frames so far needed (grow-only).
 struct ZCaps {
-  uint64_t rec = 0, pair = 0, unit = 0, helper = 0;
+  uint64_t rec = 0, pair = 0, unit = 0, helper = 0, rare = 0;
 };
 
 }  // namespace
@@ -927,6 +979,7 @@ ZBufferResult run_cuda_zbuffer(const trace::Frame& frame, const CudaConfig& cfg,
   caps.pair = tiny ? cfg.initial_pool : 2 * n_tri + n_tiles + 4096;
   caps.unit = tiny ? cfg.initial_pool : n_tri / 8 + 1024;
   caps.helper = tiny ? cfg.initial_pool : caps.pair / 64 + 1024;
+  caps.rare = tiny ? cfg.initial_pool : n_tri / 16 + 1024;
   const uint32_t segment = tiny ? 8 : 256;
 
   const bool naive = kind == ZBufferKind::naive;
@@ -970,6 +1023,7 @@ ZBufferResult run_cuda_zbuffer(const trace::Frame& frame, const CudaConfig& cfg,
     a.unit_rec = z.unit_rec.need(caps.unit + 1);
     a.sorted = z.sorted.need(caps.pair + 1);
     a.helper = z.helper.need(caps.helper + 1);
+    a.rare = z.rare.need(caps.rare + 1);
     a.owner = z.owner.need(n_samples + 1);
     a.tile_need = z.tile_need.need(n_tiles + 1);
     a.tile_done = z.tile_done.need(n_tiles + 1);
@@ -978,12 +1032,16 @@ ZBufferResult run_cuda_zbuffer(const trace::Frame& frame, const CudaConfig& cfg,
     a.pair_cap = caps.pair;
     a.unit_cap = caps.unit;
     a.helper_cap = caps.helper;
+    a.rare_cap = caps.rare;
     a.width = r.width;
     a.height = r.height;
     a.samples = S;
     a.sb = p.f.subpixel_bits;
     a.tw = tw;
     a.th = th;
+    a.ls = bits_for(S) - 1;
+    a.ltw = bits_for(tw) - 1;
+    a.lth = bits_for(th) - 1;
     a.tiles_x = tiles_x;
     a.tiles_y = tiles_y;
     a.segment = segment;
@@ -1000,6 +1058,8 @@ ZBufferResult run_cuda_zbuffer(const trace::Frame& frame, const CudaConfig& cfg,
       for (uint64_t t = 0; t < n_tri; ++t) zb_trace_triangle_host(a, ex.host_index(t, n_tri));
     }
     if (gpu) {
+      k_zb_rare<<<ex.grid_blocks, 128, 0, ex.main_stream>>>(a);
+      TV_CUDA(cudaGetLastError());
       k_zb_units<<<ex.grid_blocks * 4, 256, 0, ex.main_stream>>>(a);
       TV_CUDA(cudaGetLastError());
     } else if (!overflowed(a)) {
@@ -1034,12 +1094,13 @@ ZBufferResult run_cuda_zbuffer(const trace::Frame& frame, const CudaConfig& cfg,
     ex.download(got, a.ctr, sizeof(got));
     ex.syncs = during;
     const bool over = got[kZRecords] > caps.rec || got[kZPairs] > caps.pair || got[kZUnits] > caps.unit ||
-                      got[kZHelpers] > caps.helper;
+                      got[kZHelpers] > caps.helper || got[kZRare] > caps.rare;
     auto grow = [](uint64_t& cap, uint64_t need) { cap = std::max(cap, need + need / 4 + 16); };
     grow(caps.rec, got[kZRecords]);
     grow(caps.pair, got[kZPairs]);
     grow(caps.unit, got[kZUnits]);
     grow(caps.helper, got[kZHelpers]);
+    grow(caps.rare, got[kZRare]);
     return !over;
   };
   const uint32_t runs = ex.where == Where::cpu ? 1 : std::max<uint32_t>(cfg.runs, 1);

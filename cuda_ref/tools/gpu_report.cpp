@@ -85,8 +85,9 @@ int main(int argc, char** argv) {
   const auto gather = [&](const fs::path& dir, const std::string& set) {
     std::vector<fs::path> scenes;
     for (const auto& e : fs::directory_iterator(dir))
-      if (e.is_directory() && std::any_of(fs::directory_iterator(e.path()), fs::directory_iterator(), is_tile_dir))
-        scenes.push_back(e.path());  // scene folders hold t<tile>/; meta/ and sanitize/ do not
+      if (e.is_directory() && (std::any_of(fs::directory_iterator(e.path()), fs::directory_iterator(), is_tile_dir) ||
+                               fs::exists(e.path() / "zb_tiled") || fs::exists(e.path() / "gl")))
+        scenes.push_back(e.path());  // scene folders hold t<tile>/ or baselines; meta/ and sanitize/ do not
     std::sort(scenes.begin(), scenes.end());
     for (const auto& sd : scenes) {
       std::vector<fs::path> tiles;
