@@ -49,7 +49,12 @@ constexpr uint32_t kWarpsPerBlock = kRasterBlock / 32;
 // Device counters (ZArgs::ctr): kZRecords counts the clipped pool's records (a trace triangle's
 // own record is slot t), then kZSpread words of the drawn triangles' count (spread: no word is
 // shared by every thread), then the tiles' counts (uint32), all in one allocation, one memset.
-enum ZCounter : uint32_t { kZRecords, kZPairs, kZUnits, kZHelpers, kZRare, kZCounterCount };
+// kZBig: big triangles << 40 | their units (one atomic takes both, so a big triangle's first
+// unit grows with its index and a unit finds its triangle by binary search); kZTiles: the tiles
+// with a non-empty list (the first entry of a tile appends it).
+enum ZCounter : uint32_t { kZRecords, kZPairs, kZBig, kZHelpers, kZRare, kZTiles, kZCounterCount };
+constexpr uint32_t kZUnitBits = 40;
+constexpr uint64_t kZUnitMask = (uint64_t{1} << kZUnitBits) - 1;
 constexpr uint32_t kZSpread = 32;
 constexpr uint32_t kZCounterWords = kZCounterCount + kZSpread;
 
@@ -58,8 +63,7 @@ constexpr uint32_t kZCounterWords = kZCounterCount + kZSpread;
 struct alignas(16) ZRec {
   Vtx v[3];
   uint32_t order;
-  uint32_t unit0;  // big triangles: the first of its units
-  uint32_t pad[2];
+  uint32_t pad[3];
 };
 
 // A record as the raster tests it (edges with inside > 0, the top-left rule's owned edges,
@@ -70,7 +74,8 @@ struct alignas(16) ZDer {
   int64_t alpha, beta, area;
   int32_t a[3], b[3];
   int32_t px0, py0, px1, py1;
-  uint32_t order, owns, slot, pad;
+  uint32_t order, owns, slot;
+  uint32_t full;  // staged for one tile: the tile lies inside all three edges (every sample covered)
 };
 
 struct ZArgs {
@@ -88,7 +93,9 @@ struct ZArgs {
   uint32_t* tile_off;   // exclusive scan of tile_count (n_tiles + 1)
   uint64_t* pair;       // tile << 32 | rank
   uint32_t* pair_rec;
-  uint32_t* unit_rec;   // per unit: its record
+  uint32_t* big_slot;   // per big triangle: its record, and its first unit (increasing)
+  uint32_t* big_u0;
+  uint32_t* tiles;      // the tiles with a non-empty list (kZTiles of them)
   uint32_t* sorted;     // the tiles' lists, one after another
   uint64_t* helper;     // tile << 32 | first entry
   uint32_t* owner;      // per sample of a split tile: the nearest record so far (kNone: none)
@@ -96,13 +103,15 @@ struct ZArgs {
   uint32_t* tile_done;
   int32_t* ids;
   uint32_t* rare;       // trace triangles left to k_zb_rare (clipped, or facing not settled by the filter)
-  uint64_t rec_cap, pair_cap, unit_cap, helper_cap, rare_cap;
+  uint64_t rec_cap, pair_cap, unit_cap, big_cap, helper_cap, rare_cap;
+  uint64_t n_samples;
   uint32_t width, height, samples, sb, tw, th, tiles_x, tiles_y, coarse_x, segment;
   uint32_t ls, ltw, lth;  // log2 of samples, tw, th (powers of two: shifts, no division per sample)
 };
 
 TV_HD inline bool overflowed(const ZArgs& a) {
-  return a.ctr[kZRecords] > a.rec_cap || a.ctr[kZPairs] > a.pair_cap || a.ctr[kZUnits] > a.unit_cap ||
+  return a.ctr[kZRecords] > a.rec_cap || a.ctr[kZPairs] > a.pair_cap || (a.ctr[kZBig] & kZUnitMask) > a.unit_cap ||
+         (a.ctr[kZBig] >> kZUnitBits) > a.big_cap ||
          a.ctr[kZHelpers] > a.helper_cap || a.ctr[kZRare] > a.rare_cap;
 }
 
@@ -193,10 +202,12 @@ TV_HD inline uint32_t tile_rank(const ZArgs& a, uint32_t tile) {
   uint32_t base = 0;
   if (int(lane) == leader) base = atomicAdd(&a.tile_count[tile], uint32_t(__popc(peers)));
   base = __shfl_sync(peers, base, leader);
-  return base + uint32_t(__popc(peers & ((1u << lane) - 1u)));
+  const uint32_t rank = base + uint32_t(__popc(peers & ((1u << lane) - 1u)));
 #else
-  return a.tile_count[tile]++;
+  const uint32_t rank = a.tile_count[tile]++;
 #endif
+  if (rank == 0) a.tiles[bump_one(&a.ctr[kZTiles], ~uint64_t{0})] = tile;  // at most every tile once
+  return rank;
 }
 
 TV_HD inline void put_pair(const ZArgs& a, uint64_t p, uint32_t tile, uint32_t slot) {
@@ -206,24 +217,24 @@ TV_HD inline void put_pair(const ZArgs& a, uint64_t p, uint32_t tile, uint32_t s
   a.pair_rec[p] = slot;
 }
 
-TV_HD inline uint32_t lowest_bit(uint32_t m) {  // m != 0
-#if defined(__CUDA_ARCH__)
-  return uint32_t(__ffs(m) - 1);
-#else
-  return uint32_t(__builtin_ctz(m));
-#endif
-}
+
 
 // A small triangle's tiles: those of its box (at most kInlineTiles) that the exact edge test
 // keeps, as bits of the box in row-major order.
 struct Inline {
-  uint32_t slot = kNone, mask = 0;
-  int32_t tx0 = 0, ty0 = 0, w = 1;
+  uint32_t slot = kNone, mask = 0, drawn = 0;
+  int32_t tx0 = 0, ty0 = 0, w = 1, h = 1;
   TV_HD uint32_t count() const { return popc(mask); }
-  TV_HD uint32_t tile(const ZArgs& a, uint32_t bit) const {
-    return uint32_t(ty0 + int32_t(bit) / w) * a.tiles_x + uint32_t(tx0 + int32_t(bit) % w);
-  }
+  // Pairs p, p + 1, ... for the kept tiles in row-major order (no division by the box's width).
+  TV_HD void put(const ZArgs& a, uint64_t p) const;
 };
+
+TV_HD inline void Inline::put(const ZArgs& a, uint64_t p) const {
+  uint32_t bit = 0;
+  for (int32_t y = 0; y < h && (mask >> bit) != 0; ++y)
+    for (int32_t x = 0; x < w; ++x, ++bit)
+      if ((mask >> bit) & 1u) put_pair(a, p++, uint32_t(ty0 + y) * a.tiles_x + uint32_t(tx0 + x), slot);
+}
 
 // The counters every thread adds to: one of kZSpread words picked by the block (on the host:
 // the first), summed after the frame.
@@ -243,7 +254,8 @@ TV_HD inline uint64_t* spread(const ZArgs& a, uint32_t which) {
 TV_HD inline void zb_triangle(const ZArgs& a, uint64_t t, uint32_t k, const Vtx& v0, const Vtx& v1, const Vtx& v2,
                               uint32_t slot, Inline& in, bool now) {
   if (!(orient2d(v0.xy(), v1.xy(), v2.xy()) < 0)) return;
-  count_add(spread(a, 0), 1);
+  if (now) count_add(spread(a, 0), 1);  // else the caller counts in.drawn
+  in.drawn = 1;
   TileBox b;
   if (!tile_box(a, v0, v1, v2, b)) return;
   if (slot == kNone) {
@@ -256,17 +268,17 @@ TV_HD inline void zb_triangle(const ZArgs& a, uint64_t t, uint32_t k, const Vtx&
   r.v[1] = v1;
   r.v[2] = v2;
   r.order = uint32_t(t) << 3 | k;
-  r.unit0 = 0;
-  r.pad[0] = r.pad[1] = 0;
+  r.pad[0] = r.pad[1] = r.pad[2] = 0;
   const uint64_t n_tiles = uint64_t(b.tx1 - b.tx0 + 1) * uint64_t(b.ty1 - b.ty0 + 1);
   if (n_tiles > kInlineTiles) {
     const int64_t cx0 = b.tx0 / kCoarse, cx1 = b.tx1 / kCoarse, cy0 = b.ty0 / kCoarse, cy1 = b.ty1 / kCoarse;
     const uint64_t n_units = uint64_t(cx1 - cx0 + 1) * uint64_t(cy1 - cy0 + 1);
-    const uint64_t u0 = bump(&a.ctr[kZUnits], n_units, a.unit_cap);
-    r.unit0 = uint32_t(u0);
     a.rec[slot] = r;
-    if (u0 == ~uint64_t{0}) return;
-    for (uint64_t u = 0; u < n_units; ++u) a.unit_rec[u0 + u] = slot;
+    const uint64_t old = atomic_add(&a.ctr[kZBig], uint64_t{1} << kZUnitBits | n_units);
+    const uint64_t e = old >> kZUnitBits, u0 = old & kZUnitMask;
+    if (e >= a.big_cap || u0 + n_units > a.unit_cap) return;  // the frame runs again with more room
+    a.big_slot[e] = slot;
+    a.big_u0[e] = uint32_t(u0);
     return;
   }
   a.rec[slot] = r;
@@ -275,6 +287,7 @@ TV_HD inline void zb_triangle(const ZArgs& a, uint64_t t, uint32_t k, const Vtx&
   in.tx0 = int32_t(b.tx0);
   in.ty0 = int32_t(b.ty0);
   in.w = int32_t(b.tx1 - b.tx0 + 1);
+  in.h = int32_t(b.ty1 - b.ty0 + 1);
   in.mask = 0;
   uint32_t bit = 0;
   for (int64_t ty = b.ty0; ty <= b.ty1; ++ty)
@@ -282,9 +295,7 @@ TV_HD inline void zb_triangle(const ZArgs& a, uint64_t t, uint32_t k, const Vtx&
       if (n_tiles == 1 || may_cover(e, tile_rect(a, tx, ty, tx, ty))) in.mask |= 1u << bit;
   if (now) {
     const uint64_t p0 = bump(&a.ctr[kZPairs], in.count(), a.pair_cap);
-    uint32_t j = 0;
-    for (uint32_t m = in.mask; m; m &= m - 1, ++j)
-      put_pair(a, p0 == ~uint64_t{0} ? a.pair_cap : p0 + j, in.tile(a, lowest_bit(m)), slot);
+    in.put(a, p0 == ~uint64_t{0} ? a.pair_cap : p0);
     in.mask = 0;
   }
 }
@@ -329,26 +340,24 @@ TV_HD Inline zb_trace_triangle(const ZArgs& a, uint64_t t, bool defer) {
 TV_HD void zb_rare(const ZArgs& a, uint64_t r) {
   const uint64_t t = a.rare[r];
   const Inline in = zb_trace_triangle(a, t, false);
+  if (in.drawn) count_add(spread(a, 0), 1);
   const uint64_t p0 = bump(&a.ctr[kZPairs], in.count(), a.pair_cap);
-  uint32_t j = 0;
-  for (uint32_t m = in.mask; m; m &= m - 1, ++j)
-    put_pair(a, p0 == ~uint64_t{0} ? a.pair_cap : p0 + j, in.tile(a, lowest_bit(m)), in.slot);
+  in.put(a, p0 == ~uint64_t{0} ? a.pair_cap : p0);
 }
 
 // Host emulation: the pairs as they come.
 void zb_trace_triangle_host(const ZArgs& a, uint64_t t) {
   const Inline in = zb_trace_triangle(a, t, false);
+  if (in.drawn) count_add(spread(a, 0), 1);
   const uint64_t p0 = bump(&a.ctr[kZPairs], in.count(), a.pair_cap);
-  uint32_t j = 0;
-  for (uint32_t m = in.mask; m; m &= m - 1, ++j)
-    put_pair(a, p0 == ~uint64_t{0} ? a.pair_cap : p0 + j, in.tile(a, lowest_bit(m)), in.slot);
+  in.put(a, p0 == ~uint64_t{0} ? a.pair_cap : p0);
 }
 
 #if defined(__CUDACC__)
 // A block of 256 trace triangles at a time: the block's pairs take one atomic (a scan over the
 // block gives each thread its first), so no counter is shared by every thread of the frame.
 constexpr uint32_t kTriBlock = 256;
-__global__ void __launch_bounds__(kTriBlock) k_zb_triangles(ZArgs a, uint64_t n) {
+__global__ void __launch_bounds__(kTriBlock, 3) k_zb_triangles(ZArgs a, uint64_t n) {
   __shared__ uint32_t warp_total[kTriBlock / 32];
   __shared__ uint64_t block_base;
   const uint32_t lane = threadIdx.x & 31u, w = threadIdx.x / 32;
@@ -362,7 +371,8 @@ __global__ void __launch_bounds__(kTriBlock) k_zb_triangles(ZArgs a, uint64_t n)
       if (lane >= d) incl += v;
     }
     if (lane == 31) warp_total[w] = incl;
-    __syncthreads();
+    const int drawn = __syncthreads_count(in.drawn);
+    if (threadIdx.x == 0 && drawn) atomicAdd(reinterpret_cast<unsigned long long*>(spread(a, 0)), uint64_t(drawn));
     if (threadIdx.x == 0) {
       uint32_t sum = 0;
       for (uint32_t k = 0; k < kTriBlock / 32; ++k) {
@@ -373,8 +383,7 @@ __global__ void __launch_bounds__(kTriBlock) k_zb_triangles(ZArgs a, uint64_t n)
       block_base = sum ? atomicAdd(reinterpret_cast<unsigned long long*>(&a.ctr[kZPairs]), sum) : 0;
     }
     __syncthreads();
-    uint64_t p = block_base + warp_total[w] + incl - c;
-    for (uint32_t m = in.mask; m; m &= m - 1, ++p) put_pair(a, p, in.tile(a, lowest_bit(m)), in.slot);
+    in.put(a, block_base + warp_total[w] + incl - c);
     __syncthreads();
   }
 }
@@ -382,12 +391,18 @@ __global__ void __launch_bounds__(kTriBlock) k_zb_triangles(ZArgs a, uint64_t n)
 
 // A big triangle's unit: the coarse bin's tiles inside its box, lane, lane + lanes, ...
 TV_HD void zb_unit(const ZArgs& a, uint64_t u, uint32_t lane, uint32_t lanes) {
-  const uint32_t slot = a.unit_rec[u];
+  uint64_t lo = 0, hi = a.ctr[kZBig] >> kZUnitBits;  // the last big triangle whose first unit <= u
+  while (hi - lo > 1) {
+    const uint64_t mid = (lo + hi) / 2;
+    if (a.big_u0[mid] <= u) lo = mid;
+    else hi = mid;
+  }
+  const uint32_t slot = a.big_slot[lo];
   const ZRec& r = a.rec[slot];
   TileBox b{};
   tile_box(a, r.v[0], r.v[1], r.v[2], b);
   const int64_t cx0 = b.tx0 / kCoarse, cx1 = b.tx1 / kCoarse, cy0 = b.ty0 / kCoarse;
-  const uint32_t k = uint32_t(u - r.unit0), cw = uint32_t(cx1 - cx0 + 1);
+  const uint32_t k = uint32_t(u - a.big_u0[lo]), cw = uint32_t(cx1 - cx0 + 1);
   const int64_t cx = cx0 + int64_t(k % cw), cy = cy0 + int64_t(k / cw);
   const int64_t tx0 = tmax(b.tx0, cx * kCoarse), tx1 = tmin(b.tx1, cx * kCoarse + kCoarse - 1);
   const int64_t ty0 = tmax(b.ty0, cy * kCoarse), ty1 = tmin(b.ty1, cy * kCoarse + kCoarse - 1);
@@ -446,7 +461,7 @@ TV_HD inline ZDer derive(const ZRec& r, uint32_t slot, uint32_t sb) {
   d.py1 = tmax(tmax(v0.y, v1.y), v2.y) >> sb;
   d.order = r.order;
   d.slot = slot;
-  d.pad = 0;
+  d.full = 0;
   return d;
 }
 
@@ -487,10 +502,12 @@ TV_HD inline ZSample sample_of(const ZArgs& a, uint64_t tile, uint32_t u) {
 }
 
 TV_HD inline void test_sample(const ZDer& d, const ZSample& s, Owner& o) {
-  if (s.px < d.px0 || s.px > d.px1 || s.py < d.py0 || s.py > d.py1) return;
-  for (int k = 0; k < 3; ++k) {
-    const int64_t e = int64_t(d.a[k]) * s.x + int64_t(d.b[k]) * s.y + d.c[k];
-    if (e < 0 || (e == 0 && !((d.owns >> k) & 1u))) return;
+  if (!d.full) {
+    if (s.px < d.px0 || s.px > d.px1 || s.py < d.py0 || s.py > d.py1) return;
+    for (int k = 0; k < 3; ++k) {
+      const int64_t e = int64_t(d.a[k]) * s.x + int64_t(d.b[k]) * s.y + d.c[k];
+      if (e < 0 || (e == 0 && !((d.owns >> k) & 1u))) return;
+    }
   }
   const I128 n = I128{d.alpha} * s.x + I128{d.beta} * s.y + d.gamma;
   if (nearer(n, d.area, d.order, o)) {
@@ -583,19 +600,24 @@ struct alignas(16) OwnerS {
   uint32_t order, slot;
 };
 
+// Whether the tile at pixel (x0, y0) lies strictly inside all three edges (every sample covered).
+__device__ inline bool tile_inside(const ZArgs& a, const ZDer& d, int32_t x0, int32_t y0) {
+  const int32_t tx1 = x0 + int32_t(a.tw) - 1, ty1 = y0 + int32_t(a.th) - 1;
+  if (d.px0 > x0 || d.px1 < tx1 || d.py0 > y0 || d.py1 < ty1) return false;
+  const int64_t rx0 = int64_t(x0) << a.sb, ry0 = int64_t(y0) << a.sb;
+  const int64_t rx1 = int64_t(tx1 + 1) << a.sb, ry1 = int64_t(ty1 + 1) << a.sb;
+  bool inside = true;
+  for (int k = 0; k < 3; ++k)
+    inside &= int64_t(d.a[k]) * (d.a[k] > 0 ? rx0 : rx1) + int64_t(d.b[k]) * (d.b[k] > 0 ? ry0 : ry1) + d.c[k] > 0;
+  return inside;
+}
+
 // The samples of a tile that a record covers, as bits u = pixel_in_tile * samples + k, by the
 // same tests as test_sample; a tile inside all three edges is covered whole (`screen`: its
 // samples on the screen). Only the record's box is visited.
 __device__ inline uint64_t coverage(const ZArgs& a, const ZDer& d, int32_t x0, int32_t y0, uint64_t screen) {
   const int32_t tx1 = x0 + int32_t(a.tw) - 1, ty1 = y0 + int32_t(a.th) - 1;
-  if (d.px0 <= x0 && d.px1 >= tx1 && d.py0 <= y0 && d.py1 >= ty1) {
-    const int64_t rx0 = int64_t(x0) << a.sb, ry0 = int64_t(y0) << a.sb;
-    const int64_t rx1 = int64_t(tx1 + 1) << a.sb, ry1 = int64_t(ty1 + 1) << a.sb;
-    bool inside = true;
-    for (int k = 0; k < 3; ++k)
-      inside &= int64_t(d.a[k]) * (d.a[k] > 0 ? rx0 : rx1) + int64_t(d.b[k]) * (d.b[k] > 0 ? ry0 : ry1) + d.c[k] > 0;
-    if (inside) return screen;
-  }
+  if (tile_inside(a, d, x0, y0)) return screen;
   const int32_t px0 = tmax(d.px0, x0), px1 = tmin(tmin(d.px1, tx1), int32_t(a.width) - 1);
   const int32_t py0 = tmax(d.py0, y0), py1 = tmin(tmin(d.py1, ty1), int32_t(a.height) - 1);
   uint64_t m = 0;
@@ -638,8 +660,12 @@ __device__ inline void warp_part(const ZArgs& a, uint64_t tile, uint64_t begin, 
       d = derive(a.rec[slot], slot, a.sb);
       const int32_t nx = tmin(d.px1, tx1) - tmax(d.px0, x0) + 1, ny = tmin(d.py1, ty1) - tmax(d.py0, y0) + 1;
       if (nx > 0 && ny > 0) {
-        if ((uint32_t(nx * ny) << a.ls) <= kFragMax) cov = coverage(a, d, x0, y0, screen);
-        else large = true;
+        if ((uint32_t(nx * ny) << a.ls) <= kFragMax) {
+          cov = coverage(a, d, x0, y0, screen);
+        } else {
+          large = true;
+          d.full = tile_inside(a, d, x0, y0) ? 1u : 0u;
+        }
       }
     }
     const unsigned lm = __ballot_sync(0xffffffffu, large);
@@ -700,21 +726,18 @@ __device__ inline void sm_clear(OwnerS* sm) {
   __syncwarp();
 }
 
-__global__ void __launch_bounds__(kRasterBlock, 5) k_zb_tiles(ZArgs a, uint64_t n_tiles) {
+// A warp per tile of the non-empty list (the id buffer was set to -1 beside the vertices).
+__global__ void __launch_bounds__(kRasterBlock, 5) k_zb_tiles(ZArgs a) {
   __shared__ OwnerS sm[kWarpsPerBlock][kTileSamples];
   __shared__ ZDer stage[kWarpsPerBlock][32];
   if (overflowed(a)) return;
   const uint32_t lane = threadIdx.x & 31u, w = threadIdx.x / 32;
-  for (uint64_t tile = uint64_t(blockIdx.x) * kWarpsPerBlock + w; tile < n_tiles;
-       tile += uint64_t(gridDim.x) * kWarpsPerBlock) {
+  const uint64_t n = a.ctr[kZTiles];
+  for (uint64_t i = uint64_t(blockIdx.x) * kWarpsPerBlock + w; i < n; i += uint64_t(gridDim.x) * kWarpsPerBlock) {
+    const uint64_t tile = a.tiles[i];
     const uint64_t begin = a.tile_off[tile], end = a.tile_off[tile + 1];
     const uint64_t cut = tmin<uint64_t>(end, begin + a.segment);
     const ZSample s0 = sample_of(a, tile, lane), s1 = sample_of(a, tile, lane + 32);
-    if (begin == end) {
-      if (s0.inside) a.ids[s0.out] = -1;
-      if (s1.inside) a.ids[s1.out] = -1;
-      continue;
-    }
     const uint64_t screen =
         uint64_t(__ballot_sync(0xffffffffu, s0.inside)) | uint64_t(__ballot_sync(0xffffffffu, s1.inside)) << 32;
     sm_clear(sm[w]);
@@ -770,7 +793,7 @@ __global__ void k_zb_rare(ZArgs a) {
 
 __global__ void k_zb_units(ZArgs a) {
   if (overflowed(a)) return;
-  const uint64_t n = a.ctr[kZUnits];
+  const uint64_t n = a.ctr[kZBig] & kZUnitMask;
   TV_WARP_LOOP(u, n) zb_unit(a, u, threadIdx.x & 31u, 32);
 }
 
@@ -780,7 +803,13 @@ __global__ void k_zb_scatter(ZArgs a) {
 }
 #endif
 
-__global__ void k_zb_vertex(ZArgs a, uint64_t n) { TV_GRID_LOOP(i, n) zb_vertex(a, i); }
+// The vertices, and the id buffer set to -1 (every sample no tile list touches keeps it).
+__global__ void k_zb_vertex(ZArgs a, uint64_t n) {
+  TV_GRID_LOOP(i, n) zb_vertex(a, i);
+  int4* ids4 = reinterpret_cast<int4*>(a.ids);
+  TV_GRID_LOOP(j, a.n_samples / 4) ids4[j] = make_int4(-1, -1, -1, -1);
+  TV_GRID_LOOP(k, a.n_samples % 4) a.ids[a.n_samples / 4 * 4 + k] = -1;
+}
 
 // ---- naive ----------------------------------------------------------------------------------
 
@@ -921,11 +950,12 @@ struct ZBufs {
   Buf<int4> vtx;
   Buf<ZRec> rec;
   Buf<uint64_t> ctr;  // kZCounterWords counters, then the tiles' counts (uint32)
-  Buf<uint32_t> tile_off, pair_rec, unit_rec, sorted, owner, tile_need, tile_done, rare;
+  Buf<uint32_t> tile_off, pair_rec, big_slot, big_u0, tiles, sorted, owner, tile_need, tile_done, rare;
   Buf<uint64_t> pair, helper;
   Buf<unsigned long long> zkey, ncount;
   explicit ZBufs(Exec& e) {
-    for (auto* b : {&tile_off, &pair_rec, &unit_rec, &sorted, &owner, &tile_need, &tile_done, &rare}) b->bind(&e);
+    for (auto* b : {&tile_off, &pair_rec, &big_slot, &big_u0, &tiles, &sorted, &owner, &tile_need, &tile_done, &rare})
+      b->bind(&e);
     for (auto* b : {&ctr, &pair, &helper}) b->bind(&e);
     vtx.bind(&e);
     rec.bind(&e);
@@ -936,7 +966,7 @@ struct ZBufs {
 
 // Capacities the frames so far needed (grow-only).
 struct ZCaps {
-  uint64_t rec = 0, pair = 0, unit = 0, helper = 0, rare = 0;
+  uint64_t rec = 0, pair = 0, unit = 0, big = 0, helper = 0, rare = 0;
 };
 
 }  // namespace
@@ -978,6 +1008,7 @@ ZBufferResult run_cuda_zbuffer(const trace::Frame& frame, const CudaConfig& cfg,
   caps.rec = tiny ? cfg.initial_pool : n_tri / 8 + 1024;  // the clipped pool (records n_tri, ...)
   caps.pair = tiny ? cfg.initial_pool : 2 * n_tri + n_tiles + 4096;
   caps.unit = tiny ? cfg.initial_pool : n_tri / 8 + 1024;
+  caps.big = tiny ? cfg.initial_pool : n_tri / 64 + 256;
   caps.helper = tiny ? cfg.initial_pool : caps.pair / 64 + 1024;
   caps.rare = tiny ? cfg.initial_pool : n_tri / 16 + 1024;
   const uint32_t segment = tiny ? 8 : 256;
@@ -1020,7 +1051,10 @@ ZBufferResult run_cuda_zbuffer(const trace::Frame& frame, const CudaConfig& cfg,
     a.tile_off = z.tile_off.need(n_tiles + 1);
     a.pair = z.pair.need(caps.pair + 1);
     a.pair_rec = z.pair_rec.need(caps.pair + 1);
-    a.unit_rec = z.unit_rec.need(caps.unit + 1);
+    a.big_slot = z.big_slot.need(caps.big + 1);
+    a.big_u0 = z.big_u0.need(caps.big + 1);
+    a.tiles = z.tiles.need(n_tiles + 1);
+    a.n_samples = n_samples;
     a.sorted = z.sorted.need(caps.pair + 1);
     a.helper = z.helper.need(caps.helper + 1);
     a.rare = z.rare.need(caps.rare + 1);
@@ -1031,6 +1065,7 @@ ZBufferResult run_cuda_zbuffer(const trace::Frame& frame, const CudaConfig& cfg,
     a.rec_cap = caps.rec;
     a.pair_cap = caps.pair;
     a.unit_cap = caps.unit;
+    a.big_cap = caps.big;
     a.helper_cap = caps.helper;
     a.rare_cap = caps.rare;
     a.width = r.width;
@@ -1047,7 +1082,16 @@ ZBufferResult run_cuda_zbuffer(const trace::Frame& frame, const CudaConfig& cfg,
     a.segment = segment;
     const bool gpu = ex.where == Where::gpu;
     ex.zero(a.ctr, (kZCounterWords + (n_tiles + 1) / 2 + 1) * 8);
-    ex.launch(k_zb_vertex, zb_vertex, p.f.n_vertices, a);
+    ++ex.queued;
+    if (gpu) {
+      const uint64_t want = (std::max<uint64_t>(p.f.n_vertices, n_samples / 4) + 255) / 256;
+      k_zb_vertex<<<uint32_t(std::max<uint64_t>(1, std::min<uint64_t>(want, uint64_t(ex.grid_blocks) * 8))), 256, 0,
+                    ex.main_stream>>>(a, p.f.n_vertices);
+      TV_CUDA(cudaGetLastError());
+    } else {
+      for (uint64_t i = 0; i < p.f.n_vertices; ++i) zb_vertex(a, ex.host_index(i, p.f.n_vertices));
+      std::fill(ids, ids + n_samples, -1);
+    }
     ++ex.queued;
     if (gpu) {
       const uint64_t want = (n_tri + kTriBlock - 1) / kTriBlock;
@@ -1063,7 +1107,7 @@ ZBufferResult run_cuda_zbuffer(const trace::Frame& frame, const CudaConfig& cfg,
       k_zb_units<<<ex.grid_blocks * 4, 256, 0, ex.main_stream>>>(a);
       TV_CUDA(cudaGetLastError());
     } else if (!overflowed(a)) {
-      const uint64_t n = a.ctr[kZUnits];
+      const uint64_t n = a.ctr[kZBig] & kZUnitMask;
       for (uint64_t u = 0; u < n; ++u) zb_unit(a, ex.host_index(u, n), 0, 1);
     }
     marks.mark(1);
@@ -1079,7 +1123,7 @@ ZBufferResult run_cuda_zbuffer(const trace::Frame& frame, const CudaConfig& cfg,
     if (gpu) {
       const uint64_t want = (n_tiles + kWarpsPerBlock - 1) / kWarpsPerBlock;
       k_zb_tiles<<<uint32_t(std::min<uint64_t>(want, uint64_t(ex.grid_blocks) * 16)), kRasterBlock, 0,
-                   ex.main_stream>>>(a, n_tiles);
+                   ex.main_stream>>>(a);
       TV_CUDA(cudaGetLastError());
       k_zb_helpers<<<ex.grid_blocks * 2, kRasterBlock, 0, ex.main_stream>>>(a);
       TV_CUDA(cudaGetLastError());
@@ -1093,12 +1137,14 @@ ZBufferResult run_cuda_zbuffer(const trace::Frame& frame, const CudaConfig& cfg,
     const uint32_t during = ex.syncs;
     ex.download(got, a.ctr, sizeof(got));
     ex.syncs = during;
-    const bool over = got[kZRecords] > caps.rec || got[kZPairs] > caps.pair || got[kZUnits] > caps.unit ||
+    const bool over = got[kZRecords] > caps.rec || got[kZPairs] > caps.pair || (got[kZBig] & kZUnitMask) > caps.unit ||
+                      (got[kZBig] >> kZUnitBits) > caps.big ||
                       got[kZHelpers] > caps.helper || got[kZRare] > caps.rare;
     auto grow = [](uint64_t& cap, uint64_t need) { cap = std::max(cap, need + need / 4 + 16); };
     grow(caps.rec, got[kZRecords]);
     grow(caps.pair, got[kZPairs]);
-    grow(caps.unit, got[kZUnits]);
+    grow(caps.unit, got[kZBig] & kZUnitMask);
+    grow(caps.big, got[kZBig] >> kZUnitBits);
     grow(caps.helper, got[kZHelpers]);
     grow(caps.rare, got[kZRare]);
     return !over;
