@@ -149,11 +149,17 @@ int main(int argc, char** argv) {
           e["max_area_rel_error"] = cmp.is_null() ? json(nullptr) : cmp["max_area_rel_error"];
           // Ratios to the z-buffers of the same frame on the same GPU (> 1: slower than they).
           for (const char* k : {"cuda_zbuffer_ms", "naive_zbuffer_ms", "hw_raster_ms"}) e[k] = st.value(k, json(nullptr));
+          // Runs that timed the tiled z-buffer only (--baselines tiled, 4K 4 spp): the naive one's time
+          // from the baselines phase (its own process, the same trace).
+          if (e["naive_zbuffer_ms"].is_null()) {
+            const json zn = load(sd / "zb_naive/stats.json");
+            if (!zn.is_null()) e["naive_zbuffer_ms"] = zn["total_ms"];
+          }
           // The ratios of the new frame (the headline) and, beside them, of the known frame's graph.
           auto ratio = [&](const char* base, const char* key) {
-            if (num(st, base, 0) > 0) {
-              e[key] = num(e, "total_ms") / num(st, base);
-              e[std::string(key) + "_graph"] = num(e, "graph_total_ms") / num(st, base);
+            if (num(e, base, 0) > 0) {
+              e[key] = num(e, "total_ms") / num(e, base);
+              e[std::string(key) + "_graph"] = num(e, "graph_total_ms") / num(e, base);
             }
           };
           ratio("hw_raster_ms", "hw_raster_ratio");
