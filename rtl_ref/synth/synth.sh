@@ -57,7 +57,9 @@ run_point() { # unit lanes
   {
     echo "flow: $FLOW"
     echo "command: $COMMAND"
-    echo "commit: $(git -C "$ROOT" rev-parse --short=7 HEAD)$(git -C "$ROOT" status --porcelain -- rtl_ref/units rtl_ref/synth | grep -q . && echo ' (rtl_ref/units or rtl_ref/synth modified)')"
+    # the sources: the last commit that changed rtl_ref/units or rtl_ref/synth (HEAD moves with
+    # other work in a shared checkout), and whether they differ from it
+    echo "sources: $(git -C "$ROOT" log -1 --format=%h --abbrev=7 -- rtl_ref/units rtl_ref/synth)$(git -C "$ROOT" status --porcelain -- rtl_ref/units rtl_ref/synth | grep -q . && echo ' with rtl_ref/units or rtl_ref/synth modified')"
     echo "yosys: $($YOSYS -V)"
     echo "machine: $(machine)"
     echo "date: $(date -u +%F)"

@@ -51,6 +51,38 @@ def parse_ltp(path):
     return out
 
 
+def path_segments(path):
+    """The longest path of the .ltp file: (module, start, end, [(instance, gates), ...]) with the
+    gates counted by the instance of the flattened netlist they came from ('' for the module's own)."""
+    best, cur = None, None
+    for line in open(path):
+        m = LTP.match(line)
+        if m:
+            cur = [m.group(1), int(m.group(2)), []]
+            if best is None or cur[1] > best[1]:
+                best = cur
+            continue
+        m = re.match(r"^\s+(\d+|ff): (\S+(?: \[\d+\])?)(?: \(via (\S+)\))?", line)
+        if m and cur is not None:
+            cur[2].append((m.group(1), m.group(2), m.group(3)))
+    if best is None or not best[2]:
+        return None
+    segs = []
+    for idx, _, via in best[2]:
+        if idx in ("0", "ff") or via is None:
+            continue
+        m = re.match(r"^\$flatten\\(.+?)\.(?:\$|\\)", via)
+        inst = m.group(1) if m else ""
+        if segs and segs[-1][0] == inst:
+            segs[-1][1] += 1
+        else:
+            segs.append([inst, 1])
+    name = lambda n: n.lstrip("\\").replace(" [", "[")
+    last = best[2][-1]
+    end = f"the flip-flop `{name(last[1])}`" if last[0] == "ff" else f"`{name(last[1])}`"
+    return best[0], f"`{name(best[2][0][1])}`", end, segs
+
+
 def parse_time(path):
     """(wall s, cpu s, peak KB, exit status, signal line or None)."""
     lines = [l.strip() for l in open(path) if l.strip()]
@@ -115,16 +147,18 @@ def main():
         for lanes in a.lanes:
             base = os.path.join(a.logs, f"{unit}_x{lanes}")
             if not os.path.exists(base + ".meta"):
-                rows.append(f"| {unit} | {lanes} | not run | | | | | | |")
+                rows.append(f"| {unit} | {lanes} | not run | | | | | | | |")
                 continue
             meta = dict(l.rstrip("\n").split(": ", 1) for l in open(base + ".meta") if ": " in l)
             for k, v in meta.items():
                 metas.setdefault(k, {}).setdefault(v, []).append(f"{unit} ×{lanes}")
-            if not os.path.exists(base + ".time"):
-                rows.append(f"| {unit} | {lanes} | not finished (no time record: still running or stopped) | | | | | | |")
+            if not os.path.exists(base + ".time") or os.path.getsize(base + ".time") == 0:
+                rows.append(f"| {unit} | {lanes} | not finished (no time record: still running, or stopped) | | | | | | | |")
                 continue
             wall, cpu, peak, rc, sig = parse_time(base + ".time")
-            tail = f"{wall:,.0f} | {cpu:,.0f} | {fmt(round(peak / 1024))} |"
+            secs = lambda t: f"{t:,.0f}" if t >= 10 else f"{t:.1f}"
+            abc = [int(m.group(1)) for m in re.finditer(r"^Extracted (\d+) gates", open(base + ".log", errors="replace").read(), re.M)]
+            tail = f"{fmt(max(abc)) if abc else '–'} | {secs(wall)} | {secs(cpu)} | {fmt(round(peak / 1024))} |"
             if rc != 0 or sig or not os.path.exists(base + ".ltp"):
                 why = sig or f"yosys exited {rc}"
                 err = [l.strip() for l in open(base + ".log", errors="replace") if "ERROR" in l or "bad_alloc" in l]
@@ -139,13 +173,14 @@ def main():
             rows.append(f"| {unit} | {lanes} | {fmt(cells)} | {fmt(ffs)} | {max(ltp.values())} | "
                         f"{lrs if lrs else '–'} | {tail}")
             if unit not in breakdown and meta.get("flow") == "hierarchical":
-                breakdown[unit] = (lanes, own, inst, parse_ltp(base + ".ltp_modules"), ltp, top)
+                breakdown[unit] = (lanes, own, inst, parse_ltp(base + ".ltp_modules"), ltp, top,
+                                   path_segments(base + ".ltp"))
 
     o = []
     o.append("# Synthesis of rtl_ref's units (yosys, generic cells)\n")
     o.append("Written by `rtl_ref/synth/synth.sh` from its logs (`rtl_ref/README.md`, \"Synthesis\"); "
              "not edited by hand.\n")
-    for k in ("command", "flow", "commit", "yosys", "machine", "date"):
+    for k in ("command", "flow", "sources", "yosys", "machine", "date"):
         vals = metas.get(k, {})
         if len(vals) == 1:
             o.append(f"- {k}: `{next(iter(vals))}`" if k == "command" else f"- {k}: {next(iter(vals))}")
@@ -161,9 +196,10 @@ def main():
              "port to a register or port (`ltp -noff`) in the lane's netlist flattened after mapping "
              "(the unit's lanes share no logic), or in the whole flattened unit. Wall s: elapsed time "
              "of yosys and its ABC runs (under nice on a shared machine); CPU s: their user + system "
-             "time; peak MB: the largest resident set of yosys or of any one ABC process.\n")
-    o.append("| unit | lanes | cells | flip-flops | longest path (gates) | list RAMs | wall s | CPU s | peak MB |")
-    o.append("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
+             "time; peak MB: the largest resident set of yosys or of any one ABC process. Largest ABC run: "
+             "the most gates yosys handed to one ABC call (one module's logic).\n")
+    o.append("| unit | lanes | cells | flip-flops | longest path (gates) | list RAMs | largest ABC run (gates) | wall s | CPU s | peak MB |")
+    o.append("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     o.extend(rows)
     if breakdown:
         o.append("\n## Modules (hierarchical flow)\n")
@@ -173,7 +209,7 @@ def main():
                  "module without submodules; for a lane, its netlist flattened with its blocks.\n")
         o.append("| unit | module | instances | cells (own) | flip-flops (own) | longest path (gates) |")
         o.append("|---|---|---:|---:|---:|---:|")
-        for unit, (lanes, own, inst, ltp_m, ltp_f, top) in breakdown.items():
+        for unit, (lanes, own, inst, ltp_m, ltp_f, top, _) in breakdown.items():
             for name in sorted(own, key=lambda n: (n != top, -own[n][0])):
                 g, ff, lr, kids = own[name]
                 if name in ltp_f and name != top:
@@ -184,6 +220,16 @@ def main():
                     lp = "–"
                 extra = f", {lr} ListRam" if lr else ""
                 o.append(f"| {unit} ×{lanes} | {clean(name)} | {inst[name]} | {fmt(g)}{extra} | {fmt(ff)} | {lp} |")
+        o.append("\nThe longest path, gate by gate, by where its gates came from: an instance of a "
+                 "block (its instance path in the lane, e.g. `vert[7].u`) or the module's own logic; a path "
+                 "starts at a register's output or an input port and ends at a register's input or an "
+                 "output port.\n")
+        for unit, (lanes, own, inst, ltp_m, ltp_f, top, segs) in breakdown.items():
+            if segs is None:
+                continue
+            mod, start, end, parts = segs
+            desc = " + ".join(f"{n} in `{i}`" if i else f"{n} in {clean(mod)}" for i, n in parts)
+            o.append(f"- {unit}: {sum(n for _, n in parts)} gates in {clean(mod)}, from {start} to {end}: {desc}.")
     open(a.out, "w").write("\n".join(o) + "\n")
 
 
