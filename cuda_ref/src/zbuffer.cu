@@ -701,6 +701,7 @@ __device__ inline void warp_part(const ZArgs& a, uint64_t tile, uint64_t begin, 
       }
       __syncwarp();  // a round's writes before the next round's reads (the votes order no memory)
     }
+    __syncwarp();  // the staged records before phase B reads them (also when there was no round)
     if (lm) {
       Owner o0{sm[lane].n, sm[lane].area, sm[lane].order, sm[lane].slot};
       Owner o1{sm[lane + 32].n, sm[lane + 32].area, sm[lane + 32].order, sm[lane + 32].slot};
