@@ -191,10 +191,16 @@ struct Plane {
   double falpha, fbeta, fgamma, farea;
 };
 
-TV_HD inline Plane plane_of(const Vtx& v0, const Vtx& v1, const Vtx& v2) {
-  Plane p{};
+// The plane's integer part, for any vertices (area 0: degenerate; the coefficients are then
+// whatever the products give, and no caller may use them).
+struct IntPlane {
+  int64_t alpha, beta;
+  I128 gamma;
+  int64_t area;
+};
+
+TV_HD inline IntPlane int_plane_of(const Vtx& v0, const Vtx& v1, const Vtx& v2) {
   int64_t area = orient2d(v0.xy(), v1.xy(), v2.xy());
-  if (area == 0) return p;
   const int64_t dx1 = int64_t{v1.x} - v0.x, dy1 = int64_t{v1.y} - v0.y, dz1 = int64_t{v1.z} - v0.z;
   const int64_t dx2 = int64_t{v2.x} - v0.x, dy2 = int64_t{v2.y} - v0.y, dz2 = int64_t{v2.z} - v0.z;
   // Normal d1 x d2 has z-component area; |dy dz| <= 2^24 2^32, so alpha, beta <= 2^57.
@@ -207,14 +213,21 @@ TV_HD inline Plane plane_of(const Vtx& v0, const Vtx& v1, const Vtx& v2) {
     beta = -beta;
     gamma = -gamma;
   }
-  p.alpha = alpha;
-  p.beta = beta;
-  p.gamma = gamma;
-  p.area = area;
-  p.falpha = i64_to_double(alpha);
-  p.fbeta = i64_to_double(beta);
-  p.fgamma = i128_to_double(gamma);
-  p.farea = i64_to_double(area);
+  return {alpha, beta, gamma, area};
+}
+
+TV_HD inline Plane plane_of(const Vtx& v0, const Vtx& v1, const Vtx& v2) {
+  Plane p{};
+  const IntPlane q = int_plane_of(v0, v1, v2);
+  if (q.area == 0) return p;
+  p.alpha = q.alpha;
+  p.beta = q.beta;
+  p.gamma = q.gamma;
+  p.area = q.area;
+  p.falpha = i64_to_double(q.alpha);
+  p.fbeta = i64_to_double(q.beta);
+  p.fgamma = i128_to_double(q.gamma);
+  p.farea = i64_to_double(q.area);
   return p;
 }
 

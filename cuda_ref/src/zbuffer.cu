@@ -438,22 +438,11 @@ TV_HD inline ZDer derive(const ZRec& r, uint32_t slot, uint32_t sb) {
     d.c[k] = e.e[k].c;
     d.owns |= e.e[k].owns_boundary() ? 1u << k : 0u;
   }
-  // exact.cuh plane_of, its integer part.
-  int64_t area = orient2d(v0.xy(), v1.xy(), v2.xy());
-  const int64_t dx1 = int64_t{v1.x} - v0.x, dy1 = int64_t{v1.y} - v0.y, dz1 = int64_t{v1.z} - v0.z;
-  const int64_t dx2 = int64_t{v2.x} - v0.x, dy2 = int64_t{v2.y} - v0.y, dz2 = int64_t{v2.z} - v0.z;
-  int64_t alpha = -(dy1 * dz2 - dz1 * dy2), beta = -(dz1 * dx2 - dx1 * dz2);
-  I128 gamma = mul64(area, int64_t{v0.z}) - mul64(alpha, v0.x) - mul64(beta, v0.y);
-  if (area < 0) {
-    area = -area;
-    alpha = -alpha;
-    beta = -beta;
-    gamma = -gamma;
-  }
-  d.alpha = alpha;
-  d.beta = beta;
-  d.gamma = gamma;
-  d.area = area;
+  const exact::IntPlane q = exact::int_plane_of(v0, v1, v2);
+  d.alpha = q.alpha;
+  d.beta = q.beta;
+  d.gamma = q.gamma;
+  d.area = q.area;
   // The pixel box (not cut at the screen: samples outside the screen are never written).
   d.px0 = tmin(tmin(v0.x, v1.x), v2.x) >> sb;
   d.py0 = tmin(tmin(v0.y, v1.y), v2.y) >> sb;

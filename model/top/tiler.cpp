@@ -76,7 +76,7 @@ void Tiler::build_core(uint32_t k, int render_depth, bool per_primitive) {
   if (uses_hsr(config.sim.mode)) c.hsr = std::make_unique<HsrUnit>(n("hsr").c_str(), m_env, config.hsr);
   c.fragment = std::make_unique<FragmentUnit>(n("fragment").c_str(), m_env, config.fragment, *m_pb);
   c.writer = std::make_unique<TileWriter>(n("writer").c_str(), m_env, config.writer, config.framebuffer);
-  c.writer->closed = &m_scheduler->tile_closed();
+  if (config.sim.fidelity == Fidelity::automatic) c.writer->closed = &m_scheduler->tile_closed();
 
   auto fifo = [&](const std::string& name, int depth) {
     c.fifos.push_back(std::make_unique<OccupancyFifo<Item>>((name + sfx).c_str(), depth));

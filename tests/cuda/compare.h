@@ -4,6 +4,8 @@
 #include <cstdint>
 #include <string>
 
+#include <gtest/gtest.h>
+
 #include "tilevis/cuda_ref.h"
 #include "visibility/truth.h"
 #include "visibility/golden.h"
@@ -19,6 +21,15 @@ struct Diff {
   std::string totals;
   double agreement() const { return samples_compared ? 1.0 - double(id_mismatches) / double(samples_compared) : 1.0; }
 };
+
+// Equal to golden bit for bit: ids, every tile cell, every area, the totals.
+inline void expect_bit_identical(const Diff& d) {
+  EXPECT_GT(d.samples_compared, 0u);
+  EXPECT_EQ(d.id_mismatches, 0u);
+  EXPECT_EQ(d.tile_cell_mismatches, 0u) << d.first_tile_mismatch;
+  EXPECT_EQ(d.area_bit_mismatches, 0u);
+  EXPECT_TRUE(d.totals_equal) << d.totals;
+}
 
 // The z-buffer truth's ids (exact depth), for the CUDA z-buffer rasterisers.
 inline std::vector<int32_t> truth_ids_of(const trace::Frame& f) {

@@ -31,11 +31,7 @@ TEST_P(ExactGpu, BitIdenticalToGolden) {
   cfg.runs = 3;
   const auto r = cuda::run_cuda(f, cfg);
   const auto d = ct::diff(ct::golden_of(f, tile, tile), r);
-  EXPECT_GT(d.samples_compared, 0u);
-  EXPECT_EQ(d.id_mismatches, 0u);
-  EXPECT_EQ(d.tile_cell_mismatches, 0u) << d.first_tile_mismatch;
-  EXPECT_EQ(d.area_bit_mismatches, 0u);
-  EXPECT_TRUE(d.totals_equal) << d.totals;
+  ct::expect_bit_identical(d);
   EXPECT_EQ(r.stage_ms.size(), 8u);  // seven on the main chain, the unclipped pieces beside clip
   EXPECT_EQ(r.stream_stage_ms.size(), 8u);
   EXPECT_GT(r.stream_total_ms, 0.0);
@@ -180,11 +176,7 @@ TEST_P(HybridGpu, BitIdenticalToGoldenHybrid) {
   cfg.runs = 2;
   const auto r = cuda::run_cuda(f, cfg);
   const auto d = ct::diff(ct::golden_of(f, tile, tile, "hybrid"), r);
-  EXPECT_GT(d.samples_compared, 0u);
-  EXPECT_EQ(d.id_mismatches, 0u);
-  EXPECT_EQ(d.tile_cell_mismatches, 0u) << d.first_tile_mismatch;
-  EXPECT_EQ(d.area_bit_mismatches, 0u);
-  EXPECT_TRUE(d.totals_equal) << d.totals;
+  ct::expect_bit_identical(d);
   // The same run in float: the verdicts are exact, so they and the per-pixel tiles agree.
   cfg.precision = cuda::Precision::floating;
   const auto rf = cuda::run_cuda(f, cfg);
@@ -243,11 +235,7 @@ TEST(GpuBuiltInScenes, HybridEqualsGoldenHybridAndFloatKeepsSigns) {
     const auto r = cuda::run_cuda(frames[k], cfg);
     const vis::GoldenResult g = golden[k].get();
     const auto d = ct::diff(g, r);
-    EXPECT_GT(d.samples_compared, 0u);
-    EXPECT_EQ(d.id_mismatches, 0u);
-    EXPECT_EQ(d.tile_cell_mismatches, 0u) << d.first_tile_mismatch;
-    EXPECT_EQ(d.area_bit_mismatches, 0u);
-    EXPECT_TRUE(d.totals_equal) << d.totals;
+    ct::expect_bit_identical(d);
     std::printf("%-18s hybrid: %llu samples, %llu id / %llu tile-cell / %llu area mismatches, totals %s; "
                 "%llu per-pixel tiles; float: %llu exact-region areas, %llu negative, %llu anomalies\n",
                 name.c_str(), (unsigned long long)d.samples_compared, (unsigned long long)d.id_mismatches,

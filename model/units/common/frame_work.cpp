@@ -318,7 +318,7 @@ void FrameWork::prepare_segment(uint32_t k) {
 }
 
 uint32_t FrameWork::tile_triangle_count(uint32_t tile) const {
-  return uint32_t(uses_evu(m_cfg.mode) ? m_seg->golden->tile_triangles(tile).size() : m_seg->lists[tile].size());
+  return uint32_t(uses_evu(m_cfg.mode) ? m_seg->golden->frame().tile_triangles(tile).size() : m_seg->lists[tile].size());
 }
 
 TileWork* FrameWork::open_tile(uint32_t tile) {

@@ -66,6 +66,16 @@ uint32_t TileScheduler::free_core() {
   }
 }
 
+uint32_t TileScheduler::send(uint32_t segment, uint32_t tile, size_t i) {
+  const uint32_t core = m_cfg.policy == Schedule::dynamic ? free_core() : static_core(i);
+  Item it;
+  it.segment = segment;
+  it.tile = m_work.open_tile(tile);
+  count(core);
+  push(to_core[core], it);
+  return core;
+}
+
 void TileScheduler::dispatch() {
   for (;;) {
     const uint32_t k = ready.read();
@@ -74,14 +84,7 @@ void TileScheduler::dispatch() {
     if (m_cfg.sampled) {
       dispatch_sampled(k, tiles);
     } else {
-      for (size_t i = 0; i < tiles.size(); ++i) {
-        const uint32_t core = next_core(i);
-        Item it;
-        it.segment = k;
-        it.tile = m_work.open_tile(tiles[i]);
-        count(core);
-        push(to_core[core], it);
-      }
+      for (size_t i = 0; i < tiles.size(); ++i) send(k, tiles[i], i);
     }
     Item end;
     end.kind = Item::Kind::segment_end;
@@ -133,13 +136,7 @@ void TileScheduler::dispatch_sampled(uint32_t segment, const std::vector<uint32_
     std::vector<Sent> sent;
     for (size_t i = 0; i < order_pos.size(); ++i) {
       const size_t p = order_pos[i].first;
-      const uint32_t core = next_core(i);
-      Item it;
-      it.segment = segment;
-      it.tile = m_work.open_tile(tiles[p]);
-      count(core);
-      push(to_core[core], it);
-      sent.push_back({tiles[p], core, order_pos[i].second, triangles[p]});
+      sent.push_back({tiles[p], send(segment, tiles[p], i), order_pos[i].second, triangles[p]});
     }
     // The round ends when its last tile is written: every core empty again.
     for (const Sent& s : sent)

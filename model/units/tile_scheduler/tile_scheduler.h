@@ -60,7 +60,8 @@ class TileScheduler : public UnitBase {
   void dispatch_sampled(uint32_t segment, const std::vector<uint32_t>& tiles);
   void join();
   uint32_t free_core();
-  uint32_t next_core(size_t i) { return m_cfg.policy == Schedule::dynamic ? free_core() : static_core(i); }
+  // Opens `tile` and hands it to a core (the i-th of its dispatch, for static policies); returns the core.
+  uint32_t send(uint32_t segment, uint32_t tile, size_t i);
 
   TileSchedulerConfig m_cfg;
   uint64_t m_frame_end = 0;
