@@ -113,6 +113,8 @@ Registry::Registry() {
           "fidelity auto: consecutive tiles (scheduler order) per sampling unit");
   TV_UINT("sim.sample_first", scheduler.sampling.first_clusters, "clusters", 2, 1u << 20,
           "fidelity auto: clusters in the first round of a segment's sample");
+  TV_UINT("sim.sample_warm", scheduler.sampling.warm_tiles, "tiles/core", 0, 1u << 10,
+          "fidelity auto: tiles per core at the start of a cluster that follows an unsimulated tile, simulated but not measured (detailed warming)");
   TV_REAL("sim.sample_certainty", scheduler.sampling.certainty_ratio, "ratio", 1.0, 1e9,
           "fidelity auto: tiles with more than this many times the mean binned triangles are all simulated");
   TV_UINT("sim.sample_seed", scheduler.sampling.seed, "", 0, std::numeric_limits<uint64_t>::max(),

@@ -17,17 +17,70 @@ double normal_quantile(double confidence) {
   return 0.5 * (lo + hi);
 }
 
+double student_quantile(double confidence, double dof) {
+  if (!(confidence > 0.0 && confidence < 1.0)) throw std::invalid_argument("confidence must lie in (0, 1)");
+  if (!(dof >= 1.0)) throw std::invalid_argument("degrees of freedom must be at least 1");
+  // P(|T| <= t) = 2 * integral of the density over [0, t] (Simpson, 2000 steps), bisected.
+  const double c = std::exp(std::lgamma((dof + 1) / 2) - std::lgamma(dof / 2)) / std::sqrt(dof * M_PI);
+  auto mass = [&](double t) {
+    const int n = 2000;
+    const double h = t / n;
+    double s = 0;
+    for (int i = 0; i <= n; ++i) {
+      const double f = c * std::pow(1.0 + (i * h) * (i * h) / dof, -(dof + 1) / 2);
+      s += f * (i == 0 || i == n ? 1 : (i % 2 ? 4 : 2));
+    }
+    return 2.0 * s * h / 3.0;
+  };
+  double lo = 0.0, hi = 1.0;
+  while (mass(hi) < confidence) hi *= 2;
+  for (int i = 0; i < 60; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (mass(mid) < confidence ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
 TileSampler::TileSampler(std::vector<double> triangles, const SamplingConfig& config, uint64_t stream)
     : m_tiles(triangles.size()), m_cfg(config), m_z(normal_quantile(config.confidence)) {
   if (config.cluster_tiles == 0) throw std::invalid_argument("sampling: cluster_tiles must be at least 1");
   for (double t : triangles) m_triangles += t;
-  const uint64_t k = (m_tiles + config.cluster_tiles - 1) / config.cluster_tiles;
-  m_order.resize(k);
-  for (uint64_t i = 0; i < k; ++i) m_order[i] = i;
+  m_clusters = (m_tiles + config.cluster_tiles - 1) / config.cluster_tiles;
+  // Strata: the clusters sorted by their triangles (ties by position), cut where the running
+  // total of (triangles + tiles) passes each equal share, at least two clusters a stratum:
+  // a few heavy clusters get strata of their own instead of hiding among light ones.
+  std::vector<double> x(m_clusters, 0.0);
+  for (uint64_t c = 0; c < m_clusters; ++c)
+    for (uint64_t p = cluster_begin(c); p < cluster_end(c); ++p) x[c] += triangles[p];
+  std::vector<uint64_t> by_x(m_clusters);
+  for (uint64_t c = 0; c < m_clusters; ++c) by_x[c] = c;
+  std::stable_sort(by_x.begin(), by_x.end(), [&](uint64_t a, uint64_t b) { return x[a] < x[b]; });
+  const uint64_t h_count = std::max<uint64_t>(1, std::min<uint64_t>(std::max<uint32_t>(1, config.strata), m_clusters / 2));
+  m_strata.resize(m_clusters ? h_count : 0);
+  m_stratum_of.assign(m_clusters, 0);
+  double total = 0;
+  for (uint64_t c = 0; c < m_clusters; ++c) total += x[c] + double(cluster_end(c) - cluster_begin(c));
+  double running = 0;
+  uint32_t h = 0;
+  for (uint64_t i = 0; i < m_clusters; ++i) {
+    const uint64_t c = by_x[i];
+    // Close stratum h when it has its share and two clusters, and enough remain for the rest.
+    const uint64_t in_h = m_strata[h].order.size(), left = m_clusters - i;
+    if (h + 1 < h_count && in_h >= 2 && running >= total * double(h + 1) / double(h_count) &&
+        left >= 2 * (h_count - h - 1))
+      ++h;
+    m_stratum_of[c] = h;
+    m_strata[h].order.push_back(c);
+    running += x[c] + double(cluster_end(c) - cluster_begin(c));
+  }
+  while (!m_strata.empty() && m_strata.back().order.empty()) m_strata.pop_back();
   // Fisher-Yates with the generator's raw output: the same permutation on every platform
   // (std::shuffle's and the distributions' algorithms are the library's choice).
   std::mt19937_64 rng(config.seed * 0x9e3779b97f4a7c15ull + stream);
-  for (uint64_t i = k; i > 1; --i) std::swap(m_order[i - 1], m_order[rng() % i]);
+  for (Stratum& st : m_strata) {
+    std::sort(st.order.begin(), st.order.end());
+    for (uint64_t i = st.order.size(); i > 1; --i) std::swap(st.order[i - 1], st.order[rng() % i]);
+  }
 }
 
 uint64_t TileSampler::cluster_end(uint64_t c) const {
@@ -35,17 +88,52 @@ uint64_t TileSampler::cluster_end(uint64_t c) const {
 }
 
 std::vector<uint64_t> TileSampler::next_round(uint64_t count) {
-  count = std::min<uint64_t>(count, m_order.size() - m_taken);
-  std::vector<uint64_t> r(m_order.begin() + int64_t(m_taken), m_order.begin() + int64_t(m_taken + count));
-  m_taken += count;
+  count = std::min<uint64_t>(count, m_clusters - m_taken);
+  // Allocation weights: K_h s_h once every stratum has a variance, else K_h (proportional).
+  const Fit f = fit(1);
+  std::vector<double> w(m_strata.size());
+  bool neyman = f.variance_known;
+  for (size_t h = 0; h < m_strata.size(); ++h) {
+    neyman = neyman && f.n[h] >= 2;
+    w[h] = double(m_strata[h].order.size());
+  }
+  double sw = 0;
+  if (neyman) {
+    for (size_t h = 0; h < m_strata.size(); ++h) sw += w[h] * std::sqrt(f.s2[h]);
+    if (sw > 0)
+      for (size_t h = 0; h < m_strata.size(); ++h) w[h] *= std::sqrt(f.s2[h]);
+  }
+  // Greedy: each next cluster to the open stratum with fewer than two, else the largest
+  // weight per cluster taken (w_h / (n_h + 1)); ties to the lower stratum.
+  std::vector<uint64_t> take(m_strata.size(), 0);
+  for (uint64_t k = 0; k < count; ++k) {
+    size_t best = m_strata.size();
+    double best_score = -1;
+    for (size_t h = 0; h < m_strata.size(); ++h) {
+      const uint64_t n = m_strata[h].taken + take[h];
+      if (n >= m_strata[h].order.size()) continue;
+      const double score = n < 2 ? 1e300 / double(n + 1) : w[h] / double(n + 1);
+      if (score > best_score) best = h, best_score = score;
+    }
+    if (best == m_strata.size()) break;
+    ++take[best];
+  }
+  std::vector<uint64_t> r;
+  for (size_t h = 0; h < m_strata.size(); ++h) {
+    Stratum& st = m_strata[h];
+    r.insert(r.end(), st.order.begin() + int64_t(st.taken), st.order.begin() + int64_t(st.taken + take[h]));
+    st.taken += take[h];
+    m_taken += take[h];
+  }
   std::sort(r.begin(), r.end());
   return r;
 }
 
-void TileSampler::observe_cluster(double occupancy_sum, uint64_t tiles_observed, double triangles) {
+void TileSampler::observe_cluster(uint64_t c, double occupancy_sum, uint64_t tiles_observed, double triangles) {
   m_y.push_back(occupancy_sum);
   m_m.push_back(double(tiles_observed));
   m_x.push_back(triangles);
+  m_h.push_back(m_stratum_of.at(c));
 }
 
 void TileSampler::observe_exact(double cycles) { m_exact_sum += cycles; }
@@ -57,57 +145,90 @@ void TileSampler::observe_fill(double cycles) {
 
 TileSampler::Fit TileSampler::fit(uint32_t cores) const {
   Fit f;
-  const size_t n = m_y.size();
+  const size_t n = m_y.size(), hn = m_strata.size();
+  f.n.assign(hn, 0);
+  f.s2.assign(hn, 0.0);
+  for (uint32_t h : m_h) ++f.n[h];
+  // Design weights K_h / n_h.
+  std::vector<double> d(hn, 0.0);
+  for (size_t h = 0; h < hn; ++h) d[h] = f.n[h] ? double(m_strata[h].order.size()) / double(f.n[h]) : 0.0;
   double mm = 0, mx = 0, xx = 0, my = 0, xy = 0;
   for (size_t j = 0; j < n; ++j) {
-    mm += m_m[j] * m_m[j];
-    mx += m_m[j] * m_x[j];
-    xx += m_x[j] * m_x[j];
-    my += m_m[j] * m_y[j];
-    xy += m_x[j] * m_y[j];
+    const double wj = d[m_h[j]];
+    mm += wj * m_m[j] * m_m[j];
+    mx += wj * m_m[j] * m_x[j];
+    xx += wj * m_x[j] * m_x[j];
+    my += wj * m_m[j] * m_y[j];
+    xy += wj * m_x[j] * m_y[j];
   }
   const double det = mm * xx - mx * mx;
-  size_t params = 2;
   if (n >= 3 && det > 1e-9 * mm * xx) {
     f.a = (my * xx - xy * mx) / det;
     f.b = (xy * mm - my * mx) / det;
   } else {  // the auxiliaries are proportional (or too few clusters): a ratio to the tile count
     f.a = mm > 0 ? my / mm : 0.0;
-    params = 1;
   }
-  double e2 = 0;
+  // Per stratum: the residuals' variance about their stratum mean.
+  std::vector<double> sum(hn, 0.0), sum2(hn, 0.0);
+  double pooled = 0;
+  uint64_t pooled_dof = 0;
   for (size_t j = 0; j < n; ++j) {
     const double e = m_y[j] - f.a * m_m[j] - f.b * m_x[j];
-    e2 += e * e;
+    sum[m_h[j]] += e;
+    sum2[m_h[j]] += e * e;
   }
-  f.s2 = n > params ? e2 / double(n - params) : 0.0;
+  for (size_t h = 0; h < hn; ++h)
+    if (f.n[h] >= 2) {
+      const double ss = std::max(0.0, sum2[h] - sum[h] * sum[h] / double(f.n[h]));
+      f.s2[h] = ss / double(f.n[h] - 1);
+      pooled += ss;
+      pooled_dof += f.n[h] - 1;
+    }
+  // A stratum with one cluster observed (of more) borrows the pooled variance; with none,
+  // nothing bounds it.
+  for (size_t h = 0; h < hn; ++h) {
+    if (f.n[h] >= m_strata[h].order.size() || f.n[h] >= 2) continue;
+    if (f.n[h] == 1 && pooled_dof > 0) f.s2[h] = pooled / double(pooled_dof);
+    else f.variance_known = false;
+  }
   // The population's tiles and triangles less the cores' first tiles (their cost is the fill).
   const double c = std::min<double>(std::max<uint32_t>(cores, 1), double(m_tiles));
   const double tiles = double(m_tiles) - c;
   const double triangles = m_tiles ? m_triangles * tiles / double(m_tiles) : 0.0;
-  f.total = f.a * tiles + f.b * triangles;
+  // The generalised regression estimator: the fit's prediction plus the residuals expanded
+  // by their design weights (zero where the model holds; it corrects a misspecified model).
+  double residual_total = 0;
+  for (size_t j = 0; j < n; ++j) residual_total += d[m_h[j]] * (m_y[j] - f.a * m_m[j] - f.b * m_x[j]);
+  f.total = f.a * tiles + f.b * triangles + residual_total;
   return f;
+}
+
+double TileSampler::variance(const Fit& f) const {
+  double v = 0;
+  for (size_t h = 0; h < m_strata.size(); ++h) {
+    const double k = double(m_strata[h].order.size()), n = double(f.n[h]);
+    if (n > 0 && n < k) v += k * k * (1.0 - n / k) * f.s2[h] / n;
+  }
+  return v;
 }
 
 RenderEstimate TileSampler::estimate(uint32_t cores) const {
   RenderEstimate e;
   e.tiles = m_tiles;
-  e.clusters = m_order.size();
+  e.clusters = m_clusters;
   e.clusters_observed = m_taken;
-  for (uint64_t i = 0; i < m_taken; ++i) {
-    const uint64_t c = m_order[i];
-    e.tiles_observed += cluster_end(c) - cluster_begin(c);
-  }
-  e.complete = m_taken == m_order.size();
+  for (const Stratum& st : m_strata)
+    for (uint64_t i = 0; i < st.taken; ++i) e.tiles_observed += cluster_end(st.order[i]) - cluster_begin(st.order[i]);
+  e.complete = m_taken == m_clusters;
   const Fit f = fit(cores);
   const double fill = m_fills ? m_fill_sum / double(m_fills) : 0.0;
   const double per_core = 1.0 / double(std::max<uint32_t>(cores, 1));
   e.cycles = fill + (std::max(0.0, f.total) + m_exact_sum) * per_core;
-  const size_t n = m_y.size();
-  const double k = double(m_order.size());
-  if (!e.complete && n >= 3) {
-    const double fpc = 1.0 - double(n) / k;
-    e.half_width = m_z * per_core * k * std::sqrt(std::max(0.0, fpc * f.s2 / double(n)));
+  if (!e.complete && m_y.size() >= 3 && f.variance_known) {
+    // Student's t on the residuals' degrees of freedom: two to four clusters a stratum
+    // estimate its variance loosely (the normal quantile covered 85 % at 95 % nominal).
+    const double dof = std::max(1.0, double(m_y.size()) - double(m_strata.size()));
+    e.half_width = student_quantile(m_cfg.confidence, dof) * per_core * std::sqrt(variance(f));
   } else if (!e.complete) {
     e.half_width = e.cycles;  // too few observations to bound anything
   }
@@ -115,15 +236,22 @@ RenderEstimate TileSampler::estimate(uint32_t cores) const {
 }
 
 uint64_t TileSampler::clusters_needed(double target, uint32_t cores) const {
-  const uint64_t k = m_order.size();
+  const uint64_t k = m_clusters;
   if (m_taken >= k) return k;
-  const size_t n = m_y.size();
-  if (n < 3) return std::min<uint64_t>(k, std::max<uint64_t>(m_taken + 3, 2 * m_taken));
-  const double s2 = fit(cores).s2;
-  const double a = m_z * double(k) / double(std::max<uint32_t>(cores, 1));
-  if (s2 <= 0) return std::min<uint64_t>(k, m_taken + 1);
-  // (1/n - 1/K) * a^2 * s2 <= target^2  <=>  n >= 1 / (target^2 / (a^2 s2) + 1/K)
-  const double need = target > 0 ? 1.0 / (target * target / (a * a * s2) + 1.0 / double(k)) : double(k);
+  const Fit f = fit(cores);
+  if (m_y.size() < 3 || !f.variance_known)
+    return std::min<uint64_t>(k, std::max<uint64_t>(m_taken + 3, 2 * m_taken));
+  // Neyman allocation: V(n) = (sum K_h s_h)^2 / n - sum K_h s_h^2, on the estimate's scale.
+  const double scale = m_z / double(std::max<uint32_t>(cores, 1));
+  double a = 0, b = 0;
+  for (size_t h = 0; h < m_strata.size(); ++h) {
+    const double kh = double(m_strata[h].order.size()), sh = std::sqrt(f.s2[h]);
+    a += kh * sh;
+    b += kh * sh * sh;
+  }
+  if (a <= 0) return std::min<uint64_t>(k, m_taken + 1);
+  const double v_target = target > 0 ? (target / scale) * (target / scale) : 0.0;
+  const double need = v_target + b > 0 ? a * a / (v_target + b) : double(k);
   const uint64_t n_need = uint64_t(std::ceil(need));
   return std::min<uint64_t>(k, std::max<uint64_t>(n_need, m_taken + 1));
 }

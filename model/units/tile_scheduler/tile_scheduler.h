@@ -73,6 +73,7 @@ class TileScheduler : public UnitBase {
     uint32_t segment = 0;
     RenderEstimate estimate;
     uint64_t rounds = 0, simulated_render = 0, start_cycle = 0, certain_tiles = 0;
+    uint64_t warmup_tiles = 0;  // simulated for detailed warming, not measured
   };
   std::vector<SegmentSample> m_samples;
 };
