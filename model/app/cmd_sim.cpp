@@ -61,11 +61,18 @@ int run_sim(const SimArgs& a) {
   sim::write_sim_outputs(out, a.out);
   for (const std::string& r : out.systemc_reports) fmt::print(stderr, "tilevis: systemc: {}\n", r);
   const auto& tot = out.result.stats.at("totals");
-  fmt::print("sim {} frame {} ({} mode, fidelity {}, {}x{} tiles): {} cycles, {} fragments shaded of {} generated, "
+  // Fidelity auto: the cycles are an estimate with an interval; the counts cover what was simulated.
+  std::string cycles = fmt::format("{} cycles", out.cycles), scope;
+  if (const auto& s = out.result.stats.at("sampling"); !s.is_null()) {
+    cycles = fmt::format("{} cycles (estimated, +/- {:.2f} %)", out.cycles, 100.0 * s.at("relative_half_width").get<double>());
+    scope = fmt::format(" in the {} of {} tiles simulated", s.at("tiles_simulated").get<uint64_t>(),
+                        s.at("tiles").get<uint64_t>());
+  }
+  fmt::print("sim {} frame {} ({} mode, fidelity {}, {}x{} tiles): {}, {} fragments shaded of {} generated{}, "
              "parameter buffer {} B ({} partial renders), DRAM {} B, {:.3f} s host -> {}\n",
              a.trace, a.frame, sim::to_string(cfg.sim.mode), sim::to_string(cfg.sim.fidelity), cfg.sim.tile_width,
-             cfg.sim.tile_height, out.cycles, tot.at("fragments_shaded").get<uint64_t>(),
-             tot.at("fragments_generated").get<uint64_t>(), tot.at("param_buffer_bytes").get<uint64_t>(),
+             cfg.sim.tile_height, cycles, tot.at("fragments_shaded").get<uint64_t>(),
+             tot.at("fragments_generated").get<uint64_t>(), scope, tot.at("param_buffer_bytes").get<uint64_t>(),
              tot.at("partial_renders").get<uint64_t>(), tot.at("dram_bytes").get<uint64_t>(), out.host_seconds, a.out);
   return 0;
 #endif

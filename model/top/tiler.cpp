@@ -118,6 +118,22 @@ void Tiler::prepare() {
   m_front_end->prepare();
   m_silhouette->prepare();
   m_pb->prepare(*m_front_end);
+  // Fidelity auto: a one-segment frame's geometry is sampled too when it holds enough
+  // clusters for a sample to save anything (tile_sampler.h).
+  const SamplingConfig& sc = m_cfg.scheduler.sampling;
+  const uint32_t n = m_work.trace_triangles();
+  if (m_cfg.sim.fidelity == Fidelity::automatic && m_work.segment_count() == 1 &&
+      uint64_t(n) >= 4ull * sc.first_clusters * sc.geometry_cluster) {
+    std::vector<double> aux(n);
+    for (uint32_t id = 0; id < n; ++id) {
+      Item it;
+      it.first = id;
+      it.count = 1;
+      aux[id] = double(m_front_end->cost(it).reads.bytes() + m_pb->bytes(id, id + 1));
+    }
+    m_front_end->sample(sc, std::move(aux), [this](const GeometryEstimate& g) { m_scheduler->add_geometry(g); });
+    m_pb->arrivals = &m_front_end->arrivals();
+  }
 }
 
 Tiler::Step Tiler::analytic_tile(Core& core, TileWork* w, uint64_t at, uint64_t& pb_read) {
@@ -295,7 +311,10 @@ void Tiler::trace(sc_core::sc_trace_file* tf) const {
 }
 
 uint64_t Tiler::dram_bytes() const { return m_memory->bytes(); }
-uint64_t Tiler::param_buffer_bytes() const { return uint64_t(m_pb->stats().value("bytes_written")); }
+uint64_t Tiler::param_buffer_bytes() const {
+  // Sampled geometry writes only its sample; the frame's bytes are known functionally.
+  return m_front_end->sampled() ? m_pb->total_bytes() : uint64_t(m_pb->stats().value("bytes_written"));
+}
 uint64_t Tiler::param_buffer_peak() const { return uint64_t(m_pb->stats().value("peak_bytes")); }
 uint64_t Tiler::evu_busy_cycles() const {
   uint64_t n = 0;

@@ -335,6 +335,7 @@ TEST(FidelityAuto, OneRoundOverEveryTileIsThePrimitiveLevel) {
   EXPECT_EQ(a["sampling"]["tiles_simulated"], a["sampling"]["tiles"]);
   EXPECT_EQ(a["sampling"]["relative_half_width"].get<double>(), 0.0);
   EXPECT_TRUE(p["sampling"].is_null());
+  EXPECT_TRUE(a["sampling"]["geometry"].is_null());  // too few triangles to sample the geometry
 }
 
 TEST(FidelityAuto, ASampleOfTilesBracketsThePrimitiveLevelsCycles) {
@@ -360,4 +361,10 @@ TEST(FidelityAuto, ASampleOfTilesBracketsThePrimitiveLevelsCycles) {
   EXPECT_GE(truth, s["interval_cycles"][0].get<double>());
   EXPECT_LE(truth, s["interval_cycles"][1].get<double>());
   EXPECT_EQ(a["totals"]["cycles"].get<uint64_t>(), uint64_t(std::llround(s["frame_cycles_estimated"].get<double>())));
+  // 69,666 triangles in one segment: the geometry is sampled too, and the frame's parameter
+  // buffer is still reported whole.
+  ASSERT_FALSE(s["geometry"].is_null());
+  EXPECT_LT(s["geometry"]["triangles_simulated"].get<uint64_t>(), s["geometry"]["triangles"].get<uint64_t>());
+  EXPECT_GT(s["geometry"]["half_width_cycles"].get<double>(), 0.0);
+  EXPECT_EQ(a["totals"]["param_buffer_bytes"], p["totals"]["param_buffer_bytes"]);
 }

@@ -3,9 +3,11 @@
 // models the fetch and a post-transform vertex cache, not vertex shading.
 #pragma once
 
+#include <functional>
 #include <vector>
 
 #include "units/common/stage.h"
+#include "units/tile_scheduler/tile_sampler.h"
 
 namespace tilevis::sim {
 
@@ -18,6 +20,19 @@ struct GeometryFrontEndConfig {
   uint32_t position_bytes = 16;        // clip-space float4 per vertex (trace format)
   uint32_t vertices_per_clock = 1;     // vertex fetch rate (assumption)
   uint32_t latency_cycles = 16;        // fetch pipeline depth, once per segment (assumption)
+};
+
+// Fidelity auto: when each trace triangle sent reaches the parameter buffer (its last unit).
+struct GeometryArrivals {
+  std::vector<std::pair<uint32_t, uint64_t>> log;  // (item's first trace triangle, cycle)
+  sc_core::sc_event arrived;
+};
+
+// Fidelity auto's geometry estimate: the segment's geometry cycles as estimated, as simulated
+// (the rounds' spans), and the interval's half-width.
+struct GeometryEstimate {
+  RenderEstimate estimate;  // tiles = trace triangles, clusters of sampling.geometry_cluster
+  uint64_t rounds = 0, simulated = 0, warmup = 0;
 };
 
 class GeometryFrontEnd : public UnitBase {
@@ -38,8 +53,23 @@ class GeometryFrontEnd : public UnitBase {
   // The batches the unit issues, in order (what the analytic level also walks).
   std::vector<Item> batches() const;
 
+  // Fidelity auto: sample the geometry of a one-segment frame (tile_sampler.h) instead of
+  // sending every triangle; `aux` per trace triangle is the regression's auxiliary (its DRAM
+  // bytes). `done` gets the estimate when the last round is measured, before the segment's
+  // last item leaves.
+  void sample(const SamplingConfig& config, std::vector<double> aux, std::function<void(const GeometryEstimate&)> done);
+  bool sampled() const { return m_sampling_on; }
+  GeometryArrivals& arrivals() { return m_arrivals; }
+
  private:
   void run();
+  void run_sampled();
+  void send(const Item& it);
+  bool m_sampling_on = false;
+  SamplingConfig m_sampling;
+  std::vector<double> m_aux;
+  std::function<void(const GeometryEstimate&)> m_done;
+  GeometryArrivals m_arrivals;
   GeometryFrontEndConfig m_cfg;
   uint32_t m_batch;
   std::vector<uint32_t> m_misses;

@@ -94,10 +94,20 @@ void ParameterBuffer::collect() {
   for (;;) {
     const Item it = in.read();
     m_items.value += 1;
+    if (arrivals) {
+      arrivals->log.push_back({it.first, cycles(sc_core::sc_time_stamp())});
+      arrivals->arrived.notify(sc_core::SC_ZERO_TIME);
+    }
     if (!it.last) continue;
     if (it.segment + 1 < m_work.segment_count()) m_partial.value += 1;
     ready.write(it.segment);
   }
+}
+
+uint64_t ParameterBuffer::total_bytes() const {
+  uint64_t b = 0;
+  for (uint64_t s : m_segment_bytes) b += s;
+  return b;
 }
 
 void ParameterBuffer::release() {

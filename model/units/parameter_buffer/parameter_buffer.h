@@ -57,6 +57,9 @@ class ParameterBuffer : public UnitBase {
   const ParameterBufferConfig& config() const { return m_cfg; }
   // The analytic level's bookkeeping (no simulated time).
   void account_analytic(uint64_t written, uint64_t read);
+  // Fidelity auto's sampled geometry: arrivals logged here (not owned; null: none).
+  GeometryArrivals* arrivals = nullptr;
+  uint64_t total_bytes() const;  // every segment's bytes (what the frame writes)
 
  private:
   void b_transport(int id, tlm::tlm_generic_payload& p, sc_core::sc_time& delay);

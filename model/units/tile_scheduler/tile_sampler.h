@@ -51,6 +51,11 @@ struct SamplingConfig {
   // (interpenetrating, 1080p, every cluster simulated), 0.02 % with it.
   uint32_t warm_tiles = 1;
   uint64_t seed = 1;
+  // Geometry (one-segment frames): clusters of this many consecutive trace triangles, the
+  // first `geometry_warm` of a cluster that follows an unsimulated one simulated but not
+  // measured (the queues between the geometry units hold 16 items each by default).
+  uint32_t geometry_cluster = 256;
+  uint32_t geometry_warm = 64;
 };
 
 // Two-sided standard-normal quantile: P(|Z| <= z) = confidence.

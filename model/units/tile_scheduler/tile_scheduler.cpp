@@ -206,8 +206,14 @@ void TileScheduler::dispatch_sampled(uint32_t segment, const std::vector<uint32_
   m_samples.push_back(rec);
 }
 
+void TileScheduler::add_geometry(const GeometryEstimate& g) {
+  m_geometry_sampled = true;
+  m_geometry = g;
+  m_correction += g.estimate.cycles - double(g.simulated);
+}
+
 double TileScheduler::frame_half_width() const {
-  double v = 0;
+  double v = m_geometry_sampled ? m_geometry.estimate.half_width * m_geometry.estimate.half_width : 0.0;
   for (const SegmentSample& s : m_samples) v += s.estimate.half_width * s.estimate.half_width;
   return std::sqrt(v);
 }
@@ -233,8 +239,24 @@ nlohmann::json TileScheduler::sampling_json() const {
                     {"complete", s.estimate.complete}});
   }
   const double frame = frame_estimate(), half = frame_half_width();
+  nlohmann::json geometry = nullptr;
+  if (m_geometry_sampled) {
+    const RenderEstimate& e = m_geometry.estimate;
+    geometry = {{"triangles", e.tiles},
+                {"triangles_simulated", e.tiles_observed},
+                {"triangles_warmup", m_geometry.warmup},
+                {"clusters", e.clusters},
+                {"clusters_simulated", e.clusters_observed},
+                {"rounds", m_geometry.rounds},
+                {"simulated_cycles", m_geometry.simulated},
+                {"estimated_cycles", e.cycles},
+                {"half_width_cycles", e.half_width},
+                {"complete", e.complete}};
+  }
   return {{"help", "fidelity auto: each segment's render simulated on a random sample of clusters of consecutive tiles "
-                   "(rounds grown until the interval fits the budget) and estimated; geometry simulated in full"},
+                   "(rounds grown until the interval fits the budget) and estimated; the geometry of a one-segment frame "
+                   "likewise on clusters of consecutive trace triangles (\"geometry\"; null: simulated in full)"},
+          {"geometry", geometry},
           {"error_budget", m_cfg.sampling.error_budget},
           {"confidence", m_cfg.sampling.confidence},
           {"cluster_tiles", m_cfg.sampling.cluster_tiles},

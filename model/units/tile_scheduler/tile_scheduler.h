@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "units/common/unit_base.h"
+#include "units/geometry_front_end/geometry_front_end.h"
 #include "units/tile_scheduler/tile_sampler.h"
 
 namespace tilevis::sim {
@@ -52,6 +53,8 @@ class TileScheduler : public UnitBase {
   double frame_estimate() const { return double(m_frame_end) + m_correction; }
   double frame_half_width() const;
   nlohmann::json sampling_json() const;
+  // Fidelity auto, sampled geometry: its estimate replaces its simulated span in the frame.
+  void add_geometry(const GeometryEstimate& g);
   // TileWriter's tile ends wake a sampled round's wait.
   sc_core::sc_event& tile_closed() { return m_tile_closed; }
 
@@ -76,6 +79,8 @@ class TileScheduler : public UnitBase {
     uint64_t warmup_tiles = 0;  // simulated for detailed warming, not measured
   };
   std::vector<SegmentSample> m_samples;
+  bool m_geometry_sampled = false;
+  GeometryEstimate m_geometry;
 };
 
 }  // namespace tilevis::sim
