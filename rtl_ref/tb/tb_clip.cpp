@@ -157,10 +157,11 @@ int bench(int argc, char** argv) {
         const geom::ConvexPolygon& keep = (rng() & 1) ? sr.inside : sr.outside;
         if (!keep.empty()) v.poly = keep;
       }
-      // One vector in four: a piece far larger than a triangle in its tile (up to 40 edges),
-      // cut by a line through two lattice points of its bounding box half the time.
+      // One vector in four: a piece far larger than a triangle in its tile (up to 64 edges; the
+      // slivers scene's 1080p tile jobs split parents of up to 54), cut by a line through two
+      // lattice points of its bounding box half the time.
       if (rng() % 4 == 0) {
-        const size_t target = 8 + rng() % 33;
+        const size_t target = 8 + rng() % 57;
         v.poly = grow(v.poly, target, int(3 * target), rng);
         if (rng() & 1) {
           double x0 = 1e30, y0 = 1e30, x1 = -1e30, y1 = -1e30;
