@@ -173,8 +173,7 @@ ClipDriver::Split ClipDriver::split(const geom::ConvexPolygon& poly, const vis::
   const size_t n = poly.size();
   if (n < 3 || n >= (size_t(1) << kClipNW))
     throw std::invalid_argument("Clip: a parent of " + std::to_string(n) + " edges, outside 3.." +
-                                std::to_string((1u << kClipNW) - 1) + " (n is " + std::to_string(kClipNW) +
-                                " bits)");
+                                std::to_string((1u << kClipNW) - 1) + " (n is " + std::to_string(kClipNW) + " bits)");
   auto& d = m->d;
   auto& v = *d.v;
   constexpr uint32_t kMask = (1u << kCW) - 1;

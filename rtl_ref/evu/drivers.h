@@ -65,7 +65,7 @@ class TileSequencerDriver {
 class ClipDriver {
  public:
   struct Split {
-    int status = 0;  // 0 the line crosses (both children emitted), 1 inside, 2 outside
+    int status = 0;                       // 0 the line crosses (both children emitted), 1 inside, 2 outside
     geom::ConvexPolygon inside, outside;  // the emitted children (status 0 only)
     uint32_t clocks = 0;                  // start to done: 2n + 2 when the line crosses, n + 2 otherwise
   };

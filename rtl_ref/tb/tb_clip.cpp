@@ -35,12 +35,13 @@ struct Coverage {
     char b[768];
     std::snprintf(b, sizeof b,
                   "%llu splits (crosses %llu, inside %llu, outside %llu); a vertex on the line %llu (crossing %llu, "
-                  "at vertex 0 %llu), the line along an edge %llu; parents of 3-7 edges %llu (crossed %llu), 8-16 %llu (%llu), 17-32 %llu (%llu), "
+                  "at vertex 0 %llu), the line along an edge %llu; parents of 3-7 edges %llu (crossed %llu), 8-16 %llu "
+                  "(%llu), 17-32 %llu (%llu), "
                   "33+ %llu (%llu); largest parent %llu edges; %llu clocks for %llu parent edges",
                   (unsigned long long)splits, (unsigned long long)status[0], (unsigned long long)status[1],
                   (unsigned long long)status[2], (unsigned long long)vertex_on_line,
-                  (unsigned long long)crosses_at_vertex, (unsigned long long)crosses_at_vertex0, (unsigned long long)collinear,
-                  (unsigned long long)by_size[0], (unsigned long long)crosses_by_size[0],
+                  (unsigned long long)crosses_at_vertex, (unsigned long long)crosses_at_vertex0,
+                  (unsigned long long)collinear, (unsigned long long)by_size[0], (unsigned long long)crosses_by_size[0],
                   (unsigned long long)by_size[1], (unsigned long long)crosses_by_size[1],
                   (unsigned long long)by_size[2], (unsigned long long)crosses_by_size[2],
                   (unsigned long long)by_size[3], (unsigned long long)crosses_by_size[3],
@@ -53,7 +54,9 @@ struct Coverage {
 // `target` edges or `tries` attempts: the line through two lattice points near vertex i on its
 // two edges (rounding may cut more or miss; only a child larger than the piece is kept).
 geom::ConvexPolygon grow(geom::ConvexPolygon poly, size_t target, int tries, std::mt19937_64& rng) {
-  auto at = [](const geom::ImplicitPoint& p) { return std::pair{double(p.x) / double(p.w), double(p.y) / double(p.w)}; };
+  auto at = [](const geom::ImplicitPoint& p) {
+    return std::pair{double(p.x) / double(p.w), double(p.y) / double(p.w)};
+  };
   for (int k = 0; k < tries && poly.size() < target; ++k) {
     const size_t n = poly.size(), i = rng() % n;
     const auto v = at(poly.vertex(i)), u = at(poly.vertex((i + n - 1) % n)), w = at(poly.vertex((i + 1) % n));
@@ -170,7 +173,9 @@ int bench(int argc, char** argv) {
             const double y = double(v.poly.vertex(i).y) / double(v.poly.vertex(i).w);
             x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
           }
-          auto in = [&](double a, double b) { return int32_t(std::lround(a + (b - a) * double(rng() % 1001) / 1000.0)); };
+          auto in = [&](double a, double b) {
+            return int32_t(std::lround(a + (b - a) * double(rng() % 1001) / 1000.0));
+          };
           const geom::Point p{in(x0, x1), in(y0, y1)}, q{in(x0, x1), in(y0, y1)};
           if (!(p == q)) v.e = vis::svgpu::Edge::from({p.x, p.y, 0}, {q.x, q.y, 0});
         }
