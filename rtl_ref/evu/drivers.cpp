@@ -170,14 +170,15 @@ ClipDriver::ClipDriver() : m(std::make_unique<Impl>()) {}
 ClipDriver::~ClipDriver() = default;
 
 ClipDriver::Split ClipDriver::split(const geom::ConvexPolygon& poly, const vis::svgpu::Edge& e) {
-  if (poly.size() > kClipMaxV)
-    throw std::length_error("Clip: a parent of " + std::to_string(poly.size()) + " edges, more than the RTL's " +
-                            std::to_string(kClipMaxV) + " (MAXV)");
+  const size_t n = poly.size();
+  if (n < 3 || n >= (size_t(1) << kClipNW))
+    throw std::invalid_argument("Clip: a parent of " + std::to_string(n) + " edges, outside 3.." +
+                                std::to_string((1u << kClipNW) - 1) + " (n is " + std::to_string(kClipNW) + " bits)");
   auto& d = m->d;
   auto& v = *d.v;
   constexpr uint32_t kMask = (1u << kCW) - 1;
   v.start = 1;
-  v.n = uint8_t(poly.size());
+  v.n = uint16_t(n);
   v.ax = uint32_t(e.a.x) & kMask;
   v.ay = uint32_t(e.a.y) & kMask;
   v.bx = uint32_t(e.b.x) & kMask;
@@ -185,27 +186,36 @@ ClipDriver::Split ClipDriver::split(const geom::ConvexPolygon& poly, const vis::
   d.tick();
   v.start = 0;
   uint32_t clocks = 1;
-  for (size_t i = 0; i < poly.size(); ++i) {
-    const auto& l = poly.line(i);
-    const auto& p = poly.vertex(i);
-    v.e_valid = 1;
-    put_field(v.e_la, 0, kLA, l.a);
-    put_field(v.e_lb, 0, kLA, l.b);
-    put_field(v.e_lc, 0, kLC, l.c);
-    put_field(v.e_vx, 0, kPX, p.x);
-    put_field(v.e_vy, 0, kPX, p.y);
-    put_field(v.e_vw, 0, kPW, p.w);
-    d.tick();
-    ++clocks;
-  }
-  v.e_valid = 0;
   Split s;
-  while (!v.done) {
-    d.tick();
-    ++clocks;
-    m->collect(s.inside, s.outside);
-    if (clocks > 4 + 3 * poly.size()) d.fail("no done after " + std::to_string(clocks) + " clocks");
-  }
+  // The parent streamed from the piece memory, one edge a clock: LOAD, then EMIT when the
+  // line crosses (the lane is in EMIT as the first pass ends; children come with edges 1..n-1).
+  auto stream = [&](bool collect) {
+    for (size_t i = 0; i < n; ++i) {
+      const auto& l = poly.line(i);
+      const auto& p = poly.vertex(i);
+      v.e_valid = 1;
+      put_field(v.e_la, 0, kLA, l.a);
+      put_field(v.e_lb, 0, kLA, l.b);
+      put_field(v.e_lc, 0, kLC, l.c);
+      put_field(v.e_vx, 0, kPX, p.x);
+      put_field(v.e_vy, 0, kPX, p.y);
+      put_field(v.e_vw, 0, kPW, p.w);
+      d.tick();
+      ++clocks;
+      if (collect) m->collect(s.inside, s.outside);
+      if (v.done) d.fail("done before the parent's last edge");
+    }
+    v.e_valid = 0;
+  };
+  stream(false);
+  if (v.ready) d.fail("idle after the parent's first pass");
+  // The lane's state after LOAD is not a port: a crossing shows as status 0 (set as LOAD ends).
+  if (v.status == 0) stream(true);
+  // The last clock: the pair (n - 1, 0) and done.
+  d.tick();
+  ++clocks;
+  m->collect(s.inside, s.outside);
+  if (!v.done) d.fail("no done after " + std::to_string(clocks) + " clocks");
   s.status = int(v.status);
   s.clocks = clocks;
   return s;

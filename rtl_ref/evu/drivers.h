@@ -24,7 +24,7 @@ namespace tilevis::rtl {
 // The parameters the library's RTL is Verilated with (rtl_ref/CMakeLists.txt): the model's
 // defaults evu.reject lanes, evu.triangle_list_entries, evu.edge_list_entries.
 inline constexpr uint32_t kSeqLanes = 8, kSeqTriCap = 512, kSeqEdgeCap = 256;
-inline constexpr uint32_t kClipMaxV = 16;  // Clip's MAXV: the most edges a parent may have
+inline constexpr uint32_t kClipNW = 12;  // Clip's NW: the bits of a parent's edge count n
 // PairReject and DepthTest: one pair per clock per lane, fixed latency (their testbenches
 // check it on every vector), so their time is stated, not simulated.
 inline constexpr uint32_t kPairRejectLatency = 3, kDepthTestLatency = 3;
@@ -60,11 +60,12 @@ class TileSequencerDriver {
   std::unique_ptr<Impl> m;
 };
 
-// Clip ×1: one split of a convex polygon (3..kClipMaxV edges) by a silhouette edge's line.
+// Clip ×1: one split of a convex polygon by a silhouette edge's line. The lane holds no copy of
+// the parent: its edges are streamed twice, to classify and (when the line crosses) to emit.
 class ClipDriver {
  public:
   struct Split {
-    int status = 0;  // 0 the line crosses (both children emitted), 1 inside, 2 outside
+    int status = 0;                       // 0 the line crosses (both children emitted), 1 inside, 2 outside
     geom::ConvexPolygon inside, outside;  // the emitted children (status 0 only)
     uint32_t clocks = 0;                  // start to done: 2n + 2 when the line crosses, n + 2 otherwise
   };
@@ -72,7 +73,8 @@ class ClipDriver {
   ~ClipDriver();
   ClipDriver(const ClipDriver&) = delete;
   ClipDriver& operator=(const ClipDriver&) = delete;
-  // Throws std::length_error for a parent of more than kClipMaxV edges (the RTL holds no more).
+  // Throws std::invalid_argument for a parent of fewer than 3 edges or too many for n's
+  // kClipNW bits (2^kClipNW - 1 = 4,095 edges: 7 for the triangle in its tile and one a split).
   Split split(const geom::ConvexPolygon& poly, const vis::svgpu::Edge& e);
 
  private:
