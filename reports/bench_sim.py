@@ -110,6 +110,8 @@ def main():
                 m = s["sampling"]
                 per[level].update({"interval": m["interval_cycles"], "tiles_total": m["tiles"],
                                    "tiles_simulated": m["tiles_simulated"], "within_budget": m["within_budget"]})
+                if m.get("geometry"):
+                    per[level].update({"geometry_triangles_simulated": m["geometry"]["triangles_simulated"]})
         reference = "rtl" if "rtl" in per else "primitive"
         ref = per[reference]["cycles"]
         for level in LEVELS:
@@ -146,9 +148,26 @@ def main():
             extra = (f"{r['interval'][0]:,.0f} - {r['interval'][1]:,.0f} "
                      f"({'holds' if r['reference_in_interval'] else 'misses'} the reference), "
                      f"{r['tiles_simulated']:,} / {r['tiles_total']:,}")
+            if "geometry_triangles_simulated" in r:
+                extra += f"; geometry {r['geometry_triangles_simulated']:,} / {r['triangles']:,} triangles"
         lines.append(f"| {r['scene']} | {r['triangles']:,} | {r['level']} | {r['wall_seconds']:.2f} | "
                      f"{r['host_seconds']:.2f} | {r['speedup_vs_reference']:.1f}x | {r['cycles']:,} | "
                      f"{100 * r['cycles_vs_reference']:.2f} % | {extra} |")
+    # Per level over the scenes: error and speed against the reference.
+    lines += ["", "Per level over the scenes (median and largest error, median and smallest speed-up against the "
+              "reference; auto: scenes whose interval holds the reference):", "",
+              "| level | scenes | median error | largest error | median faster | slowest faster | interval holds |",
+              "|---|---|---|---|---|---|---|"]
+    for level in LEVELS:
+        rs = [r for r in rows if r["level"] == level]
+        if not rs:
+            continue
+        errs = sorted(100 * r["cycles_vs_reference"] for r in rs)
+        fast = sorted(r["speedup_vs_reference"] for r in rs)
+        holds = [r["reference_in_interval"] for r in rs if "reference_in_interval" in r]
+        lines.append(f"| {level} | {len(rs)} | {errs[len(errs) // 2]:.2f} % | {errs[-1]:.2f} % | "
+                     f"{fast[len(fast) // 2]:.1f}x | {fast[0]:.1f}x | "
+                     f"{f'{sum(holds)} of {len(holds)}' if holds else ''} |")
     if failures:
         lines += ["", "Fidelity rtl failed on (the reference is primitive there):", ""]
         lines += [f"- {k}: `{v}`" for k, v in sorted(failures.items())]
