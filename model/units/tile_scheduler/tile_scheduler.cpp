@@ -127,7 +127,11 @@ void TileScheduler::dispatch_sampled(uint32_t segment, const std::vector<uint32_
   rec.certain_tiles = certain_pos.size();
   rec.start_cycle = cycles(sc_core::sc_time_stamp());
   const uint64_t warm = uint64_t(m_cfg.sampling.warm_tiles) * m_cfg.cores;
-  uint64_t want = std::min<uint64_t>(sampler.clusters(), std::max<uint32_t>(1, m_cfg.sampling.first_clusters));
+  // A segment of at most twice the first round's clusters is simulated whole, in one round:
+  // the rounds' fills and warm-ups that a sample of it would leave to the estimate cost more
+  // accuracy than the few tiles saved (elephant, 245 tiles in 8 rounds: -2.9 %).
+  const uint64_t first = std::max<uint32_t>(1, m_cfg.sampling.first_clusters);
+  uint64_t want = sampler.clusters() <= 2 * first ? sampler.clusters() : first;
   bool first_round = true;
   while (want > 0 || first_round) {
     const std::vector<uint64_t> round = sampler.next_round(want);
