@@ -314,6 +314,8 @@ phase_sanitize() {
   : >"$WORK/meta/sanitizer.txt.tmp"
   for tool in memcheck racecheck; do
     for p in exact float zb_tiled zb_naive hybrid_exact hybrid_float; do
+      # TILEVIS_SANITIZE_ONLY: "tool:what ..." (what: the above, or dev_overflow) narrows the runs.
+      [ -z "${TILEVIS_SANITIZE_ONLY:-}" ] || [[ " $TILEVIS_SANITIZE_ONLY " == *" $tool:$p "* ]] || continue
       local log="$LOGS/sanitizer_${tool}_$p.log" rc=0
       local args=(--tile 32 --precision "$p" --baselines off)
       # Hybrid with small lists, so that tiles go per pixel (budget) and its kernels run.
@@ -338,7 +340,7 @@ phase_sanitize() {
     # The device-sized graph past its bounds (a launch that overflows: every later count 0, the
     # frame run again with host reads): the GPU test that makes it happen, under the tool.
     local log="$LOGS/sanitizer_${tool}_dev_overflow.log" rc=0 gt="$BUILD/tests/cuda/cuda_gpu_tests"
-    if [ -x "$gt" ]; then
+    if [ -x "$gt" ] && { [ -z "${TILEVIS_SANITIZE_ONLY:-}" ] || [[ " $TILEVIS_SANITIZE_ONLY " == *" $tool:dev_overflow "* ]]; }; then
       timeout "${TILEVIS_SANITIZE_TIMEOUT:-300}" compute-sanitizer --tool "$tool" --error-exitcode 3 "$gt" \
         --gtest_filter=Gpu.DeviceSizedGraphPastItsBoundsRunsAgain >"$log" 2>&1 || rc=$?
       local line

@@ -16,6 +16,8 @@ cd "$ROOT"
 OUT="${OUT:-/tmp/quick_out}"
 export OUT
 mkdir -p "$OUT"
+# The carried libraries (gpu_run.sh build unpacks them there), for the runs outside gpu_run.sh.
+export LD_LIBRARY_PATH="/tmp/sysroot/usr/lib/x86_64-linux-gnu:/tmp/sysroot/lib/x86_64-linux-gnu${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
 BUILD="$ROOT/build-gpu"
 BIN="$BUILD/model/app/tilevis"
 phases=("$@")

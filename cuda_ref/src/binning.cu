@@ -292,8 +292,11 @@ void stage_binning(Pipeline<P>& p) {
   if (p.dev) {  // the counts stay on the device, within the learned bounds
     p.n_items = p.caps.items;
     p.n_tile_edges = p.caps.tile_edges;
+    const uint64_t ni = p.n_items, ne = p.n_tile_edges;
     SizeArgs s{p.sizes.get(), 2, {p.tri_tiles_off.get() + p.n_tris, p.edge_tiles_off.get() + p.n_edges},
-               {p.n_items, p.n_tile_edges}, 0, kCullLanes};
+               {ni, ne}, 0, kCullLanes,
+               {{p.item_key.need(ni + 1), 0, ni}, {p.occ_key.need(ni + 1), 0, ni}, {p.area_key.need(ni + 1), 0, ni},
+                {p.tedge_key.need(ne + 1), 1, ne}}, 4};
     queue_take_sizes(ex, s);
   } else {
     // sync: the numbers of (tile, triangle) and (tile, edge) pairs.
@@ -318,7 +321,7 @@ void stage_binning(Pipeline<P>& p) {
   ex.branch(0);
   ex.launch(k_bin_edge_emit<P>, bin_edge_emit<P>, p.N(kSzEdgeEmit, p.n_edges), a);
   ex.sort_pairs(a.tedge_key, p.tedge_key_sorted.need(ne + 1), a.tedge_id, p.tedge_id_sorted.need(ne + 1), n_tedges,
-                tile_bits + d, ne);
+                tile_bits + d, ne, true);
   ex.zero(edge_begin, tiles * 4ull);
   ex.launch(k_tile_begin, tile_begin, n_tedges, RangeArgs{p.tedge_key_sorted.get(), uint32_t(d), ne, edge_begin});
   ex.launch(k_gather_box<P>, gather_box<P>, n_tedges, BoxArgs<P>{p.edges.get(), p.tedge_id_sorted.get(), p.tedge_box.need(ne + 1)});
@@ -327,11 +330,11 @@ void stage_binning(Pipeline<P>& p) {
   ex.launch(k_bin_tri_emit<P>, bin_tri_emit<P>, p.N(kSzTriEmit, p.n_tris), a);
   ex.branch(1);
   ex.sort_pairs(a.occ_key, p.occ_key_sorted.need(ni + 1), a.occ_tri, p.occ_tri_sorted.need(ni + 1), n_items,
-                tile_bits + d + 1, ni);
+                tile_bits + d + 1, ni, true);
   ex.launch(k_gather_occ<P>, gather_occ<P>, n_items, OccGatherArgs<P>{p.tris.get(), p.occ_tri_sorted.get(), p.occ_rec.need(ni + 1)});
   ex.on_main();
   ex.sort_pairs(a.item_key, p.item_key_sorted.need(ni + 1), a.item_tri, p.item_tri_sorted.need(ni + 1), n_items,
-                tile_bits, ni);
+                tile_bits, ni, true);
   ex.zero(item_begin, tiles * 4ull);
   ex.launch(k_tile_begin, tile_begin, n_items, RangeArgs{p.item_key_sorted.get(), 0, ni, item_begin});
 
@@ -381,7 +384,7 @@ void stage_binning(Pipeline<P>& p) {
   ex.branch(2);
   ex.launch(k_area_key<P>, area_key<P>, n_items, ak);
   ex.sort_pairs(ak.key, p.area_key_sorted.need(ni + 1), ak.item, p.area_item_sorted.need(ni + 1), n_items,
-                int(bits_for(p.f.n_triangles)), ni);
+                int(bits_for(p.f.n_triangles)), ni, true);
   // The key list ends with a sentinel no id equals, so a run's walk in the fold stops there
   // (device-sized: the padding keys past the count, all ones, are sentinels too).
   ex.fill_ones(p.area_key_sorted.get() + ni, 8);

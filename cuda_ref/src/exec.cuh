@@ -342,9 +342,10 @@ class Exec {
   void exclusive_scan(const uint32_t* in, uint32_t* out, uint64_t n, uint64_t bound = 0);
   // Stable sort of (key, value) pairs by the key's bits [0, end_bit). n may be a tagged device
   // count: the keys from the count to `bound` are set to all ones first and `bound` pairs are
-  // sorted (stable: the padding stays after every real pair, also one whose key is all ones).
+  // sorted (stable: the padding stays after every real pair, also one whose key is all ones);
+  // `padded`: the caller has padded them (take_sizes).
   void sort_pairs(const uint64_t* keys_in, uint64_t* keys_out, const uint32_t* vals_in, uint32_t* vals_out, uint64_t n,
-                  int end_bit, uint64_t bound = 0);
+                  int end_bit, uint64_t bound = 0, bool padded = false);
   uint64_t generation() const { return m_generation; }  // counts allocations and releases
 
  private:

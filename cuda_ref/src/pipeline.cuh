@@ -67,17 +67,45 @@ enum SizeSlot : uint32_t {
   kSzTotals,  // the totals as found, two per stage (for growing the bounds)
   kSizeSlots = kSzTotals + 6
 };
+// The same kernel pads the key lists the stage's sorts will sort: keys from the count to the
+// bound set to all ones (Exec::sort_pairs' padding, done here so that it costs no launch).
+struct SizePad {
+  uint64_t* keys;
+  uint32_t which;  // the count: total 0 or 1
+  uint64_t bound;
+};
 struct SizeArgs {
   uint64_t* sz;
   uint32_t stage;  // 0 setup, 1 silhouettes, 2 binning
   const uint64_t* total[2];
   uint64_t bound[2];
   uint64_t n_triangles, cull_lanes;
+  SizePad pad[4];
+  uint32_t n_pads;
 };
+// Whether the stage's totals passed their bounds (or an earlier stage's did). Every thread of
+// the kernel computes it; only element 0 writes kSzOverflow, and a thread that reads it before
+// that write finds this stage's own reason itself.
+TV_HD inline bool sizes_over(const SizeArgs& a) {
+  const uint64_t t0 = *a.total[0], t1 = a.total[1] ? *a.total[1] : 0;
+  return a.sz[kSzOverflow] != 0 || t0 > a.bound[0] || t1 > a.bound[1];
+}
+// Padding element i (over every pad's range [count, bound), one after the other).
+TV_HD inline void pad_keys(const SizeArgs& a, bool over, uint64_t i) {
+  for (uint32_t k = 0; k < a.n_pads; ++k) {
+    const SizePad& p = a.pad[k];
+    const uint64_t from = over ? 0 : *a.total[p.which];
+    if (i < p.bound - from) {
+      p.keys[from + i] = ~uint64_t{0};
+      return;
+    }
+    i -= p.bound - from;
+  }
+}
 TV_HD inline void take_sizes(const SizeArgs& a, uint64_t) {
   uint64_t* s = a.sz;
   const uint64_t t0 = *a.total[0], t1 = a.total[1] ? *a.total[1] : 0;
-  const bool over = s[kSzOverflow] != 0 || t0 > a.bound[0] || t1 > a.bound[1];
+  const bool over = sizes_over(a);
   s[kSzTotals + 2 * a.stage] = t0;
   s[kSzTotals + 2 * a.stage + 1] = t1;
   if (over) s[kSzOverflow] = 1;

@@ -295,7 +295,7 @@ void stage_setup(Pipeline<P>& p) {
   ex.exclusive_scan(a.fan_count, p.fan_offset.get(), n);
   if (p.dev) {  // the count stays on the device, within the learned bound
     p.n_setup = p.caps.setup;
-    SizeArgs s{p.sizes.get(), 0, {p.fan_offset.get() + n, nullptr}, {p.n_setup, 0}, n, 0};
+    SizeArgs s{p.sizes.get(), 0, {p.fan_offset.get() + n, nullptr}, {p.n_setup, 0}, n, 0, {}, 0};
     queue_take_sizes(ex, s);
   } else {
     p.n_setup = ex.read(p.fan_offset.get() + n);  // sync: the setup triangle count sizes what follows

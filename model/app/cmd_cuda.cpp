@@ -241,9 +241,9 @@ int run(const CudaArgs& a, const trace::Frame& frame, uint32_t tw, uint32_t th) 
                                               "sizes in between, no graph; graph_total_ms: the known "
                                               "frame as one CUDA graph (sizes as the first runs read them; every "
                                               "replay checked) with events at its ends only; stage_ms from a second "
-                                              "graph with an event at every stage boundary (its total: "
-                                              "probed_total_ms); stream_stage_ms: the new frame's stages; "
-                                              "presized_total_ms: the new frame's launches with no host round trip "
+                                              "device-sized graph with an event at every stage boundary (its total: "
+                                              "probed_total_ms); stream_stage_ms: the stream's stages; "
+                                              "presized_total_ms: the stream's launches with no host round trip "
                                               "(its reads answered by the last run's, checked after)"
                                             : "host clock (emulation)"},
                {"runs", r.runs},

@@ -86,7 +86,9 @@ struct CudaResult {
   // check of overflow after the frame (outside the events; a frame past a bound runs again with
   // host reads); the results are that run's. stream_total_ms: the work queued stage by stage with
   // the host reading sizes in between (host_syncs round trips), no graph (without device_sized
-  // also total_ms; on the host emulation every time is this one's). graph_total_ms: the frame recorded as
+  // also total_ms; on the host emulation every time is this one's). stage_ms and probed_total_ms:
+  // a second device-sized graph with an event at every stage boundary (without device_sized, the
+  // known frame's, as below). graph_total_ms: the frame recorded as
   // one CUDA graph and replayed (its host reads answered by the first runs; each replay checked
   // against them): a known frame. stage_ms come from a second graph with an event at every
   // stage boundary (its own total: probed_total_ms). cpu: every time is the host emulation's.
