@@ -312,6 +312,7 @@ phase_sanitize() {
   local small="$TRACES/small/dragon_320x240.tvt" tool p
   command -v compute-sanitizer >/dev/null || { echo "compute-sanitizer not found" >"$WORK/meta/sanitizer.txt"; return; }
   : >"$WORK/meta/sanitizer.txt.tmp"
+  export TILEVIS_CUDA_NO_LAUNCH_PROBE=1  # no launch-cost probe (2,300 empty launches) under the tools
   for tool in memcheck racecheck; do
     for p in exact float zb_tiled zb_naive hybrid_exact hybrid_float; do
       # TILEVIS_SANITIZE_ONLY: "tool:what ..." (what: the above, or dev_overflow) narrows the runs.

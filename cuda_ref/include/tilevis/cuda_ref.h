@@ -113,7 +113,8 @@ struct CudaResult {
   uint64_t min_dram_bytes = 0;
   double dram_bandwidth_gbs = 0;
   // Measured on the device with an empty kernel: microseconds per back-to-back launch and per
-  // launch + 8-byte copy back + wait (a host round trip).
+  // launch + 8-byte copy back + wait (a host round trip); 0 where TILEVIS_CUDA_NO_LAUNCH_PROBE is set
+  // (compute-sanitizer runs: gpu_run.sh sanitize).
   double launch_us = 0, round_trip_us = 0;
 };
 
