@@ -7,7 +7,7 @@
 #                         CLI11, GoogleTest (Ubuntu 24.04 ships none of them by default; these are
 #                         unpacked, not installed, there)
 #   .gpu/traces.tar.xz    every traces/scenes/*.json as a trace (`tilevis trace`), plus
-#                         small/dragon_320x240.tvt for compute-sanitizer
+#                         small/dragon_320x240.tvt for compute-sanitizer (and .gpu/tiny/dragon_128x72.tvt)
 #   .gpu/commit.txt       the commit the traces were made at
 #   .gpu/prebuilt.tar.xz  with --prebuilt DIR: tilevis, cuda_gpu_tests, gl_raster, cuda_gpu_report
 #                         built here in DIR and the shared libraries they need (gpu_run.sh build
@@ -73,6 +73,9 @@ for scene in traces/scenes/*.json; do
 done
 say "trace dragon at 320x240 (sanitizers)"
 "$BIN" trace traces/scenes/dragon.json --viewport 320x240 -q -o .gpu/traces/small/dragon_320x240.tvt
+# racecheck of float hybrid: a smaller one still (gpu_run.sh sanitize), outside the archive.
+mkdir -p .gpu/tiny
+"$BIN" trace traces/scenes/dragon.json --viewport 128x72 -q -o .gpu/tiny/dragon_128x72.tvt
 
 # An 8-frame orbit of the bunny (the camera turning 360 degrees about y): per-frame times.
 say "trace bunny orbit (8 frames)"

@@ -281,16 +281,31 @@ void stage_binning(Pipeline<P>& p) {
   a.occ_count = occ_count;
   // Triangles on the main stream, edges beside them (side stream 0) until cull; the occluder
   // lists (side 1) until occlusion; the visible-area order (side 2) until the fold.
-  ex.launch(k_bin_tri_count<P>, bin_tri_count<P>, p.n_tris, a);
-  ex.exclusive_scan(a.tri_tiles, p.tri_tiles_off.get(), p.n_tris);
+  const uint64_t n_tris = p.N(kSzTris, p.n_tris), n_edges = p.N(kSzEdges, p.n_edges);
+  ex.launch(k_bin_tri_count<P>, bin_tri_count<P>, n_tris, a);
+  ex.exclusive_scan(a.tri_tiles, p.tri_tiles_off.get(), n_tris, p.n_tris);
   ex.branch(0);
-  ex.launch(k_bin_edge_count<P>, bin_edge_count<P>, p.n_edges, a);
-  ex.exclusive_scan(a.edge_tiles, p.edge_tiles_off.get(), p.n_edges);
+  ex.launch(k_bin_edge_count<P>, bin_edge_count<P>, n_edges, a);
+  ex.exclusive_scan(a.edge_tiles, p.edge_tiles_off.get(), n_edges, p.n_edges);
   ex.on_main();
   ex.merge(0);
-  // sync: the numbers of (tile, triangle) and (tile, edge) pairs.
-  ex.read_many({{&p.n_items, p.tri_tiles_off.get() + p.n_tris}, {&p.n_tile_edges, p.edge_tiles_off.get() + p.n_edges}});
+  if (p.dev) {  // the counts stay on the device, within the learned bounds
+    p.n_items = p.caps.items;
+    p.n_tile_edges = p.caps.tile_edges;
+    const uint64_t ni = p.n_items, ne = p.n_tile_edges;
+    SizeArgs s{p.sizes.get(), 2, {p.tri_tiles_off.get() + p.n_tris, p.edge_tiles_off.get() + p.n_edges},
+               {ni, ne}, 0, kCullLanes,
+               {{p.item_key.need(ni + 1), 0, ni}, {p.occ_key.need(ni + 1), 0, ni}, {p.area_key.need(ni + 1), 0, ni},
+                {p.tedge_key.need(ne + 1), 1, ne}}, 4};
+    queue_take_sizes(ex, s);
+  } else {
+    // sync: the numbers of (tile, triangle) and (tile, edge) pairs.
+    ex.read_many({{&p.n_items, p.tri_tiles_off.get() + p.n_tris}, {&p.n_tile_edges, p.edge_tiles_off.get() + p.n_edges}});
+    Capacities::learn(p.caps.items, p.n_items);
+    Capacities::learn(p.caps.tile_edges, p.n_tile_edges);
+  }
   if (p.n_items >= 0xffffffffull) throw std::runtime_error("cuda: more than 2^32 - 2 (tile, triangle) pairs");
+  const uint64_t n_items = p.N(kSzItems, p.n_items), n_tedges = p.N(kSzTileEdges, p.n_tile_edges);
 
   const uint64_t ni = p.n_items, ne = p.n_tile_edges;
   a.item_key = p.item_key.need(ni + 1);
@@ -304,23 +319,24 @@ void stage_binning(Pipeline<P>& p) {
   uint32_t* item_begin = p.tile_item_begin.need(tiles);
   uint32_t* edge_begin = p.tile_edge_begin.need(tiles);
   ex.branch(0);
-  ex.launch(k_bin_edge_emit<P>, bin_edge_emit<P>, p.n_edges, a);
-  ex.sort_pairs(a.tedge_key, p.tedge_key_sorted.need(ne + 1), a.tedge_id, p.tedge_id_sorted.need(ne + 1), ne,
-                tile_bits + d);
+  ex.launch(k_bin_edge_emit<P>, bin_edge_emit<P>, p.N(kSzEdgeEmit, p.n_edges), a);
+  ex.sort_pairs(a.tedge_key, p.tedge_key_sorted.need(ne + 1), a.tedge_id, p.tedge_id_sorted.need(ne + 1), n_tedges,
+                tile_bits + d, ne, true);
   ex.zero(edge_begin, tiles * 4ull);
-  ex.launch(k_tile_begin, tile_begin, ne, RangeArgs{p.tedge_key_sorted.get(), uint32_t(d), ne, edge_begin});
-  ex.launch(k_gather_box<P>, gather_box<P>, ne, BoxArgs<P>{p.edges.get(), p.tedge_id_sorted.get(), p.tedge_box.need(ne + 1)});
+  ex.launch(k_tile_begin, tile_begin, n_tedges, RangeArgs{p.tedge_key_sorted.get(), uint32_t(d), ne, edge_begin});
+  ex.launch(k_gather_box<P>, gather_box<P>, n_tedges, BoxArgs<P>{p.edges.get(), p.tedge_id_sorted.get(), p.tedge_box.need(ne + 1)});
   ex.on_main();
 
-  ex.launch(k_bin_tri_emit<P>, bin_tri_emit<P>, p.n_tris, a);
+  ex.launch(k_bin_tri_emit<P>, bin_tri_emit<P>, p.N(kSzTriEmit, p.n_tris), a);
   ex.branch(1);
-  ex.sort_pairs(a.occ_key, p.occ_key_sorted.need(ni + 1), a.occ_tri, p.occ_tri_sorted.need(ni + 1), ni,
-                tile_bits + d + 1);
-  ex.launch(k_gather_occ<P>, gather_occ<P>, ni, OccGatherArgs<P>{p.tris.get(), p.occ_tri_sorted.get(), p.occ_rec.need(ni + 1)});
+  ex.sort_pairs(a.occ_key, p.occ_key_sorted.need(ni + 1), a.occ_tri, p.occ_tri_sorted.need(ni + 1), n_items,
+                tile_bits + d + 1, ni, true);
+  ex.launch(k_gather_occ<P>, gather_occ<P>, n_items, OccGatherArgs<P>{p.tris.get(), p.occ_tri_sorted.get(), p.occ_rec.need(ni + 1)});
   ex.on_main();
-  ex.sort_pairs(a.item_key, p.item_key_sorted.need(ni + 1), a.item_tri, p.item_tri_sorted.need(ni + 1), ni, tile_bits);
+  ex.sort_pairs(a.item_key, p.item_key_sorted.need(ni + 1), a.item_tri, p.item_tri_sorted.need(ni + 1), n_items,
+                tile_bits, ni, true);
   ex.zero(item_begin, tiles * 4ull);
-  ex.launch(k_tile_begin, tile_begin, ni, RangeArgs{p.item_key_sorted.get(), 0, ni, item_begin});
+  ex.launch(k_tile_begin, tile_begin, n_items, RangeArgs{p.item_key_sorted.get(), 0, ni, item_begin});
 
   // Finer occlusion bins: (bin, record) pairs counted, emitted in record order, sorted
   // stably by bin (so records keep their tile order in each bin), gathered.
@@ -328,6 +344,7 @@ void stage_binning(Pipeline<P>& p) {
   const uint32_t bw = c.occlusion_bin_w && c.occlusion_bin_w < c.tile_w ? c.occlusion_bin_w : c.tile_w;
   const uint32_t bh = c.occlusion_bin_h && c.occlusion_bin_h < c.tile_h ? c.occlusion_bin_h : c.tile_h;
   if (bw != c.tile_w || bh != c.tile_h) {
+    if (p.dev) throw std::runtime_error("cuda: finer occlusion bins read a size on the host (no device-sized run)");
     ex.merge(1);  // on the main stream: the pair count is read
     p.obin_w = bw;
     p.obin_h = bh;
@@ -365,10 +382,11 @@ void stage_binning(Pipeline<P>& p) {
 
   AreaKeyArgs<P> ak{p.tris.get(), p.item_tri_sorted.get(), p.area_key.need(ni + 1), p.area_item.need(ni + 1)};
   ex.branch(2);
-  ex.launch(k_area_key<P>, area_key<P>, ni, ak);
-  ex.sort_pairs(ak.key, p.area_key_sorted.need(ni + 1), ak.item, p.area_item_sorted.need(ni + 1), ni,
-                int(bits_for(p.f.n_triangles)));
-  // The key list ends with a sentinel no id equals, so a run's walk in the fold stops there.
+  ex.launch(k_area_key<P>, area_key<P>, n_items, ak);
+  ex.sort_pairs(ak.key, p.area_key_sorted.need(ni + 1), ak.item, p.area_item_sorted.need(ni + 1), n_items,
+                int(bits_for(p.f.n_triangles)), ni, true);
+  // The key list ends with a sentinel no id equals, so a run's walk in the fold stops there
+  // (device-sized: the padding keys past the count, all ones, are sentinels too).
   ex.fill_ones(p.area_key_sorted.get() + ni, 8);
   ex.on_main();
   ex.merge(0);  // cull reads the edge lists

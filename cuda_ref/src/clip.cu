@@ -249,7 +249,7 @@ bool stage_clip(Pipeline<P>& p) {
   a.slot_factor = p.caps.slot_factor;
   a.n_items = ni;
 
-  ex.exclusive_scan(a.cand_count, p.cand_offset.get(), ni);
+  ex.exclusive_scan(a.cand_count, p.cand_offset.get(), p.N(kSzItems, ni), ni);
   ex.launch_dyn(k_cand_scatter<P>, cand_scatter<P>, p.counters.get() + kCandidates, p.caps.candidates, a);
   if (ex.where == Where::cpu) {
     ex.launch_dyn(k_clip_items<P>, clip_item_host<P>, p.counters.get() + kClipItems, ni, a);
@@ -259,10 +259,17 @@ bool stage_clip(Pipeline<P>& p) {
     TV_CUDA(cudaGetLastError());
   }
 
+  // Device-sized: the overflow counters are checked once the frame has ended (pools_fit).
+  if (p.dev) return true;
   // sync: the overflow counters (those before kFloatAnomalies: only setup, cull and clip, all
   // finished here, write them; the unclipped pieces' occlusion may be running beside).
   uint64_t c[kFloatAnomalies];
   ex.download(c, p.counters.get(), sizeof(c));
+  return pools_fit(p, c);
+}
+
+template <class P>
+bool pools_fit(Pipeline<P>& p, const uint64_t* c) {
   bool ok = true;
   Capacities& caps = p.caps;
   auto grow = [&](uint64_t& cap, uint64_t used) {
@@ -285,5 +292,7 @@ bool stage_clip(Pipeline<P>& p) {
 
 template bool stage_clip<ExactP>(Pipeline<ExactP>&);
 template bool stage_clip<FloatP>(Pipeline<FloatP>&);
+template bool pools_fit<ExactP>(Pipeline<ExactP>&, const uint64_t*);
+template bool pools_fit<FloatP>(Pipeline<FloatP>&, const uint64_t*);
 
 }  // namespace tilevis::cuda

@@ -36,7 +36,6 @@ struct CullArgs {
 
 namespace {
 
-inline constexpr uint32_t kCullLanes = 8;
 
 // Element i: lane i % kCullLanes of item i / kCullLanes (tile, triangle). The items of a tile
 // are neighbours, so the threads of a warp walk the same tile's edge list (edges by nearest
@@ -148,7 +147,7 @@ void stage_cull(Pipeline<P>& p) {
   a.cands = p.cands.need(p.caps.candidates);
   a.cand_cap = p.caps.candidates;
   a.n_items = ni;
-  ex.launch(k_cull_item<P>, cull_item<P>, ni * kCullLanes, a);
+  ex.launch(k_cull_item<P>, cull_item<P>, p.N(kSzCullLanes, ni * kCullLanes), a);
   ex.launch_dyn(k_cull_exact<P>, cull_exact<P>, p.counters.get() + kDeepPairs, p.caps.deep_pairs, a);
 }
 

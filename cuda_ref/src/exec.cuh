@@ -22,10 +22,33 @@ namespace tilevis::cuda {
 void cuda_check(cudaError_t e, const char* what);
 #define TV_CUDA(call) ::tilevis::cuda::cuda_check((call), #call)
 
-// Grid-stride loop over [0, n) (64-bit safe).
-#define TV_GRID_LOOP(i, n)                                                                   \
-  for (uint64_t i = uint64_t(blockIdx.x) * blockDim.x + threadIdx.x; i < uint64_t(n);       \
-       i += uint64_t(gridDim.x) * blockDim.x)
+// An element count passed to a kernel is either a value or, tagged by kDevCount, the address
+// of a uint64_t in device memory that holds it (a size the host never reads: a device-sized
+// run). Bits 48-55 of a tagged count hold bits_for(upper bound), so a launch can size its grid.
+inline constexpr uint64_t kDevCount = uint64_t{1} << 63;
+inline constexpr uint64_t kDevAddr = (uint64_t{1} << 48) - 1;
+TV_HD inline uint64_t count_of(uint64_t n) {
+  return n & kDevCount ? *reinterpret_cast<const uint64_t*>(static_cast<uintptr_t>(n & kDevAddr)) : n;
+}
+// Tagged count at p, at most `bound` (the host's upper bound: the buffers' capacity).
+inline uint64_t dev_count(const uint64_t* p, uint64_t bound) {
+  const uint64_t a = uint64_t(reinterpret_cast<uintptr_t>(p));
+  if (a > kDevAddr) throw std::runtime_error("cuda: a device address past 48 bits cannot tag a count");
+  uint64_t b = 0;
+  while (b < 63 && (bound >> b) != 0) ++b;
+  return kDevCount | b << 48 | a;
+}
+inline bool is_dev_count(uint64_t n) { return (n & kDevCount) != 0; }
+inline uint64_t dev_count_bound(uint64_t n) {  // 2^bits >= the bound the tag was made with
+  const uint64_t b = (n >> 48) & 0x7f;
+  return b >= 63 ? ~uint64_t{0} : uint64_t{1} << b;
+}
+
+// Grid-stride loop over [0, n) (64-bit safe; n a value or a tagged device count, read once).
+#define TV_GRID_LOOP(i, n)                                                                      \
+  for (uint64_t i = uint64_t(blockIdx.x) * blockDim.x + threadIdx.x,                             \
+                i##_end = ::tilevis::cuda::count_of(uint64_t(n));                                \
+       i < i##_end; i += uint64_t(gridDim.x) * blockDim.x)
 
 // ---- atomics that also run single-threaded on the host -------------------------------------
 
@@ -205,8 +228,9 @@ TV_HD inline uint32_t popc(uint32_t v) {
 
 // Warp-stride loop over [0, n): warp w takes elements w, w + warps, ... (64-bit safe).
 #define TV_WARP_LOOP(w, n)                                                                   \
-  for (uint64_t w = (uint64_t(blockIdx.x) * blockDim.x + threadIdx.x) / 32; w < uint64_t(n); \
-       w += uint64_t(gridDim.x) * blockDim.x / 32)
+  for (uint64_t w = (uint64_t(blockIdx.x) * blockDim.x + threadIdx.x) / 32,                  \
+                w##_end = ::tilevis::cuda::count_of(uint64_t(n));                            \
+       w < w##_end; w += uint64_t(gridDim.x) * blockDim.x / 32)
 
 enum class Where { gpu, cpu };
 
@@ -287,10 +311,11 @@ class Exec {
     if (n == 0) return;
     ++queued;
     if (where == Where::cpu) {
-      for (uint64_t k = 0; k < n; ++k) body(args, host_index(k, n));
+      const uint64_t m = count_of(n);
+      for (uint64_t k = 0; k < m; ++k) body(args, host_index(k, m));
       return;
     }
-    const uint64_t want = (n + block - 1) / block;
+    const uint64_t want = ((is_dev_count(n) ? dev_count_bound(n) : n) + block - 1) / block;
     const uint32_t blocks = uint32_t(want < grid_blocks * 8ull ? want : grid_blocks * 8ull);
     launch_kernel(reinterpret_cast<const void*>(kernel), blocks, block, &args, n);
   }
@@ -311,20 +336,26 @@ class Exec {
 
   // out[i] = sum of in[0..i) for i in [0, n]; in has n elements. Returns nothing: out[n]
   // holds the total on the device.
-  void exclusive_scan(const uint32_t* in, uint64_t* out, uint64_t n);
-  void exclusive_scan(const uint32_t* in, uint32_t* out, uint64_t n);
-  // Stable sort of (key, value) pairs by the key's bits [0, end_bit).
+  // n may be a tagged device count (count_of): the scan then runs over `bound` elements, those
+  // past the count read as zeros, and out[bound] holds the total.
+  void exclusive_scan(const uint32_t* in, uint64_t* out, uint64_t n, uint64_t bound = 0);
+  void exclusive_scan(const uint32_t* in, uint32_t* out, uint64_t n, uint64_t bound = 0);
+  // Stable sort of (key, value) pairs by the key's bits [0, end_bit). n may be a tagged device
+  // count: the keys from the count to `bound` are set to all ones first and `bound` pairs are
+  // sorted (stable: the padding stays after every real pair, also one whose key is all ones);
+  // `padded`: the caller has padded them (take_sizes).
   void sort_pairs(const uint64_t* keys_in, uint64_t* keys_out, const uint32_t* vals_in, uint32_t* vals_out, uint64_t n,
-                  int end_bit);
+                  int end_bit, uint64_t bound = 0, bool padded = false);
+  uint64_t generation() const { return m_generation; }  // counts allocations and releases
 
  private:
   template <class T>
-  void scan_into(const uint32_t* in, T* out, uint64_t n);  // both exclusive_scan overloads
+  void scan_into(const uint32_t* in, T* out, uint64_t n, uint64_t bound);  // both exclusive_scan overloads
   void launch_kernel(const void* fn, uint32_t blocks, uint32_t block, const void* args, uint64_t n);
   void* temp(size_t bytes);  // scratch of CUB calls, one per stream (branches run at once)
   cudaEvent_t next_event();
   void join(int k, cudaStream_t into);  // `into` waits for side k's work queued so far
-  uint64_t m_live = 0, m_peak = 0;
+  uint64_t m_live = 0, m_peak = 0, m_generation = 0;
   cudaStream_t m_side[kSides] = {};
   int m_cur = 0;             // 0: main stream, k + 1: side k
   bool m_pending[kSides] = {};

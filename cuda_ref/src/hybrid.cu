@@ -566,7 +566,7 @@ void stage_hybrid(Pipeline<P>& p) {
   f.piece_area = p.piece_area.get();
   f.sample_area = 1.0 / double(p.f.n_samples);
   f.area = p.area.get();
-  ex.launch(k_hybrid_fold<P>, hybrid_fold<P>, ni, f);
+  ex.launch(k_hybrid_fold<P>, hybrid_fold<P>, p.N(kSzItems, ni), f);
 }
 
 template void stage_hybrid<ExactP>(Pipeline<ExactP>&);

@@ -22,7 +22,8 @@ struct PieceSource {
   const uint32_t* slot_item;  // per slot, its item (kNone: reserved, unused)
   const PEdge<P>* pool;
   TileGrid grid;
-  uint64_t n_items;
+  uint64_t n_items;            // the first clipped piece's id (device-sized: the items' upper bound)
+  const uint64_t* item_count;  // the items there are (device memory)
 };
 
 template <class P>
@@ -70,6 +71,7 @@ PieceSource<P> piece_source(Pipeline<P>& p) {
   s.pool = p.clip_edges.get();
   s.grid = p.grid;
   s.n_items = p.n_items;
+  s.item_count = p.dev ? p.sizes.get() + kSzItems : p.tri_tiles_off.get() + p.n_tris;
   return s;
 }
 
@@ -82,7 +84,8 @@ struct PassRange {
 
 template <class P>
 PassRange pass_range(Pipeline<P>& p, Pass pass) {
-  if (pass == Pass::unclipped) return {0, p.tri_tiles_off.get() + p.n_tris, p.n_items};
+  if (pass == Pass::unclipped)
+    return {0, p.dev ? p.sizes.get() + kSzItems : p.tri_tiles_off.get() + p.n_tris, p.n_items};
   return {p.n_items, p.counters.get() + kSlotsUsed, p.caps.clip_slots};
 }
 

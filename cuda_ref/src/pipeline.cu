@@ -7,6 +7,7 @@
 #include <iterator>
 #include <numeric>
 
+#include <cub/block/block_radix_sort.cuh>
 #include <cub/device/device_radix_sort.cuh>
 #include <cub/device/device_scan.cuh>
 
@@ -120,6 +121,7 @@ void* Exec::alloc(size_t bytes) {
   }
   m_live += bytes;
   m_peak = std::max(m_peak, m_live);
+  ++m_generation;
   return p;
 }
 
@@ -127,6 +129,7 @@ void Exec::release(void* p, size_t bytes) {
   if (where == Where::cpu) std::free(p);
   else cudaFree(p);
   m_live -= bytes;
+  ++m_generation;
 }
 
 void Exec::upload(void* dst, const void* src, size_t bytes) {
@@ -235,42 +238,116 @@ struct ZeroPadded {
   using pointer = const uint32_t*;
   using reference = uint32_t;
   const uint32_t* in;
-  uint64_t n;
+  uint64_t n;  // a value or a tagged device count (count_of)
   std::ptrdiff_t at = 0;
   __host__ __device__ uint32_t operator[](std::ptrdiff_t i) const {
     const uint64_t k = uint64_t(at + i);
-    return k < n ? in[k] : 0u;
+    return k < count_of(n) ? in[k] : 0u;
   }
   __host__ __device__ uint32_t operator*() const { return (*this)[0]; }
   __host__ __device__ ZeroPadded operator+(std::ptrdiff_t d) const { return {in, n, at + d}; }
 };
+
+__global__ void k_pad_keys(uint64_t* keys, uint64_t n, uint64_t bound) {
+  const uint64_t from = count_of(n);
+  for (uint64_t i = from + uint64_t(blockIdx.x) * blockDim.x + threadIdx.x; i < bound; i += uint64_t(gridDim.x) * blockDim.x)
+    keys[i] = ~uint64_t{0};
+}
+
+// A sort of at most kSmallSort pairs in one block (cub::BlockRadixSort, stable like the device
+// sort): one launch where CUB's device sort takes a histogram, a scan and a pass per digit once
+// the pairs outgrow its single tile (a device-sized run's bound can, where the count would not:
+// the bunny's silhouette edges, 6 launches and about 30 us more, measured with Nsight Compute).
+constexpr uint32_t kSmallSortThreads = 256, kSmallSortItems = 16, kSmallSort = kSmallSortThreads * kSmallSortItems;
+__global__ void __launch_bounds__(kSmallSortThreads)
+    k_sort_small(const uint64_t* keys_in, uint64_t* keys_out, const uint32_t* vals_in, uint32_t* vals_out, uint32_t n,
+                 int end_bit) {
+  using Sort = cub::BlockRadixSort<uint64_t, kSmallSortThreads, kSmallSortItems, uint32_t>;
+  __shared__ typename Sort::TempStorage tmp;
+  uint64_t k[kSmallSortItems];
+  uint32_t v[kSmallSortItems];
+  for (uint32_t j = 0; j < kSmallSortItems; ++j) {  // blocked: thread t holds items t * kSmallSortItems + j
+    const uint32_t i = threadIdx.x * kSmallSortItems + j;
+    k[j] = i < n ? keys_in[i] : ~uint64_t{0};  // past n: after every pair (stable, and last in input)
+    v[j] = i < n ? vals_in[i] : 0u;
+  }
+  Sort(tmp).Sort(k, v, 0, end_bit);
+  for (uint32_t j = 0; j < kSmallSortItems; ++j) {
+    const uint32_t i = threadIdx.x * kSmallSortItems + j;
+    if (i < n) {
+      keys_out[i] = k[j];
+      vals_out[i] = v[j];
+    }
+  }
+}
+
+__global__ void k_take_sizes(SizeArgs a, uint64_t pads) {
+  const bool over = sizes_over(a);  // before element 0 writes the sizes
+  const uint64_t i0 = uint64_t(blockIdx.x) * blockDim.x + threadIdx.x;
+  if (i0 == 0) take_sizes(a, 0);
+  for (uint64_t i = i0; i < pads; i += uint64_t(gridDim.x) * blockDim.x) pad_keys(a, over, i);
+}
+
 }  // namespace
 
+void queue_take_sizes(Exec& ex, const SizeArgs& a) {
+  ++ex.queued;
+  uint64_t pads = 0;  // the most padding elements there can be (every count 0)
+  for (uint32_t k = 0; k < a.n_pads; ++k) pads += a.pad[k].bound;
+  if (ex.where == Where::cpu) {
+    const bool over = sizes_over(a);
+    take_sizes(a, 0);
+    for (uint64_t i = 0; i < pads; ++i) pad_keys(a, over, i);  // past the ranges' ends: nothing
+    return;
+  }
+  const uint64_t want = (pads + 255) / 256;
+  k_take_sizes<<<uint32_t(want < 1 ? 1 : want < ex.grid_blocks ? want : ex.grid_blocks), 256, 0, ex.stream>>>(a, pads);
+  TV_CUDA(cudaGetLastError());
+}
+
 template <class T>
-void Exec::scan_into(const uint32_t* in, T* out, uint64_t n) {
+void Exec::scan_into(const uint32_t* in, T* out, uint64_t n_in, uint64_t bound) {
   ++queued;
+  const uint64_t n = is_dev_count(n_in) ? bound : n_in;  // elements scanned (past the count: zeros)
   if (where == Where::cpu) {
+    const uint64_t m = count_of(n_in);
     T s = 0;
     for (uint64_t i = 0; i < n; ++i) {
-      const T v = in[i];
+      const T v = i < m ? in[i] : 0;
       out[i] = s;
       s += v;
     }
     out[n] = s;
     return;
   }
-  const ZeroPadded padded{in, n};
+  const ZeroPadded padded{in, n_in};
   size_t bytes = 0;
   TV_CUDA(cub::DeviceScan::ExclusiveScan(nullptr, bytes, padded, out, ::cuda::std::plus<T>{}, T{0}, n + 1, stream));
   void* t = temp(bytes);
   TV_CUDA(cub::DeviceScan::ExclusiveScan(t, bytes, padded, out, ::cuda::std::plus<T>{}, T{0}, n + 1, stream));
 }
 
-void Exec::exclusive_scan(const uint32_t* in, uint64_t* out, uint64_t n) { scan_into(in, out, n); }
-void Exec::exclusive_scan(const uint32_t* in, uint32_t* out, uint64_t n) { scan_into(in, out, n); }
+void Exec::exclusive_scan(const uint32_t* in, uint64_t* out, uint64_t n, uint64_t bound) { scan_into(in, out, n, bound); }
+void Exec::exclusive_scan(const uint32_t* in, uint32_t* out, uint64_t n, uint64_t bound) { scan_into(in, out, n, bound); }
 
 void Exec::sort_pairs(const uint64_t* keys_in, uint64_t* keys_out, const uint32_t* vals_in, uint32_t* vals_out,
-                      uint64_t n, int end_bit) {
+                      uint64_t n_in, int end_bit, uint64_t bound, bool padded) {
+  uint64_t n = n_in;
+  if (is_dev_count(n_in)) {
+    n = bound;
+    if (n == 0) return;
+  }
+  if (is_dev_count(n_in) && !padded) {
+    ++queued;
+    uint64_t* keys = const_cast<uint64_t*>(keys_in);
+    if (where == Where::cpu) {
+      for (uint64_t i = count_of(n_in); i < bound; ++i) keys[i] = ~uint64_t{0};
+    } else {
+      const uint64_t want = (bound + 255) / 256;
+      k_pad_keys<<<uint32_t(want < grid_blocks ? want : grid_blocks), 256, 0, stream>>>(keys, n_in, bound);
+      TV_CUDA(cudaGetLastError());
+    }
+  }
   if (n == 0) return;
   ++queued;
   if (end_bit < 1) end_bit = 1;
@@ -284,6 +361,11 @@ void Exec::sort_pairs(const uint64_t* keys_in, uint64_t* keys_out, const uint32_
       keys_out[i] = keys_in[order[i]];
       vals_out[i] = vals_in[order[i]];
     }
+    return;
+  }
+  if (n <= kSmallSort) {
+    k_sort_small<<<1, kSmallSortThreads, 0, stream>>>(keys_in, keys_out, vals_in, vals_out, uint32_t(n), end_bit);
+    TV_CUDA(cudaGetLastError());
     return;
   }
   size_t bytes = 0;
@@ -358,6 +440,7 @@ bool run_once(Pipeline<P>& p, Timer& t) {
   else p.ex.read_log.clear();
   p.ex.begin_frame();
   p.ex.zero(p.counters.get(), kCounterCount * 8);
+  if (p.dev) p.ex.zero(p.sizes.get(), kSizeSlots * 8);
   // The id and area buffers are cleared beside the stages (side stream 2) long before the
   // raster passes and the fold, which wait for that point.
   p.ex.branch(2);
@@ -464,6 +547,126 @@ class FrameGraph {
   uint32_t m_nodes = 0;
 };
 
+// After a device-sized run has ended: the one check of the frame (the clipping pools' counters
+// and the size slots, two small copies). False: a pool or a bound was too small (pools grown;
+// the caller runs the frame with host reads, which learns the bounds). True: the run's sizes
+// are now on the host (n_setup ... n_tile_edges hold them, no longer the bounds).
+template <class P>
+bool dev_fits(Pipeline<P>& p) {
+  uint64_t c[kFloatAnomalies], s[kSizeSlots];
+  p.ex.download(c, p.counters.get(), sizeof(c));
+  p.ex.download(s, p.sizes.get(), sizeof(s));
+  const bool pools = pools_fit(p, c);
+  if (s[kSzOverflow]) return false;
+  p.n_setup = s[kSzSetup];
+  p.n_edges = s[kSzEdges];
+  p.n_tris = s[kSzTris];
+  p.n_items = s[kSzItems];
+  p.n_tile_edges = s[kSzTileEdges];
+  return pools;
+}
+
+// Runs with host reads until every pool fits (they learn the bounds, Capacities), then
+// device-sized runs until one fits (the first of them allocates what the bounds need, so a
+// capture that follows allocates nothing). Returns the runs that did not fit.
+template <class P>
+uint32_t settle_dev(Pipeline<P>& p, Timer& t) {
+  uint32_t misses = 0;
+  for (;;) {
+    p.dev = false;
+    p.ex.reads = Exec::Reads::log;
+    while (!run_once(p, t))
+      if (++misses > 32) throw std::runtime_error("cuda: buffers still overflow after 32 retries");
+    p.ex.reads = Exec::Reads::direct;
+    p.dev = true;
+    run_once(p, t);
+    const bool fits = dev_fits(p);
+    p.dev = false;
+    if (fits) return misses;
+    if (++misses > 32) throw std::runtime_error("cuda: a device-sized run still overflows after 32 retries");
+  }
+}
+
+// The frame as one CUDA graph of a device-sized run: no size of any frame is in it (grids, scans
+// and sorts over the learned bounds, counts read on the device), so any frame whose sizes fit the
+// bounds runs through it unchanged, and a new frame costs one graph launch and one check after it
+// (dev_fits). Valid while no buffer moves (Exec::generation), the frame's constants (FrameDev:
+// vertex, triangle and sample counts, viewport) and the bounds stay.
+template <class P>
+class DevGraph {
+ public:
+  explicit DevGraph(Pipeline<P>& p) : m_p(p) {}
+  ~DevGraph() { reset(); }
+  DevGraph(const DevGraph&) = delete;
+  DevGraph& operator=(const DevGraph&) = delete;
+  void reset() {
+    if (m_exec) cudaGraphExecDestroy(m_exec);
+    if (m_graph) cudaGraphDestroy(m_graph);
+    m_exec = nullptr;
+    m_graph = nullptr;
+  }
+  bool valid() const {
+    const Capacities& c = m_p.caps;
+    return m_exec && m_gen == m_p.ex.generation() && std::memcmp(&m_f, &m_p.f, sizeof(FrameDev)) == 0 &&
+           m_bounds == std::vector<uint64_t>{c.setup, c.edges, c.tris, c.items, c.tile_edges, c.deep_pairs,
+                                             c.candidates, c.clip_slots, c.clip_edges, c.slot_factor};
+  }
+  // Records run() (a device-sized run_once) after settle_dev: it must neither read nor allocate.
+  template <class Run>
+  void capture(Run&& run) {
+    reset();
+    Exec& ex = m_p.ex;
+    std::vector<uint8_t> log;
+    std::swap(log, ex.read_log);  // empty: any host read inside the capture throws
+    ex.read_pos = 0;
+    ex.reads = Exec::Reads::replay;
+    m_p.dev = true;
+    const uint64_t gen = ex.generation();
+    TV_CUDA(cudaStreamBeginCapture(ex.main_stream, cudaStreamCaptureModeRelaxed));
+    bool ok = false;
+    try {
+      ok = run();
+    } catch (...) {
+      cudaGraph_t g = nullptr;
+      cudaStreamEndCapture(ex.main_stream, &g);
+      if (g) cudaGraphDestroy(g);
+      ex.reads = Exec::Reads::direct;
+      std::swap(log, ex.read_log);
+      m_p.dev = false;
+      throw;
+    }
+    ex.reads = Exec::Reads::direct;
+    std::swap(log, ex.read_log);
+    m_p.dev = false;
+    TV_CUDA(cudaStreamEndCapture(ex.main_stream, &m_graph));
+    if (!ok || ex.generation() != gen) throw std::runtime_error("cuda: the device-sized capture allocated or failed");
+    TV_CUDA(cudaGraphInstantiate(&m_exec, m_graph, 0));
+    size_t nodes = 0;
+    TV_CUDA(cudaGraphGetNodes(m_graph, nullptr, &nodes));
+    m_nodes = uint32_t(nodes);
+    m_gen = ex.generation();
+    m_f = m_p.f;
+    const Capacities& c = m_p.caps;
+    m_bounds = {c.setup, c.edges, c.tris, c.items, c.tile_edges, c.deep_pairs, c.candidates, c.clip_slots, c.clip_edges, c.slot_factor};
+  }
+  // One frame: the graph launched, waited for, checked (dev_fits).
+  bool launch() {
+    TV_CUDA(cudaGraphLaunch(m_exec, m_p.ex.main_stream));
+    TV_CUDA(cudaStreamSynchronize(m_p.ex.main_stream));
+    return dev_fits(m_p);
+  }
+  uint32_t nodes() const { return m_nodes; }
+
+ private:
+  Pipeline<P>& m_p;
+  cudaGraph_t m_graph = nullptr;
+  cudaGraphExec_t m_exec = nullptr;
+  uint64_t m_gen = 0;
+  FrameDev m_f{};
+  std::vector<uint64_t> m_bounds;
+  uint32_t m_nodes = 0;
+};
+
 __global__ void k_empty(uint64_t* p) {
   if (p && threadIdx.x == 1024) *p = 0;  // never: keeps the launch from being optimised away
 }
@@ -513,6 +716,7 @@ CudaResult run(const trace::Frame& frame, const CudaConfig& cfg) {
   upload_frame_common(ex, frame, cfg.depth_bits, p.f, p.draws_host, p.vertices, p.indices, p.tri_draw, p.draws,
                       p.sample_xy);
   p.counters.need(kCounterCount);
+  p.sizes.need(kSizeSlots);
   ex.sync();
   r.upload_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 
@@ -597,6 +801,37 @@ CudaResult run(const trace::Frame& frame, const CudaConfig& cfg) {
     r.graph_total_ms = r.stream_total_ms;
   }
   ex.reads = Exec::Reads::direct;
+  // The headline new frame: one launch of the device-sized graph (no size of this frame in it,
+  // none read on the host during it; the check after it, dev_fits, is outside the events, like
+  // the z-buffers' overflow check). The results below are this run's. Finer occlusion bins
+  // read a size on the host: there the new frame stays the stream's.
+  if (p.obins_x * p.obins_y == 1) {
+    r.retries += settle_dev(p, timer);
+    if (ex.where == Where::gpu) {
+      // Two device-sized graphs, as for the known frame: one with an event at every stage
+      // boundary (stage_ms, probed_total_ms: the headline's stages), one with only the ends.
+      timer.all = true;
+      DevGraph<P> probed(p), g(p);
+      probed.capture([&] { return run_once(p, timer); });
+      timer.all = false;
+      g.capture([&] { return run_once(p, timer); });
+      auto launch = [&](DevGraph<P>& d) {
+        if (!d.launch()) throw std::runtime_error("cuda: the device-sized graph overflowed on its own frame");
+        return true;
+      };
+      launch(probed);
+      launch(g);
+      r.device_graph_nodes = g.nodes();
+      timer.all = true;
+      r.stage_ms.clear();
+      timed([&] { return launch(probed); }, r.stage_ms, r.probed_total_ms);
+      timer.all = false;
+      std::vector<StageTime> unused;
+      timed([&] { return launch(g); }, unused, r.total_ms);  // last: the results are this graph's run
+      timer.all = true;
+    }
+    r.device_sized = true;
+  }
 
   // Results of the last run.
   t0 = std::chrono::steady_clock::now();
@@ -673,7 +908,8 @@ CudaResult run(const trace::Frame& frame, const CudaConfig& cfg) {
     if (cudaDeviceGetAttribute(&khz, cudaDevAttrMemoryClockRate, 0) == cudaSuccess &&
         cudaDeviceGetAttribute(&bus_bits, cudaDevAttrGlobalMemoryBusWidth, 0) == cudaSuccess)
       r.dram_bandwidth_gbs = 2.0 * khz * 1e3 * (bus_bits / 8.0) / 1e9;  // double data rate
-    measure_launch_costs(ex, r);
+    // Thousands of empty launches: left out where each launch is slow (compute-sanitizer).
+    if (!std::getenv("TILEVIS_CUDA_NO_LAUNCH_PROBE")) measure_launch_costs(ex, r);
   }
   return r;
 }
@@ -684,6 +920,7 @@ std::vector<FrameTime> run_frames(const std::vector<trace::Frame>& frames, const
   Pipeline<P> p(ex);
   p.cfg = cfg;
   p.counters.need(kCounterCount);
+  p.sizes.need(kSizeSlots);
   Timer timer(ex);
   std::vector<FrameTime> out(frames.size());
   std::vector<std::vector<double>> lap_ms(frames.size());
@@ -693,16 +930,36 @@ std::vector<FrameTime> run_frames(const std::vector<trace::Frame>& frames, const
                         p.sample_xy);
     ex.sync();
   };
-  // One new frame: run until no pool overflows; its time from the events, or the host clock
-  // around every try when it had to grow.
+  // One new frame: one launch of the device-sized graph (DevGraph) when the pipeline has one
+  // that still holds (no buffer moved, same frame constants and bounds) and the frame fits its
+  // bounds: its time from the events. Otherwise (the first frames, a frame past a bound) runs
+  // with host reads until everything fits, the bounds learned, and the graph recorded again:
+  // the host clock around all of it. The host emulation: runs with host reads, then one
+  // device-sized run (its results are the frame's).
+  DevGraph<P> dg(p);
+  const bool gpu = ex.where == Where::gpu;
   auto new_frame = [&](uint32_t& retries) {
-    ex.reads = Exec::Reads::log;
     const auto t0 = clock::now();
-    uint32_t tries = 0;
-    while (!run_once(p, timer))
-      if (++tries > 32) throw std::runtime_error("cuda: buffers still overflow after 32 retries");
-    retries += tries;
-    return tries ? std::chrono::duration<double, std::milli>(clock::now() - t0).count() : timer.ms(0, kStageCount);
+    if (gpu && dg.valid()) {
+      if (dg.launch()) return timer.ms(0, kStageCount);
+      ++retries;
+    } else if (!gpu && p.caps.items) {  // the emulation: a device-sized run within the bounds so far
+      ex.reads = Exec::Reads::direct;
+      p.dev = true;
+      run_once(p, timer);
+      p.dev = false;
+      if (dev_fits(p)) return std::chrono::duration<double, std::milli>(clock::now() - t0).count();
+      ++retries;
+    }
+    retries += settle_dev(p, timer);
+    if (gpu) {
+      const bool all = timer.all;
+      timer.all = false;
+      dg.capture([&] { return run_once(p, timer); });
+      timer.all = all;
+      if (!dg.launch()) throw std::runtime_error("cuda: the device-sized graph overflowed right after it was recorded");
+    }
+    return std::chrono::duration<double, std::milli>(clock::now() - t0).count();
   };
   for (uint32_t lap = 0; lap <= laps; ++lap)
     for (size_t k = 0; k < frames.size(); ++k) {
@@ -730,9 +987,10 @@ std::vector<FrameTime> run_frames(const std::vector<trace::Frame>& frames, const
     const bool all = timer.all;
     for (size_t k = 0; k < frames.size(); ++k) {
       upload(k);
-      uint32_t unused = 0;
       timer.all = true;
-      new_frame(unused);  // the read log of this frame
+      ex.reads = Exec::Reads::log;  // the read log of this frame
+      for (uint32_t tries = 0; !run_once(p, timer);)
+        if (++tries > 32) throw std::runtime_error("cuda: buffers still overflow after 32 retries");
       timer.all = false;
       FrameGraph g(ex);
       g.capture([&] { return run_once(p, timer); });

@@ -12,6 +12,7 @@
 namespace tilevis::cuda {
 
 inline constexpr uint32_t kNone = 0xffffffffu;
+inline constexpr uint32_t kCullLanes = 8;  // culling threads per (tile, triangle) item (cull.cu)
 
 // The tile grid. A tile's rectangle ends at the viewport's right and bottom edges: the last
 // column and row of tiles may reach past the screen, and nothing there is visible.
@@ -49,6 +50,88 @@ enum Counter : uint32_t {
   kFloatExactAreas,     // float: visible pieces whose area sign was not proven: the exact region's area
   kCounterCount
 };
+
+// A device-sized run (Pipeline::dev): the sizes that a run in the other modes reads on the host
+// (setup triangles, silhouette edges, front triangles, (tile, triangle) and (tile, edge) pairs)
+// stay on the device. After each stage's scan one thread (take_sizes) clamps the totals to the
+// host's upper bounds (Capacities, learned from earlier runs): within them, the counts the next
+// kernels read (tagged counts, exec.cuh); past one, kSzOverflow is set and every later count is
+// 0, so nothing writes past a buffer, and the run is repeated with host reads once it has ended
+// (one check of the counters after the frame). The emit kernels get counts of their own, 0 on
+// overflow, so a total past its bound writes nothing.
+enum SizeSlot : uint32_t {
+  kSzSetup, kSzUses, kSzSetupEmit,                                // after setup's scan
+  kSzEdges, kSzTris, kSzFrontBuild, kSzSilScatter,                // after the silhouettes' scans
+  kSzItems, kSzTileEdges, kSzCullLanes, kSzTriEmit, kSzEdgeEmit,  // after binning's scans
+  kSzOverflow,
+  kSzTotals,  // the totals as found, two per stage (for growing the bounds)
+  kSizeSlots = kSzTotals + 6
+};
+// The same kernel pads the key lists the stage's sorts will sort: keys from the count to the
+// bound set to all ones (Exec::sort_pairs' padding, done here so that it costs no launch).
+struct SizePad {
+  uint64_t* keys;
+  uint32_t which;  // the count: total 0 or 1
+  uint64_t bound;
+};
+struct SizeArgs {
+  uint64_t* sz;
+  uint32_t stage;  // 0 setup, 1 silhouettes, 2 binning
+  const uint64_t* total[2];
+  uint64_t bound[2];
+  uint64_t n_triangles, cull_lanes;
+  SizePad pad[4];
+  uint32_t n_pads;
+};
+// Whether the stage's totals passed their bounds (or an earlier stage's did). Every thread of
+// the kernel computes it; only element 0 writes kSzOverflow, and a thread that reads it before
+// that write finds this stage's own reason itself.
+TV_HD inline bool sizes_over(const SizeArgs& a) {
+  const uint64_t t0 = *a.total[0], t1 = a.total[1] ? *a.total[1] : 0;
+  return a.sz[kSzOverflow] != 0 || t0 > a.bound[0] || t1 > a.bound[1];
+}
+// Padding element i (over every pad's range [count, bound), one after the other).
+TV_HD inline void pad_keys(const SizeArgs& a, bool over, uint64_t i) {
+  for (uint32_t k = 0; k < a.n_pads; ++k) {
+    const SizePad& p = a.pad[k];
+    const uint64_t from = over ? 0 : *a.total[p.which];
+    if (i < p.bound - from) {
+      p.keys[from + i] = ~uint64_t{0};
+      return;
+    }
+    i -= p.bound - from;
+  }
+}
+TV_HD inline void take_sizes(const SizeArgs& a, uint64_t) {
+  uint64_t* s = a.sz;
+  const uint64_t t0 = *a.total[0], t1 = a.total[1] ? *a.total[1] : 0;
+  const bool over = sizes_over(a);
+  s[kSzTotals + 2 * a.stage] = t0;
+  s[kSzTotals + 2 * a.stage + 1] = t1;
+  if (over) s[kSzOverflow] = 1;
+  const uint64_t k = over ? 0 : 1;
+  switch (a.stage) {
+    case 0:
+      s[kSzSetup] = k * t0;
+      s[kSzUses] = k * 3 * t0;
+      s[kSzSetupEmit] = k * a.n_triangles;
+      break;
+    case 1:
+      s[kSzEdges] = k * t0;
+      s[kSzTris] = k * t1;
+      s[kSzFrontBuild] = k * s[kSzSetup];
+      s[kSzSilScatter] = k * s[kSzUses];
+      break;
+    default:
+      s[kSzItems] = k * t0;
+      s[kSzTileEdges] = k * t1;
+      s[kSzCullLanes] = k * t0 * a.cull_lanes;
+      s[kSzTriEmit] = k * s[kSzTris];
+      s[kSzEdgeEmit] = k * s[kSzEdges];
+      break;
+  }
+}
+void queue_take_sizes(Exec& ex, const SizeArgs& a);  // one thread on the stream in use
 
 // The silhouette hash table (silhouettes.cu). A slot: the key + 1 (0: empty) and, in the same 16 bytes (one memory transaction),
 // uses (bits 0-15), front-facing uses (16-31) and the bitwise complement of the lowest use
@@ -90,6 +173,11 @@ struct Capacities {
   uint64_t clip_slots = 1 << 16;
   uint64_t clip_edges = 1 << 20;
   uint32_t slot_factor = 4;  // piece slots reserved per clipping item: factor * (candidates + 1)
+  // Upper bounds of a device-sized run's sizes (SizeSlot), learned from the runs with host reads.
+  uint64_t setup = 0, edges = 0, tris = 0, items = 0, tile_edges = 0;
+  static void learn(uint64_t& cap, uint64_t v) {
+    if (v > cap) cap = v + v / 32 + 32;
+  }
 };
 
 template <class P>
@@ -107,6 +195,13 @@ struct Pipeline {
   Buf<DrawInfo> draws;
   Buf<uint32_t> sample_xy;      // per sample: x | y << 16
   Buf<uint64_t> counters;       // Counter
+  // Device-sized run: the sizes stay on the device (SizeSlot); n_setup, n_edges, n_tris,
+  // n_items and n_tile_edges hold the host's upper bounds (caps) instead of the sizes.
+  bool dev = false;
+  Buf<uint64_t> sizes;
+  // The count a kernel, scan or sort gets: `host` itself, or (device-sized) the tagged count of
+  // a size slot whose upper bound is `host`.
+  uint64_t N(uint32_t slot, uint64_t host) const { return dev ? dev_count(sizes.get() + slot, host) : host; }
 
   // Setup.
   Buf<uint32_t> fan_count;
@@ -205,7 +300,7 @@ struct Pipeline {
                     &cand_edges, &cand_scratch, &clip_items, &item_slot, &indices, &tri_draw, &sample_xy,
                     &obin_cnt, &obin_val, &obin_val_sorted, &obin_begin, &obin_count, &slot_item, &occ_units})
       b->bind(&e);
-    for (auto* b : {&fan_offset, &use_key, &sil_offset, &sil_key, &sil_key_sorted,
+    for (auto* b : {&sizes, &fan_offset, &use_key, &sil_offset, &sil_key, &sil_key_sorted,
                     &front_offset, &tri_tiles_off, &edge_tiles_off, &item_key, &item_key_sorted, &occ_key,
                     &occ_key_sorted, &tedge_key, &tedge_key_sorted, &area_key, &area_key_sorted, &deep, &cands, &slot_poly, &counters, &heavy, &occ_unit_off,
                     &obin_off, &obin_key, &obin_key_sorted})
@@ -268,6 +363,10 @@ template <class P>
 void stage_cull(Pipeline<P>& p);
 template <class P>
 bool stage_clip(Pipeline<P>& p);  // false: a buffer overflowed (capacities grown; run again)
+// The clipping pools' counters c[0, kFloatAnomalies) checked: false when one overflowed (its
+// capacity grown). stage_clip checks them itself, except in a device-sized run.
+template <class P>
+bool pools_fit(Pipeline<P>& p, const uint64_t* c);
 // Occlusion and raster run once per kind of piece (pieces.cuh): the unclipped items' pieces on
 // side stream 0 as soon as culling is done (beside the clipping), the clipped ones' after it.
 enum class Pass;

@@ -304,6 +304,7 @@ TV_HD void exact_area(const ExactAreaArgs<P>& a, uint64_t p) {
   if constexpr (!P::kExact) {
     // Slots past those this run used keep an earlier run's flags.
     if (p >= a.src.n_items && p - a.src.n_items >= a.counters[kSlotsUsed]) return;
+    if (p < a.src.n_items && p >= *a.src.item_count) return;  // device-sized: past the items there are
     if (a.visible[p] != 2) return;
     PEdge<P> local[kTileCap];
     const PieceView<P> v = piece_at<P>(a.src, p, local);
@@ -331,7 +332,7 @@ void stage_fold(Pipeline<P>& p) {
     e.area_scale = 2.0 * double(1u << p.f.subpixel_bits) * double(1u << p.f.subpixel_bits);
     p.ex.launch(k_exact_area<P>, exact_area<P>, p.n_items + p.caps.clip_slots, e);
   }
-  p.ex.launch(k_fold_area<P>, fold_area<P>, p.n_items, out_args(p));
+  p.ex.launch(k_fold_area<P>, fold_area<P>, p.N(kSzItems, p.n_items), out_args(p));
 }
 
 template void raster_begin<ExactP>(Pipeline<ExactP>&);

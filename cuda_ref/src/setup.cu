@@ -293,11 +293,18 @@ void stage_setup(Pipeline<P>& p) {
   a.fan_offset = p.fan_offset.need(n + 1);
   ex.launch(k_setup_count, setup_count, n, a);
   ex.exclusive_scan(a.fan_count, p.fan_offset.get(), n);
-  p.n_setup = ex.read(p.fan_offset.get() + n);  // sync: the setup triangle count sizes what follows
+  if (p.dev) {  // the count stays on the device, within the learned bound
+    p.n_setup = p.caps.setup;
+    SizeArgs s{p.sizes.get(), 0, {p.fan_offset.get() + n, nullptr}, {p.n_setup, 0}, n, 0, {}, 0};
+    queue_take_sizes(ex, s);
+  } else {
+    p.n_setup = ex.read(p.fan_offset.get() + n);  // sync: the setup triangle count sizes what follows
+    Capacities::learn(p.caps.setup, p.n_setup);
+  }
   a.setup = p.setup.need(p.n_setup + 1);
   a.use_key = p.use_key.need(3 * p.n_setup + 1);
   a.use_forward = p.use_forward.need(3 * p.n_setup + 1);
-  ex.launch(k_setup_emit, setup_emit, n, a);
+  ex.launch(k_setup_emit, setup_emit, p.N(kSzSetupEmit, n), a);
 }
 
 template void stage_setup<ExactP>(Pipeline<ExactP>&);

@@ -34,6 +34,7 @@ struct HashArgs {
   const uint64_t* offset;
   uint64_t* sil_key;
   uint32_t* sil_use;
+  uint64_t key_base;  // vertices + 1: the sort key of (lo, hi) is lo * key_base + hi (a boundary's hi: vertices)
 };
 
 TV_HD inline uint64_t find_slot(const HashArgs& a, uint64_t key, bool insert) {
@@ -91,7 +92,10 @@ TV_HD void hash_judge(const HashArgs& a, uint64_t u) {
 TV_HD void sil_scatter(const HashArgs& a, uint64_t u) {
   if (!a.flag[u]) return;
   const uint64_t at = a.offset[u];
-  a.sil_key[at] = a.use_key[u];
+  // (lo, hi) as one number below key_base^2, in the same order as lo << 32 | hi (hi < key_base - 1,
+  // or all ones for a boundary, which sorts last): fewer radix passes than the 64-bit key.
+  const uint64_t k = a.use_key[u], hi = uint32_t(k);
+  a.sil_key[at] = (k >> 32) * a.key_base + (hi == 0xffffffffu ? a.key_base - 1 : hi);
   a.sil_use[at] = uint32_t(u);
 }
 
@@ -161,44 +165,56 @@ void stage_silhouettes(Pipeline<P>& p) {
   while (cap < 2 * uses) cap <<= 1;  // load factor <= 1/2
   p.hash_cap = cap;
   HashArgs h{p.use_key.get(),    p.use_forward.get(),         p.setup.get(), p.hash_slots.need(cap), cap - 1,
-             p.sil_flag.need(uses + 1), p.sil_offset.need(uses + 1), nullptr,       nullptr};
+             p.sil_flag.need(uses + 1), p.sil_offset.need(uses + 1), nullptr,       nullptr, 0};
   // The table is all zeros between runs: cleared once when (re)allocated, and after each run's
   // last use on a side stream, off the stages' chain.
   if (p.hash_clean_at != h.slots || p.hash_clean < cap) ex.zero(h.slots, cap * sizeof(HashSlot));
-  ex.launch(k_hash_insert, hash_insert, uses, h);
-  ex.launch(k_hash_judge, hash_judge, uses, h);
-  ex.exclusive_scan(h.flag, p.sil_offset.get(), uses);
+  const uint64_t n_uses = p.N(kSzUses, uses), n_setup = p.N(kSzSetup, p.n_setup);
+  ex.launch(k_hash_insert, hash_insert, n_uses, h);
+  ex.launch(k_hash_judge, hash_judge, n_uses, h);
+  ex.exclusive_scan(h.flag, p.sil_offset.get(), n_uses, uses);
 
   // Front triangles beside the hash (side stream 0), scanned here so that one read brings back
   // both counts.
   FrontArgs<P> fa{p.setup.get(), p.front_flag.need(p.n_setup + 1), p.front_offset.need(p.n_setup + 1), nullptr};
   ex.branch(0);
-  ex.launch(k_front_flag<P>, front_flag<P>, p.n_setup, fa);
-  ex.exclusive_scan(fa.flag, p.front_offset.get(), p.n_setup);
+  ex.launch(k_front_flag<P>, front_flag<P>, n_setup, fa);
+  ex.exclusive_scan(fa.flag, p.front_offset.get(), n_setup, p.n_setup);
   ex.on_main();
   ex.merge(0);
 
-  // sync: silhouette and front-triangle counts size the tile stage.
-  ex.read_many({{&p.n_edges, p.sil_offset.get() + uses}, {&p.n_tris, p.front_offset.get() + p.n_setup}});
+  if (p.dev) {  // the counts stay on the device, within the learned bounds
+    p.n_edges = p.caps.edges;
+    p.n_tris = p.caps.tris;
+    SizeArgs s{p.sizes.get(), 1, {p.sil_offset.get() + uses, p.front_offset.get() + p.n_setup}, {p.n_edges, p.n_tris}, 0, 0,
+               {{p.sil_key.need(p.n_edges + 1), 0, p.n_edges}}, 1};
+    queue_take_sizes(ex, s);
+  } else {
+    // sync: silhouette and front-triangle counts size the tile stage.
+    ex.read_many({{&p.n_edges, p.sil_offset.get() + uses}, {&p.n_tris, p.front_offset.get() + p.n_setup}});
+    Capacities::learn(p.caps.edges, p.n_edges);
+    Capacities::learn(p.caps.tris, p.n_tris);
+  }
 
   fa.tris = p.tris.need(p.n_tris + 1);
   ex.branch(0);
-  ex.launch(k_front_build<P>, front_build<P>, p.n_setup, fa);
+  ex.launch(k_front_build<P>, front_build<P>, p.N(kSzFrontBuild, p.n_setup), fa);
   ex.on_main();
 
   h.sil_key = p.sil_key.need(p.n_edges + 1);
   h.sil_use = p.sil_use.need(p.n_edges + 1);
-  ex.launch(k_sil_scatter, sil_scatter, uses, h);
+  h.key_base = p.f.n_vertices + 1;
+  ex.launch(k_sil_scatter, sil_scatter, p.N(kSzSilScatter, uses), h);
   ex.branch(1);
   ex.zero(h.slots, cap * sizeof(HashSlot));
   ex.on_main();
   p.hash_clean_at = h.slots;
   p.hash_clean = cap;
-  const int end_bit = int(32 + bits_for(p.f.n_vertices));
+  const int end_bit = int(bits_for(h.key_base * h.key_base - 1));  // below 2^64: vertices < 2^32 - 1
   ex.sort_pairs(h.sil_key, p.sil_key_sorted.need(p.n_edges + 1), h.sil_use, p.sil_use_sorted.need(p.n_edges + 1),
-                p.n_edges, end_bit > 64 ? 64 : end_bit);
+                p.N(kSzEdges, p.n_edges), end_bit, p.n_edges, true);
   EdgeArgs<P> ea{p.setup.get(), p.sil_use_sorted.get(), p.edges.need(p.n_edges + 1)};
-  ex.launch(k_build_edge<P>, build_edge<P>, p.n_edges, ea);
+  ex.launch(k_build_edge<P>, build_edge<P>, p.N(kSzEdges, p.n_edges), ea);
   ex.merge(0);
 }
 

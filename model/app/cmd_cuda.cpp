@@ -234,13 +234,16 @@ int run(const CudaArgs& a, const trace::Frame& frame, uint32_t tw, uint32_t th) 
                {"probed_total_ms", r.probed_total_ms},
                {"graph_nodes", r.graph_nodes},
                {"timing", a.device == "gpu" ? "CUDA events, median of runs after warm-up. total_ms: a new frame, "
-                                              "queued stage by stage with the host reading sizes in between and no "
-                                              "graph recorded for it (= stream_total_ms); graph_total_ms: the known "
+                                              "one launch of the device-sized graph (no size of any frame in it: "
+                                              "grids, scans and sorts over bounds learned from earlier runs, counts "
+                                              "read on the device; the overflow check after it outside the events); "
+                                              "stream_total_ms: the frame queued stage by stage with the host reading "
+                                              "sizes in between, no graph; graph_total_ms: the known "
                                               "frame as one CUDA graph (sizes as the first runs read them; every "
                                               "replay checked) with events at its ends only; stage_ms from a second "
-                                              "graph with an event at every stage boundary (its total: "
-                                              "probed_total_ms); stream_stage_ms: the new frame's stages; "
-                                              "presized_total_ms: the new frame's launches with no host round trip "
+                                              "device-sized graph with an event at every stage boundary (its total: "
+                                              "probed_total_ms); stream_stage_ms: the stream's stages; "
+                                              "presized_total_ms: the stream's launches with no host round trip "
                                               "(its reads answered by the last run's, checked after)"
                                             : "host clock (emulation)"},
                {"runs", r.runs},

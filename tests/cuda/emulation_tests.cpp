@@ -145,6 +145,34 @@ TEST(Emulation, FrameSequenceGivesEachFramesIds) {
   }
 }
 
+// A device-sized run (sizes kept on the device, within bounds learned from earlier frames) of a
+// frame past those bounds: the run overflows, runs again with host reads (a retry), and every
+// frame still gets the ids a run of it alone gives. The small frame is the big one shrunk
+// about the screen's centre: same counts of vertices and triangles, fewer (tile, triangle) pairs.
+TEST(Emulation, DeviceSizedRunPastItsBoundsRunsAgain) {
+  const trace::Frame big = ct::scene("cubes");
+  trace::Frame small = big;
+  for (auto& d : small.draws)
+    for (auto& v : d.vertices) {
+      v.x *= 0.5f;
+      v.y *= 0.5f;
+    }
+  const std::vector<trace::Frame> frames = {small, big, small, big};
+  for (auto prec : {cuda::Precision::exact, cuda::Precision::floating}) {
+    const auto cfg = ct::config(cuda::Device::cpu, prec, 32, 32);
+    const auto seq = cuda::run_cuda_frames(frames, cfg, 1);
+    ASSERT_EQ(seq.size(), frames.size());
+    EXPECT_GE(seq[1].first_retries, 1u);  // big after small: past the bounds, run again
+    EXPECT_EQ(seq[2].first_retries, 0u);  // small within the bounds big left
+    EXPECT_EQ(seq[3].first_retries, 0u);
+    for (size_t k = 0; k < frames.size(); ++k) {
+      const auto alone = cuda::run_cuda(frames[k], cfg);
+      EXPECT_TRUE(alone.device_sized);
+      EXPECT_EQ(seq[k].ids_hash, cuda::ids_hash(alone.ids)) << k;
+    }
+  }
+}
+
 TEST(Emulation, RejectsBadConfig) {
   const trace::Frame f = ct::scene("cubes");
   auto cfg = ct::config(cuda::Device::cpu, cuda::Precision::exact, 0, 32);

@@ -38,6 +38,8 @@ TEST_P(ExactGpu, BitIdenticalToGolden) {
   EXPECT_GT(r.total_ms, 0.0);
   EXPECT_GT(r.peak_device_bytes, 0u);
   EXPECT_FALSE(r.device_name.empty());
+  EXPECT_TRUE(r.device_sized);  // the results above are the device-sized graph's run
+  EXPECT_GT(r.device_graph_nodes, 0u);
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, ExactGpu,
@@ -263,6 +265,35 @@ TEST(Gpu, FrameSequenceGivesEachFramesIds) {
       EXPECT_GT(seq[k].new_frame_ms, 0.0);
       EXPECT_GT(seq[k].graph_ms, 0.0);
       EXPECT_GT(seq[k].first_ms, 0.0);
+    }
+  }
+}
+
+// The device-sized graph of a sequence (DevGraph: recorded once, no frame's sizes in it) meets a
+// frame past the bounds it was recorded for: the launch overflows, the frame runs again with host
+// reads and the graph is recorded again; every frame gets the ids a run of it alone gives, and
+// in the later laps every frame runs through the one graph without a retry.
+TEST(Gpu, DeviceSizedGraphPastItsBoundsRunsAgain) {
+  REQUIRE_GPU();
+  const trace::Frame big = ct::scene("cubes");
+  trace::Frame small = big;
+  for (auto& d : small.draws)
+    for (auto& v : d.vertices) {
+      v.x *= 0.5f;
+      v.y *= 0.5f;
+    }
+  const std::vector<trace::Frame> frames = {small, big, small, big};
+  for (auto prec : {cuda::Precision::exact, cuda::Precision::floating}) {
+    auto cfg = ct::config(cuda::Device::gpu, prec, 32, 32);
+    cfg.runs = 2;
+    const auto seq = cuda::run_cuda_frames(frames, cfg, 2);
+    ASSERT_EQ(seq.size(), frames.size());
+    EXPECT_GE(seq[1].first_retries, 1u);  // big after small's graph: past its bounds
+    EXPECT_EQ(seq[2].first_retries, 0u);
+    EXPECT_EQ(seq[3].first_retries, 0u);
+    for (size_t k = 0; k < frames.size(); ++k) {
+      EXPECT_EQ(seq[k].retries, 0u) << k;  // the laps: one graph for all four frames
+      EXPECT_EQ(seq[k].ids_hash, cuda::ids_hash(cuda::run_cuda(frames[k], cfg).ids)) << k;
     }
   }
 }

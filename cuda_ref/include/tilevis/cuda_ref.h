@@ -79,10 +79,16 @@ struct CudaResult {
                                       // polygon in positive order: the exact area of the region their lines bound
 
   // Medians of the whole pipeline (trace in device memory -> id raster).
-  // total_ms (the headline): a new frame, that is the work queued stage by stage with the host
-  // reading sizes in between (host_syncs round trips) and no graph recorded for it: what a frame
-  // the pipeline has not seen costs (only buffer capacities carry over, as in any renderer);
-  // stream_total_ms is the same figure (its older name). graph_total_ms: the frame recorded as
+  // total_ms (the headline): a new frame. With device_sized (every configuration but finer
+  // occlusion bins): one launch of the device-sized graph, a CUDA graph that holds no size of
+  // any frame (kernels, scans and sorts run over upper bounds learned from earlier runs and read
+  // the counts on the device; only buffer capacities carry over, as in any renderer), then one
+  // check of overflow after the frame (outside the events; a frame past a bound runs again with
+  // host reads); the results are that run's. stream_total_ms: the work queued stage by stage with
+  // the host reading sizes in between (host_syncs round trips), no graph (without device_sized
+  // also total_ms; on the host emulation every time is this one's). stage_ms and probed_total_ms:
+  // a second device-sized graph with an event at every stage boundary (without device_sized, the
+  // known frame's, as below). graph_total_ms: the frame recorded as
   // one CUDA graph and replayed (its host reads answered by the first runs; each replay checked
   // against them): a known frame. stage_ms come from a second graph with an event at every
   // stage boundary (its own total: probed_total_ms). cpu: every time is the host emulation's.
@@ -93,6 +99,8 @@ struct CudaResult {
   // what the host round trips cost, presized_total_ms - graph_total_ms what the launches do.
   double presized_total_ms = 0;
   uint32_t graph_nodes = 0;
+  bool device_sized = false;         // total_ms is the device-sized graph's (above)
+  uint32_t device_graph_nodes = 0;
   double upload_ms = 0, download_ms = 0;
   uint32_t runs = 0;
   uint32_t retries = 0;             // grow-and-retry rounds (first run)
@@ -105,7 +113,8 @@ struct CudaResult {
   uint64_t min_dram_bytes = 0;
   double dram_bandwidth_gbs = 0;
   // Measured on the device with an empty kernel: microseconds per back-to-back launch and per
-  // launch + 8-byte copy back + wait (a host round trip).
+  // launch + 8-byte copy back + wait (a host round trip); 0 where TILEVIS_CUDA_NO_LAUNCH_PROBE is set
+  // (compute-sanitizer runs: gpu_run.sh sanitize).
   double launch_us = 0, round_trip_us = 0;
 };
 

@@ -1,0 +1,80 @@
+#!/usr/bin/env bash
+# One GPU call that builds, tests and times the tree as it is (gpu_run.sh's build and test
+# phases), then packs the binaries it built for later calls (TILEVIS_GPU_PREBUILT=1):
+#
+#   bash cuda_ref/quick_check.sh [build] [test] [emulation] [bench] [sanitize] [pack]   (default: all but sanitize)
+#
+# bench: `tilevis cuda` at 32x32 tiles, TILEVIS_QUICK_RUNS runs (default 10), on the scenes of
+# TILEVIS_QUICK_SCENES (default "bunny million slivers"), exact and float, with both CUDA
+# z-buffers timed in the same process; a table of new frame (device-sized graph), stream (sizes
+# read on the host), presized, graph and the ratios to the z-buffers, last. With .gpu carried
+# (prepare_gpu_run.sh) and the commit in .gpu/commit_src.txt (the sender writes it). $OUT gets
+# bench.json (every stats.json), prebuilt.tar.xz (pack) and gpu_run.sh's logs.tar.xz.
+set -uo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$ROOT"
+OUT="${OUT:-/tmp/quick_out}"
+export OUT
+mkdir -p "$OUT"
+# The carried libraries (gpu_run.sh build unpacks them there), for the runs outside gpu_run.sh.
+export LD_LIBRARY_PATH="/tmp/sysroot/usr/lib/x86_64-linux-gnu:/tmp/sysroot/lib/x86_64-linux-gnu${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+BUILD="$ROOT/build-gpu"
+BIN="$BUILD/model/app/tilevis"
+phases=("$@")
+[ ${#phases[@]} -gt 0 ] || phases=(build test emulation bench pack)
+t0=$SECONDS
+say() { printf 'quick_check [%4d s]: %s\n' "$((SECONDS - t0))" "$*" >&2; }
+for ph in "${phases[@]}"; do
+  case "$ph" in
+    build) bash cuda_ref/gpu_run.sh build 2>&1 | tail -n 4; say "build done" ;;
+    test)
+      TILEVIS_TEST_LABEL=gpu bash cuda_ref/gpu_run.sh test 2>&1 | tail -n 25
+      say "GPU tests: $(cat "$BUILD/work/meta/gpu_tests.txt" 2>/dev/null)" ;;
+    emulation)
+      ctest --test-dir "$BUILD" -L cuda -j "$(nproc)" --output-on-failure >"$OUT/emulation.log" 2>&1
+      say "host emulation tests: $(grep -E 'tests passed|tests failed' "$OUT/emulation.log" | tail -n 1)"
+      grep -E "\*\*\*Failed|FAILED" "$OUT/emulation.log" | head -n 20 ;;
+    sanitize)
+      bash cuda_ref/gpu_run.sh sanitize 2>&1 | tail -n 20
+      say "sanitizers: $(cat "$BUILD/work/meta/sanitizer.txt" 2>/dev/null)" ;;
+    bench)
+      rm -rf /tmp/quick && mkdir -p /tmp/quick
+      for s in ${TILEVIS_QUICK_SCENES:-bunny million slivers}; do
+        for p in ${TILEVIS_QUICK_PRECISIONS:-float exact}; do
+          "$BIN" cuda "$BUILD/gpu_traces/$s.tvt" --tile 32 --precision "$p" --runs "${TILEVIS_QUICK_RUNS:-10}" \
+            -o "/tmp/quick/${s}_$p" >"/tmp/quick/${s}_$p.log" 2>&1 || say "cuda $s $p failed: $(tail -n 2 "/tmp/quick/${s}_$p.log")"
+        done
+      done
+      python3 - "$OUT/bench.json" <<'PY'
+import glob, json, os, sys
+rows = {}
+for f in sorted(glob.glob("/tmp/quick/*/stats.json")):
+    rows[os.path.basename(os.path.dirname(f))] = json.load(open(f))
+json.dump(rows, open(sys.argv[1], "w"), indent=1)
+print("| run | new frame ms | stream | presized | graph | tiled zb ms | naive zb ms | / tiled | / naive | retries |")
+for k, s in rows.items():
+    g = lambda key: s.get(key, float("nan"))
+    print(f"| {k} | {g('total_ms'):.3f} | {g('stream_total_ms'):.3f} | {g('presized_total_ms'):.3f} | "
+          f"{g('graph_total_ms'):.3f} | {g('cuda_zbuffer_ms'):.3f} | {g('naive_zbuffer_ms'):.3f} | "
+          f"{g('cuda_zbuffer_ratio'):.2f} | {g('naive_zbuffer_ratio'):.2f} | {g('retries')} |")
+PY
+      ;;
+    pack)
+      rm -rf /tmp/prebuilt && mkdir -p /tmp/prebuilt/prebuilt/bin /tmp/prebuilt/prebuilt/lib
+      for b in model/app/tilevis tests/cuda/cuda_gpu_tests cuda_ref/gl_raster cuda_ref/cuda_gpu_report; do
+        install -D -m 755 "$BUILD/$b" "/tmp/prebuilt/prebuilt/bin/$b"
+      done
+      for b in model/app/tilevis tests/cuda/cuda_gpu_tests cuda_ref/gl_raster; do
+        ldd "$BUILD/$b" | awk '$3 ~ /^\// {print $3}'
+      done | sort -u | while read -r lib; do
+        case "$(basename "$lib")" in
+          libc.so* | libm.so* | libpthread.so* | libdl.so* | librt.so* | ld-linux* | libstdc++.so* | libgcc_s.so* | libcuda.so* | libnvidia*) ;;
+          *) cp -L "$lib" /tmp/prebuilt/prebuilt/lib/ ;;
+        esac
+      done
+      echo "$(cat .gpu/commit_src.txt 2>/dev/null || echo unknown) (built on the GPU machine)" >/tmp/prebuilt/prebuilt/commit.txt
+      tar -C /tmp/prebuilt -cf - prebuilt | xz -6 -T0 >"$OUT/prebuilt.tar.xz"
+      say "packed $(du -sh "$OUT/prebuilt.tar.xz" | cut -f1)" ;;
+    *) say "unknown phase $ph" ;;
+  esac
+done
