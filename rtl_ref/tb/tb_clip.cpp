@@ -204,9 +204,10 @@ int bench(int argc, char** argv) {
     std::printf("Clip random (seed %llu): %s; mismatches %llu\n", (unsigned long long)seed, cov.report().c_str(),
                 (unsigned long long)b.mismatches());
   }
-  // Per tile job: the RTL's clocks at one lane beside the SystemC EVU clip stage's cycles for
-  // the same work at one lane (EvuClip::cost: per triangle ceil(candidates + clips) x ii, or 1
-  // without any, plus the latency once; model defaults ii 4, latency 12).
+  // Per tile job: the RTL's clocks at one lane beside the clip stage's cost before calibration
+  // (838c783: per triangle ceil(candidates + clips) x ii 4, or 1 without any, plus a latency
+  // of 12), for reports/rtl's before-calibration table; the calibrated cost is compared with
+  // the RTL on whole frames by rtl_ref/tools/calibrated_error.py.
   std::ofstream out;
   if (!csv.empty()) {
     out.open(csv);

@@ -147,9 +147,10 @@ int bench(int argc, char** argv) {
                 (unsigned long long)b.mismatches());
     bad += b.mismatches();
   }
-  // Per tile job: the RTL's clocks at one lane beside the SystemC EVU occlude stage's cycles
-  // for the same work at one lane (EvuOcclude::cost: per triangle pieces + occlusion tests at
-  // ii 1, or 1 without any, plus the latency 10 once).
+  // Per tile job: the RTL's clocks at one lane beside the occlude stage's cost before
+  // calibration (838c783: per triangle pieces + occlusion tests at ii 1, or 1 without any, plus
+  // a latency of 10), for reports/rtl's before-calibration table; the calibrated cost is
+  // compared with the RTL on whole frames by rtl_ref/tools/calibrated_error.py.
   std::ofstream out;
   if (!csv.empty()) {
     out.open(csv);

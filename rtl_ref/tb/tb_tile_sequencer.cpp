@@ -23,8 +23,9 @@ using namespace tilevis::rtl;
 namespace {
 
 constexpr uint32_t kLanes = kSeqLanes, kTriCap = kSeqTriCap, kEdgeCap = kSeqEdgeCap;
-// The SystemC model's defaults (model/units/early_visibility_unit/early_visibility_unit.h):
-// reject {lanes 8, ii 1, latency 6}, pass_overhead_cycles 32.
+// The reject stage's cost before calibration (838c783), for reports/rtl's before-calibration
+// table: reject {lanes 8, ii 1, latency 6}, pass_overhead_cycles 32. The calibrated cost is
+// compared with the RTL on whole frames by rtl_ref/tools/calibrated_error.py.
 constexpr uint64_t kModelRejectLatency = 6, kModelPassOverhead = 32;
 
 // A job as the sequencer sees it: triangles' z_max, edges' z_min sorted ascending (stable).

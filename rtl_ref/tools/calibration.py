@@ -1,5 +1,7 @@
 #!/usr/bin/env python3
-"""Timing error of the SystemC EVU's cost functions against the RTL, per tile job and per frame.
+"""Timing error of the SystemC EVU's cost functions *before calibration* (838c783) against the
+RTL, per tile job and per frame: reports/rtl's before-calibration tables. The calibrated cost
+functions are compared with the RTL on whole frames by rtl_ref/tools/calibrated_error.py.
 
 Reads the per-tile CSVs the testbenches write with --csv (tb_tile_sequencer, tb_clip,
 tb_occlude over the dumped tile jobs) and prints a Markdown report: for each sub-unit and
