@@ -368,3 +368,28 @@ TEST(FidelityAuto, ASampleOfTilesBracketsThePrimitiveLevelsCycles) {
   EXPECT_GT(s["geometry"]["half_width_cycles"].get<double>(), 0.0);
   EXPECT_EQ(a["totals"]["param_buffer_bytes"], p["totals"]["param_buffer_bytes"]);
 }
+
+TEST(FidelityAuto, TheGeometrysIntervalAndTheRendersShareTheBudget) {
+  // Four cores, the dynamic scheduler, hybrid mode: the sampled geometry's interval and the
+  // render's add in quadrature and stay inside the budget (the render's target is what the
+  // geometry left; before, 2.04 % here). The estimate is near the primitive level's but, with
+  // four cores, not inside this interval (-2.5 %): the bias the interval does not carry.
+  const trace::Frame f = simtest::shipped("bunny", 480, 270, 4);
+  const std::vector<std::string> common = {"sim.tile_width=8", "sim.tile_height=8", "sim.mode=hybrid", "sim.cores=4",
+                                           "sim.scheduler=dynamic"};
+  auto with = [&](std::vector<std::string> extra) {
+    extra.insert(extra.end(), common.begin(), common.end());
+    return run(f, extra);
+  };
+  const auto p = with({"sim.fidelity=primitive"});
+  const auto a = with({"sim.fidelity=auto", "sim.error_budget=0.02"});
+  expect_clean(a);
+  if (a.contains("error") || p.contains("error")) return;
+  const auto& s = a["sampling"];
+  ASSERT_FALSE(s["geometry"].is_null());
+  EXPECT_TRUE(s["within_budget"].get<bool>());
+  EXPECT_LE(s["relative_half_width"].get<double>(), 0.02);
+  // A bound against gross breakage, not the accuracy claim (measured: -2.51 %).
+  EXPECT_NEAR(a["totals"]["cycles"].get<double>(), p["totals"]["cycles"].get<double>(),
+              0.04 * p["totals"]["cycles"].get<double>());
+}

@@ -200,8 +200,11 @@ void TileScheduler::dispatch_sampled(uint32_t segment, const std::vector<uint32_
     rec.estimate.tiles_observed += certain_pos.size();
     if (rec.estimate.complete && rec.rounds == 1) break;  // the whole segment in one round: simulated, not estimated
     // The budget is a share of the frame: what is simulated before this segment, earlier
-    // segments' corrections, this segment's render as estimated.
-    const double target = m_cfg.sampling.error_budget * (double(rec.start_cycle) + m_correction + rec.estimate.cycles);
+    // segments' corrections, this segment's render as estimated; the intervals already spent
+    // (a sampled geometry, earlier segments) take their part of it, in quadrature.
+    const double frame_target = m_cfg.sampling.error_budget * (double(rec.start_cycle) + m_correction + rec.estimate.cycles);
+    const double spent = frame_half_width();
+    const double target = std::sqrt(std::max(frame_target * frame_target - spent * spent, 0.01 * frame_target * frame_target));
     if (rec.estimate.complete || rec.estimate.half_width <= target) break;
     want = sampler.clusters_needed(target, m_cfg.cores) - sampler.clusters_taken();
   }
