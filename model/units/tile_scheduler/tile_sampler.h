@@ -23,7 +23,7 @@
 // at random, at least two per stratum, then in Neyman allocation (K_h s_h): a skewed scene's
 // heavier clusters are always represented, and a sample of light clusters alone can no longer
 // claim a zero-width interval. The fit is weighted by the design weights K_h / n_h (the
-// combined regression estimator, Cochran 1977 §7.10) and
+// combined regression estimator: Cochran, Sampling Techniques, ch. 7) and
 //     Var(Y) = sum_h K_h^2 (1 - n_h/K_h) s_eh^2 / n_h   (K_h clusters, n_h observed),
 // s_eh^2 the residuals' variance within stratum h. Pure arithmetic: no SystemC.
 #pragma once
