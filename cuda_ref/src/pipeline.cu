@@ -284,7 +284,7 @@ __global__ void __launch_bounds__(kSmallSortThreads)
 __global__ void k_take_sizes(SizeArgs a, uint64_t pads) {
   const bool over = sizes_over(a);  // before element 0 writes the sizes
   const uint64_t i0 = uint64_t(blockIdx.x) * blockDim.x + threadIdx.x;
-  if (i0 == 0) take_sizes(a, 0);
+  if (i0 == 0) take_sizes(a);
   for (uint64_t i = i0; i < pads; i += uint64_t(gridDim.x) * blockDim.x) pad_keys(a, over, i);
 }
 
@@ -296,7 +296,7 @@ void queue_take_sizes(Exec& ex, const SizeArgs& a) {
   for (uint32_t k = 0; k < a.n_pads; ++k) pads += a.pad[k].bound;
   if (ex.where == Where::cpu) {
     const bool over = sizes_over(a);
-    take_sizes(a, 0);
+    take_sizes(a);
     for (uint64_t i = 0; i < pads; ++i) pad_keys(a, over, i);  // past the ranges' ends: nothing
     return;
   }
@@ -606,10 +606,8 @@ class DevGraph {
     m_graph = nullptr;
   }
   bool valid() const {
-    const Capacities& c = m_p.caps;
     return m_exec && m_gen == m_p.ex.generation() && std::memcmp(&m_f, &m_p.f, sizeof(FrameDev)) == 0 &&
-           m_bounds == std::vector<uint64_t>{c.setup, c.edges, c.tris, c.items, c.tile_edges, c.deep_pairs,
-                                             c.candidates, c.clip_slots, c.clip_edges, c.slot_factor};
+           m_bounds == m_p.caps.graph_bounds();
   }
   // Records run() (a device-sized run_once) after settle_dev: it must neither read nor allocate.
   template <class Run>
@@ -646,8 +644,7 @@ class DevGraph {
     m_nodes = uint32_t(nodes);
     m_gen = ex.generation();
     m_f = m_p.f;
-    const Capacities& c = m_p.caps;
-    m_bounds = {c.setup, c.edges, c.tris, c.items, c.tile_edges, c.deep_pairs, c.candidates, c.clip_slots, c.clip_edges, c.slot_factor};
+    m_bounds = m_p.caps.graph_bounds();
   }
   // One frame: the graph launched, waited for, checked (dev_fits).
   bool launch() {

@@ -102,7 +102,7 @@ TV_HD inline void pad_keys(const SizeArgs& a, bool over, uint64_t i) {
     i -= p.bound - from;
   }
 }
-TV_HD inline void take_sizes(const SizeArgs& a, uint64_t) {
+TV_HD inline void take_sizes(const SizeArgs& a) {
   uint64_t* s = a.sz;
   const uint64_t t0 = *a.total[0], t1 = a.total[1] ? *a.total[1] : 0;
   const bool over = sizes_over(a);
@@ -177,6 +177,10 @@ struct Capacities {
   uint64_t setup = 0, edges = 0, tris = 0, items = 0, tile_edges = 0;
   static void learn(uint64_t& cap, uint64_t v) {
     if (v > cap) cap = v + v / 32 + 32;
+  }
+  // Every bound a device-sized graph is recorded for (DevGraph: valid while they stay).
+  std::vector<uint64_t> graph_bounds() const {
+    return {setup, edges, tris, items, tile_edges, deep_pairs, candidates, clip_slots, clip_edges, slot_factor};
   }
 };
 

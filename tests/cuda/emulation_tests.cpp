@@ -146,18 +146,10 @@ TEST(Emulation, FrameSequenceGivesEachFramesIds) {
 }
 
 // A device-sized run (sizes kept on the device, within bounds learned from earlier frames) of a
-// frame past those bounds: the run overflows, runs again with host reads (a retry), and every
-// frame still gets the ids a run of it alone gives. The small frame is the big one shrunk
-// about the screen's centre: same counts of vertices and triangles, fewer (tile, triangle) pairs.
+// frame past those bounds (ct::small_big_sequence): the run overflows, runs again with host reads
+// (a retry), and every frame still gets the ids a run of it alone gives.
 TEST(Emulation, DeviceSizedRunPastItsBoundsRunsAgain) {
-  const trace::Frame big = ct::scene("cubes");
-  trace::Frame small = big;
-  for (auto& d : small.draws)
-    for (auto& v : d.vertices) {
-      v.x *= 0.5f;
-      v.y *= 0.5f;
-    }
-  const std::vector<trace::Frame> frames = {small, big, small, big};
+  const std::vector<trace::Frame> frames = ct::small_big_sequence();
   for (auto prec : {cuda::Precision::exact, cuda::Precision::floating}) {
     const auto cfg = ct::config(cuda::Device::cpu, prec, 32, 32);
     const auto seq = cuda::run_cuda_frames(frames, cfg, 1);

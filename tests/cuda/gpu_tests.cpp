@@ -275,14 +275,7 @@ TEST(Gpu, FrameSequenceGivesEachFramesIds) {
 // in the later laps every frame runs through the one graph without a retry.
 TEST(Gpu, DeviceSizedGraphPastItsBoundsRunsAgain) {
   REQUIRE_GPU();
-  const trace::Frame big = ct::scene("cubes");
-  trace::Frame small = big;
-  for (auto& d : small.draws)
-    for (auto& v : d.vertices) {
-      v.x *= 0.5f;
-      v.y *= 0.5f;
-    }
-  const std::vector<trace::Frame> frames = {small, big, small, big};
+  const std::vector<trace::Frame> frames = ct::small_big_sequence();
   for (auto prec : {cuda::Precision::exact, cuda::Precision::floating}) {
     auto cfg = ct::config(cuda::Device::gpu, prec, 32, 32);
     cfg.runs = 2;

@@ -217,6 +217,17 @@ trace::Frame scene(const std::string& name, uint32_t samples) {
   return f;
 }
 
+std::vector<trace::Frame> small_big_sequence() {
+  const trace::Frame big = scene("cubes");
+  trace::Frame small = big;
+  for (auto& d : small.draws)
+    for (auto& v : d.vertices) {
+      v.x *= 0.5f;
+      v.y *= 0.5f;
+    }
+  return {small, big, small, big};
+}
+
 std::vector<std::string> scene_names() {
   return {"cubes", "ground", "stack", "mixed", "coplanar", "folded", "near_eye", "near_eye_pair"};
 }

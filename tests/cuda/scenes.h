@@ -40,5 +40,9 @@ trace::Draw make_draw(const std::string& name, const MeshBuilder& m, const Mat4&
 //   "near_eye_pair"  two such triangles at one depth (the tile-size-dependent case)
 trace::Frame scene(const std::string& name, uint32_t samples = 1);
 std::vector<std::string> scene_names();
+// Frames small, big, small, big: "cubes", and "cubes" shrunk about the screen's centre (the same
+// counts of vertices and triangles, fewer (tile, triangle) pairs): a device-sized run's bounds
+// learned from the small frame do not hold the big one.
+std::vector<trace::Frame> small_big_sequence();
 
 }  // namespace tilevis::cudatest

@@ -338,15 +338,25 @@ TEST(FidelityAuto, OneRoundOverEveryTileIsThePrimitiveLevel) {
   EXPECT_TRUE(a["sampling"]["geometry"].is_null());  // too few triangles to sample the geometry
 }
 
-TEST(FidelityAuto, ASampleOfTilesBracketsThePrimitiveLevelsCycles) {
+namespace {
+
+// The quarter-resolution bunny (4 spp, 8x8 tiles, `common` beside) at fidelity primitive and at
+// fidelity auto with `error_budget`.
+std::pair<nlohmann::json, nlohmann::json> bunny_primitive_and_auto(std::vector<std::string> common,
+                                                                   const std::string& error_budget) {
   const trace::Frame f = simtest::shipped("bunny", 480, 270, 4);
-  const std::vector<std::string> common = {"sim.tile_width=8", "sim.tile_height=8"};
+  common.insert(common.end(), {"sim.tile_width=8", "sim.tile_height=8"});
   auto with = [&](std::vector<std::string> extra) {
     extra.insert(extra.end(), common.begin(), common.end());
     return run(f, extra);
   };
-  const auto p = with({"sim.fidelity=primitive"});
-  const auto a = with({"sim.fidelity=auto", "sim.error_budget=0.05"});
+  return {with({"sim.fidelity=primitive"}), with({"sim.fidelity=auto", "sim.error_budget=" + error_budget})};
+}
+
+}  // namespace
+
+TEST(FidelityAuto, ASampleOfTilesBracketsThePrimitiveLevelsCycles) {
+  const auto [p, a] = bunny_primitive_and_auto({}, "0.05");
   expect_clean(a);
   if (a.contains("error") || p.contains("error")) return;
   const auto& s = a["sampling"];
@@ -374,15 +384,7 @@ TEST(FidelityAuto, TheGeometrysIntervalAndTheRendersShareTheBudget) {
   // render's add in quadrature and stay inside the budget (the render's target is what the
   // geometry left; before, 2.04 % here). The estimate is near the primitive level's but, with
   // four cores, not inside this interval (-2.5 %): the bias the interval does not carry.
-  const trace::Frame f = simtest::shipped("bunny", 480, 270, 4);
-  const std::vector<std::string> common = {"sim.tile_width=8", "sim.tile_height=8", "sim.mode=hybrid", "sim.cores=4",
-                                           "sim.scheduler=dynamic"};
-  auto with = [&](std::vector<std::string> extra) {
-    extra.insert(extra.end(), common.begin(), common.end());
-    return run(f, extra);
-  };
-  const auto p = with({"sim.fidelity=primitive"});
-  const auto a = with({"sim.fidelity=auto", "sim.error_budget=0.02"});
+  const auto [p, a] = bunny_primitive_and_auto({"sim.mode=hybrid", "sim.cores=4", "sim.scheduler=dynamic"}, "0.02");
   expect_clean(a);
   if (a.contains("error") || p.contains("error")) return;
   const auto& s = a["sampling"];
