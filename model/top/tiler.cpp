@@ -125,12 +125,7 @@ void Tiler::prepare() {
   if (m_cfg.sim.fidelity == Fidelity::automatic && m_work.segment_count() == 1 &&
       uint64_t(n) >= 4ull * sc.first_clusters * sc.geometry_cluster) {
     std::vector<double> aux(n);
-    for (uint32_t id = 0; id < n; ++id) {
-      Item it;
-      it.first = id;
-      it.count = 1;
-      aux[id] = double(m_front_end->cost(it).reads.bytes() + m_pb->bytes(id, id + 1));
-    }
+    for (uint32_t id = 0; id < n; ++id) aux[id] = double(m_front_end->read_bytes(id, id + 1) + m_pb->bytes(id, id + 1));
     m_front_end->sample(sc, std::move(aux), [this](const GeometryEstimate& g) { m_scheduler->add_geometry(g); });
     m_pb->arrivals = &m_front_end->arrivals();
   }

@@ -54,7 +54,7 @@ Cost GeometryFrontEnd::cost(const Item& it) const {
   Cost c;
   c.cycles = m_cycles[it.first + it.count] - m_cycles[it.first] + (it.last ? m_cfg.latency_cycles : 0);
   // Index and vertex streams, contiguous in the order the draws read them.
-  c.reads.add(region::vertices + m_bytes_prefix[it.first], m_bytes_prefix[it.first + it.count] - m_bytes_prefix[it.first]);
+  c.reads.add(region::vertices + m_bytes_prefix[it.first], read_bytes(it.first, it.first + it.count));
   return c;
 }
 

@@ -47,6 +47,8 @@ class GeometryFrontEnd : public UnitBase {
   // Runs the vertex cache over the frame (after setup: culled triangles are fetched too).
   void prepare();
   Cost cost(const Item& item) const;
+  // Index and vertex bytes trace triangles [first, end) read.
+  uint64_t read_bytes(uint32_t first, uint32_t end) const { return m_bytes_prefix[end] - m_bytes_prefix[first]; }
   void account(const Item& item, const Cost& c);
   // Vertices trace triangle `id` missed in the cache (new vertices the parameter buffer stores).
   uint32_t vertex_misses(uint32_t id) const { return m_misses[id]; }
