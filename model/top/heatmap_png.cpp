@@ -66,6 +66,7 @@ void write_heatmap_png(const std::filesystem::path& file, const std::vector<doub
     throw std::runtime_error(tmp.string() + ": PNG write failed");
   }
   png_init_io(png, fp.get());
+  png_set_compression_level(png, 1);
   png_set_IHDR(png, info, w, h, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
                PNG_FILTER_TYPE_DEFAULT);
   png_text text[2] = {};

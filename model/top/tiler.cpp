@@ -1,6 +1,8 @@
 #include "top/tiler.h"
 
 #include <algorithm>
+#include <future>
+#include <thread>
 
 namespace tilevis::sim {
 
@@ -114,9 +116,14 @@ Tiler::~Tiler() = default;
 
 void Tiler::prepare() {
   m_setup->prepare();
+  // The front end's vertex cache and the silhouette hash read the trace and the setup and
+  // nothing the binning writes: on a host with a second core they run beside it.
+  auto tables = std::async(std::thread::hardware_concurrency() > 1 ? std::launch::async : std::launch::deferred, [this] {
+    m_front_end->prepare();
+    m_silhouette->prepare();
+  });
   m_tiling->prepare();
-  m_front_end->prepare();
-  m_silhouette->prepare();
+  tables.get();
   m_pb->prepare(*m_front_end);
   // Fidelity auto: a one-segment frame's geometry is sampled too when it holds enough
   // clusters for a sample to save anything (tile_sampler.h).

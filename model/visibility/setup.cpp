@@ -8,6 +8,7 @@
 
 #include "geom/homogeneous.h"
 #include "geom/predicates.h"
+#include "visibility/parallel.h"
 
 namespace tilevis::vis {
 namespace {
@@ -104,7 +105,27 @@ struct EdgeUse {
   uint32_t triangle;   // setup triangle
   uint8_t edge;        // 0..2: v[edge] -> v[(edge+1)%3]
   bool forward = true; // the edge runs from the smaller index to the larger
+  bool front = false;  // the triangle's (beside it: the runs below need no look-up of it)
 };
+
+// Orders edge uses by (key, triangle, edge): a counting sort by the smaller vertex index (the
+// key's high half), then each bucket, a vertex's few edges, sorted in place. Boundaries (key
+// ~0: made by clipping) go last, in the (triangle, edge) order they were pushed in, as a
+// comparison sort puts them. `out` and `bucket` are scratch kept across draws.
+void sort_edge_uses(const std::vector<EdgeUse>& in, size_t vertices, std::vector<EdgeUse>& out,
+                    std::vector<uint32_t>& bucket) {
+  bucket.assign(vertices + 2, 0);
+  for (const EdgeUse& e : in) ++bucket[e.key == ~uint64_t(0) ? vertices + 1 : size_t(e.key >> 32) + 1];
+  for (size_t v = 1; v < bucket.size(); ++v) bucket[v] += bucket[v - 1];
+  out.resize(in.size());
+  std::vector<uint32_t> fill(bucket.begin(), bucket.end() - 1);
+  for (const EdgeUse& e : in) out[fill[e.key == ~uint64_t(0) ? vertices : size_t(e.key >> 32)]++] = e;
+  for (size_t v = 0; v < vertices; ++v)
+    if (bucket[v + 1] - bucket[v] > 1)
+      std::sort(out.begin() + bucket[v], out.begin() + bucket[v + 1], [](const EdgeUse& a, const EdgeUse& b) {
+        return a.key != b.key ? a.key < b.key : a.triangle != b.triangle ? a.triangle < b.triangle : a.edge < b.edge;
+      });
+}
 
 std::vector<uint32_t> weld_by_position(const std::vector<trace::Vec4>& v) {
   std::vector<uint32_t> order(v.size()), weld(v.size());
@@ -114,6 +135,145 @@ std::vector<uint32_t> weld_by_position(const std::vector<trace::Vec4>& v) {
   for (size_t k = 0; k < order.size(); ++k)
     weld[order[k]] = (k > 0 && key(order[k]) == key(order[k - 1])) ? weld[order[k - 1]] : order[k];
   return weld;
+}
+
+// One draw's share of the setup. Draws are independent (a draw's silhouettes pair only its
+// own edges), so they run on threads and are joined in draw order.
+struct DrawSetup {
+  std::vector<SetupTriangle> triangles;
+  std::vector<SilhouetteEdge> silhouettes;
+  SetupStats stats;
+};
+
+struct DrawScratch {
+  std::vector<ClipVertex> poly, scratch;
+  std::vector<geom::Vertex> snapped;
+  std::vector<EdgeUse> edges, sorted;
+  std::vector<uint32_t> bucket;
+};
+
+// Draw `di`, whose first triangle has id `id`.
+void setup_draw(const trace::Frame& frame, uint32_t di, uint32_t id, const Snapper& snap,
+                const std::array<Plane, 6>& planes, DrawScratch& w, DrawSetup& out) {
+  const trace::Draw& d = frame.draws[di];
+  const bool opaque = d.opaque() && !d.per_pixel_only();
+  // Soup draws key silhouettes by position: vertices with bit-identical clip-space
+  // positions are welded to the lowest such index.
+  std::vector<uint32_t> weld;
+  if (d.flags & trace::kTriangleSoup) weld = weld_by_position(d.vertices);
+  w.snapped.resize(d.vertices.size());
+  std::vector<bool> snapped_ok(d.vertices.size(), false);
+  w.edges.clear();
+  for (size_t t = 0; t < d.indices.size(); t += 3, ++id) {
+    ++out.stats.triangles_in;
+    w.poly.clear();
+    for (int k = 0; k < 3; ++k) {
+      uint32_t vi = d.indices[t + k];
+      const trace::Vec4& v = d.vertices[vi];
+      w.poly.push_back({v.x, v.y, v.z, v.w, vi});
+    }
+    // Facing is decided once, in clip space, for every piece clipping leaves (the facing of
+    // the clipped polygon: geom/homogeneous.h). Zero: the eye lies in the triangle's plane,
+    // so it projects to a line (or, through the eye itself, nowhere): nothing to draw.
+    const trace::Vec4 &c0 = d.vertices[d.indices[t]], &c1 = d.vertices[d.indices[t + 1]],
+                      &c2 = d.vertices[d.indices[t + 2]];
+    const int facing = geom::homogeneous_orientation(c0.x, c0.y, c0.w, c1.x, c1.y, c1.w, c2.x, c2.y, c2.w);
+    if (facing == 0) {
+      ++out.stats.edge_on;
+      continue;
+    }
+    bool culled = false, cut = false;
+    for (const Plane& p : planes) {
+      int inside = 0;
+      for (const auto& v : w.poly) inside += p.distance(v) >= 0;
+      if (inside == 0) {
+        culled = true;
+        break;
+      }
+      if (inside < int(w.poly.size())) {
+        clip_polygon(w.poly, w.scratch, p);
+        cut = true;
+      }
+    }
+    if (culled || w.poly.size() < 3) {
+      ++out.stats.frustum_culled;
+      continue;
+    }
+    out.stats.clipped += cut;
+    std::array<geom::Vertex, 16> sv{};
+    for (size_t k = 0; k < w.poly.size() && k < sv.size(); ++k) {
+      uint32_t vi = w.poly[k].index;
+      if (vi != kNoVertex) {
+        if (!snapped_ok[vi]) {
+          w.snapped[vi] = snap(w.poly[k]);
+          snapped_ok[vi] = true;
+        }
+        sv[k] = w.snapped[vi];
+      } else {
+        sv[k] = snap(w.poly[k]);
+      }
+    }
+    // Fan: (p0, pk, pk+1). Triangles made by clipping carry no vertex indices.
+    for (size_t k = 1; k + 1 < w.poly.size(); ++k) {
+      SetupTriangle st;
+      st.v[0] = sv[0];
+      st.v[1] = sv[k];
+      st.v[2] = sv[k + 1];
+      st.id = id;
+      st.draw = di;
+      st.opaque = opaque;
+      st.sample_rate = d.sample_rate();
+      st.clipped = cut;
+      int64_t area = geom::orient2d(st.v[0].xy(), st.v[1].xy(), st.v[2].xy());
+      // Counter-clockwise in NDC is clockwise in y-down window space: negative area. A piece
+      // whose snapped area is zero or turns against its triangle's facing covers nothing.
+      const bool turns_as_facing = facing > 0 ? area < 0 : area > 0;
+      st.front = facing > 0 && turns_as_facing;
+      if (!turns_as_facing) ++out.stats.degenerate;
+      else if (facing < 0) ++out.stats.back_facing;
+      else ++out.stats.front_facing;
+      auto tri = static_cast<uint32_t>(out.triangles.size());
+      uint32_t idx[3] = {cut ? kNoVertex : w.poly[0].index, cut ? kNoVertex : w.poly[k].index,
+                         cut ? kNoVertex : w.poly[k + 1].index};
+      if (!weld.empty())
+        for (auto& i : idx)
+          if (i != kNoVertex) i = weld[i];
+      for (uint8_t e = 0; e < 3; ++e) {
+        uint32_t i0 = idx[e], i1 = idx[(e + 1) % 3];
+        if (i0 == kNoVertex || i1 == kNoVertex) {
+          // An edge made by clipping has no neighbour to pair with: a boundary.
+          w.edges.push_back({~uint64_t(0), tri, e, true, st.front});
+          continue;
+        }
+        uint64_t key = (uint64_t(std::min(i0, i1)) << 32) | std::max(i0, i1);
+        w.edges.push_back({key, tri, e, i0 < i1, st.front});
+      }
+      out.triangles.push_back(st);
+    }
+  }
+  if (!opaque) return;
+  // Silhouette extraction: order edge uses by (key, triangle, edge), then judge each run of
+  // equal keys.
+  sort_edge_uses(w.edges, d.vertices.size(), w.sorted, w.bucket);
+  w.edges.swap(w.sorted);
+  for (size_t i = 0; i < w.edges.size();) {
+    size_t j = i + 1;
+    if (w.edges[i].key != ~uint64_t(0))
+      while (j < w.edges.size() && w.edges[j].key == w.edges[i].key) ++j;
+    size_t front = 0;
+    for (size_t k = i; k < j; ++k) front += w.edges[k].front;
+    size_t count = j - i;
+    // An edge is interior to the visible surface only where exactly two front-facing
+    // triangles share it from opposite sides, i.e. traverse it in opposite directions. Two
+    // that traverse it the same way (a duplicated face, a mesh folded onto itself, faces
+    // wound inconsistently) lie on the same side of it on screen: it bounds them both.
+    if (front > 0 && (count != 2 || front != count || w.edges[i].forward == w.edges[i + 1].forward)) {
+      const SetupTriangle& t = out.triangles[w.edges[i].triangle];
+      SilhouetteEdge se{t.v[w.edges[i].edge], t.v[(w.edges[i].edge + 1) % 3], di};
+      out.silhouettes.push_back(se);
+    }
+    i = j;
+  }
 }
 
 }  // namespace
@@ -139,131 +299,28 @@ Setup primitive_setup(const trace::Frame& frame, const SetupConfig& config) {
                                         {0, 1, 0, gy},    // bottom
                                         {0, -1, 0, gy}}};  // top
 
-  std::vector<ClipVertex> poly, scratch;
-  std::vector<geom::Vertex> snapped;
-  std::vector<EdgeUse> edges;
-  uint32_t id = 0;
-  for (uint32_t di = 0; di < frame.draws.size(); ++di) {
-    const trace::Draw& d = frame.draws[di];
-    const bool opaque = d.opaque() && !d.per_pixel_only();
-    // Soup draws key silhouettes by position: vertices with bit-identical clip-space
-    // positions are welded to the lowest such index.
-    std::vector<uint32_t> weld;
-    if (d.flags & trace::kTriangleSoup) weld = weld_by_position(d.vertices);
-    snapped.resize(d.vertices.size());
-    std::vector<bool> snapped_ok(d.vertices.size(), false);
-    edges.clear();
-    for (size_t t = 0; t < d.indices.size(); t += 3, ++id) {
-      s.triangle_draw.push_back(di);
-      ++s.stats.triangles_in;
-      poly.clear();
-      for (int k = 0; k < 3; ++k) {
-        uint32_t vi = d.indices[t + k];
-        const trace::Vec4& v = d.vertices[vi];
-        poly.push_back({v.x, v.y, v.z, v.w, vi});
-      }
-      // Facing is decided once, in clip space, for every piece clipping leaves (the facing of
-      // the clipped polygon: geom/homogeneous.h). Zero: the eye lies in the triangle's plane,
-      // so it projects to a line (or, through the eye itself, nowhere): nothing to draw.
-      const trace::Vec4 &c0 = d.vertices[d.indices[t]], &c1 = d.vertices[d.indices[t + 1]],
-                        &c2 = d.vertices[d.indices[t + 2]];
-      const int facing = geom::homogeneous_orientation(c0.x, c0.y, c0.w, c1.x, c1.y, c1.w, c2.x, c2.y, c2.w);
-      if (facing == 0) {
-        ++s.stats.edge_on;
-        continue;
-      }
-      bool culled = false, cut = false;
-      for (const Plane& p : planes) {
-        int inside = 0;
-        for (const auto& v : poly) inside += p.distance(v) >= 0;
-        if (inside == 0) {
-          culled = true;
-          break;
-        }
-        if (inside < int(poly.size())) {
-          clip_polygon(poly, scratch, p);
-          cut = true;
-        }
-      }
-      if (culled || poly.size() < 3) {
-        ++s.stats.frustum_culled;
-        continue;
-      }
-      s.stats.clipped += cut;
-      std::array<geom::Vertex, 16> sv{};
-      for (size_t k = 0; k < poly.size() && k < sv.size(); ++k) {
-        uint32_t vi = poly[k].index;
-        if (vi != kNoVertex) {
-          if (!snapped_ok[vi]) {
-            snapped[vi] = snap(poly[k]);
-            snapped_ok[vi] = true;
-          }
-          sv[k] = snapped[vi];
-        } else {
-          sv[k] = snap(poly[k]);
-        }
-      }
-      // Fan: (p0, pk, pk+1). Triangles made by clipping carry no vertex indices.
-      for (size_t k = 1; k + 1 < poly.size(); ++k) {
-        SetupTriangle st;
-        st.v[0] = sv[0];
-        st.v[1] = sv[k];
-        st.v[2] = sv[k + 1];
-        st.id = id;
-        st.draw = di;
-        st.opaque = opaque;
-        st.sample_rate = d.sample_rate();
-        st.clipped = cut;
-        int64_t area = geom::orient2d(st.v[0].xy(), st.v[1].xy(), st.v[2].xy());
-        // Counter-clockwise in NDC is clockwise in y-down window space: negative area. A piece
-        // whose snapped area is zero or turns against its triangle's facing covers nothing.
-        const bool turns_as_facing = facing > 0 ? area < 0 : area > 0;
-        st.front = facing > 0 && turns_as_facing;
-        if (!turns_as_facing) ++s.stats.degenerate;
-        else if (facing < 0) ++s.stats.back_facing;
-        else ++s.stats.front_facing;
-        auto tri = static_cast<uint32_t>(s.triangles.size());
-        uint32_t idx[3] = {cut ? kNoVertex : poly[0].index, cut ? kNoVertex : poly[k].index,
-                           cut ? kNoVertex : poly[k + 1].index};
-        if (!weld.empty())
-          for (auto& i : idx)
-            if (i != kNoVertex) i = weld[i];
-        for (uint8_t e = 0; e < 3; ++e) {
-          uint32_t i0 = idx[e], i1 = idx[(e + 1) % 3];
-          if (i0 == kNoVertex || i1 == kNoVertex) {
-            // An edge made by clipping has no neighbour to pair with: a boundary.
-            edges.push_back({~uint64_t(0), tri, e});
-            continue;
-          }
-          uint64_t key = (uint64_t(std::min(i0, i1)) << 32) | std::max(i0, i1);
-          edges.push_back({key, tri, e, i0 < i1});
-        }
-        s.triangles.push_back(st);
-      }
-    }
-    if (!opaque) continue;
-    // Silhouette extraction: sort edge uses by key, then judge each run of equal keys.
-    std::sort(edges.begin(), edges.end(), [](const EdgeUse& a, const EdgeUse& b) {
-      return a.key != b.key ? a.key < b.key : a.triangle != b.triangle ? a.triangle < b.triangle : a.edge < b.edge;
-    });
-    for (size_t i = 0; i < edges.size();) {
-      size_t j = i + 1;
-      if (edges[i].key != ~uint64_t(0))
-        while (j < edges.size() && edges[j].key == edges[i].key) ++j;
-      size_t front = 0;
-      for (size_t k = i; k < j; ++k) front += s.triangles[edges[k].triangle].front;
-      size_t count = j - i;
-      // An edge is interior to the visible surface only where exactly two front-facing
-      // triangles share it from opposite sides, i.e. traverse it in opposite directions. Two
-      // that traverse it the same way (a duplicated face, a mesh folded onto itself, faces
-      // wound inconsistently) lie on the same side of it on screen: it bounds them both.
-      if (front > 0 && (count != 2 || front != count || edges[i].forward == edges[i + 1].forward)) {
-        const SetupTriangle& t = s.triangles[edges[i].triangle];
-        SilhouetteEdge se{t.v[edges[i].edge], t.v[(edges[i].edge + 1) % 3], di};
-        s.silhouettes.push_back(se);
-      }
-      i = j;
-    }
+  const size_t n = frame.draws.size();
+  std::vector<uint32_t> first(n + 1, 0);
+  for (size_t di = 0; di < n; ++di) first[di + 1] = first[di] + uint32_t(frame.draws[di].triangle_count());
+  std::vector<DrawSetup> draws(n);
+  for_each_index<DrawScratch>(n, [&](size_t di, DrawScratch& w) { setup_draw(frame, uint32_t(di), first[di], snap, planes, w, draws[di]); });
+
+  s.triangles.reserve(frame.triangle_count());
+  s.triangle_draw.reserve(frame.triangle_count());
+  for (size_t di = 0; di < n; ++di) {
+    DrawSetup& d = draws[di];
+    s.triangles.insert(s.triangles.end(), d.triangles.begin(), d.triangles.end());
+    s.silhouettes.insert(s.silhouettes.end(), d.silhouettes.begin(), d.silhouettes.end());
+    s.triangle_draw.insert(s.triangle_draw.end(), first[di + 1] - first[di], uint32_t(di));
+    const SetupStats& t = d.stats;
+    s.stats.triangles_in += t.triangles_in;
+    s.stats.frustum_culled += t.frustum_culled;
+    s.stats.clipped += t.clipped;
+    s.stats.edge_on += t.edge_on;
+    s.stats.degenerate += t.degenerate;
+    s.stats.back_facing += t.back_facing;
+    s.stats.front_facing += t.front_facing;
+    d = DrawSetup{};
   }
   s.stats.setup_triangles = s.triangles.size();
   s.stats.silhouette_edges = s.silhouettes.size();

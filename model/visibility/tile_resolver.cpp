@@ -8,6 +8,7 @@
 namespace tilevis::vis {
 
 TileFrame::TileFrame(const Setup& s, const geom::TileGrid& grid) : m_s(s), m_grid(grid) {
+  m_tris.reserve(s.triangles.size());
   for (size_t i = 0; i < s.triangles.size(); ++i) {
     const SetupTriangle& t = s.triangles[i];
     if (!t.front) continue;

@@ -1,8 +1,11 @@
 // Primitive setup, golden SVGPU pipeline and z-buffer truth on small scenes: golden
 // agrees with the truth sample for sample, runs are deterministic, clipping conserves
 // area, and the per-pixel modes count what they must.
+#include <atomic>
 #include <cmath>
 #include <numeric>
+#include <stdexcept>
+#include <string>
 
 
 #include <gtest/gtest.h>
@@ -10,6 +13,7 @@
 #include "geom/predicates.h"
 #include "scene_frames.h"
 #include "visibility/golden.h"
+#include "visibility/parallel.h"
 #include "visibility/setup.h"
 #include "visibility/truth.h"
 
@@ -57,6 +61,61 @@ TEST(Setup, CubeSilhouetteIsItsOutline) {
   EXPECT_EQ(s.stats.front_facing, 6u);
   EXPECT_EQ(s.stats.back_facing, 6u);
   EXPECT_EQ(s.silhouettes.size(), 6u);
+}
+
+TEST(Setup, DrawsJoinedInOrderEqualEachDrawSetUpAlone) {
+  // Draws are set up on threads and joined in draw order: the frame's setup is each draw's
+  // own, ids and draw indices shifted, in order, whatever the schedule.
+  auto f = frame_of("cubes", kCubes);
+  ASSERT_GE(f.draws.size(), 4u);
+  const auto whole = vis::primitive_setup(f, {});
+  size_t tri = 0, sil = 0;
+  uint32_t first_id = 0;
+  for (uint32_t d = 0; d < f.draws.size(); ++d) {
+    trace::Frame one = f;
+    one.draws = {f.draws[d]};
+    const auto alone = vis::primitive_setup(one, {});
+    for (const auto& t : alone.triangles) {
+      ASSERT_LT(tri, whole.triangles.size());
+      const auto& w = whole.triangles[tri++];
+      EXPECT_EQ(w.id, t.id + first_id);
+      EXPECT_EQ(w.draw, d);
+      EXPECT_EQ(w.front, t.front);
+      for (int k = 0; k < 3; ++k) EXPECT_TRUE(w.v[k] == t.v[k]);
+    }
+    for (const auto& e : alone.silhouettes) {
+      ASSERT_LT(sil, whole.silhouettes.size());
+      const auto& w = whole.silhouettes[sil++];
+      EXPECT_TRUE(w.a == e.a && w.b == e.b);
+      EXPECT_EQ(w.draw, d);
+    }
+    for (uint32_t i = 0; i < f.draws[d].triangle_count(); ++i) EXPECT_EQ(whole.triangle_draw[first_id + i], d);
+    first_id += uint32_t(f.draws[d].triangle_count());
+  }
+  EXPECT_EQ(tri, whole.triangles.size());
+  EXPECT_EQ(sil, whole.silhouettes.size());
+  EXPECT_EQ(whole.triangle_draw.size(), f.triangle_count());
+}
+
+TEST(ForEachIndex, VisitsEveryIndexOnceAndRethrowsTheLowestFailure) {
+  struct Scratch {
+    int uses = 0;
+  };
+  std::vector<std::atomic<int>> seen(1000);
+  vis::for_each_index<Scratch>(seen.size(), [&](size_t i, Scratch& s) {
+    ++s.uses;
+    ++seen[i];
+  });
+  for (const auto& v : seen) EXPECT_EQ(v.load(), 1);
+  try {
+    vis::for_each_index<Scratch>(100, [](size_t i, Scratch&) {
+      if (i == 70 || i == 30 || i == 90) throw std::runtime_error(std::to_string(i));
+    });
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_STREQ(e.what(), "30");
+  }
+  vis::for_each_index<Scratch>(0, [](size_t, Scratch&) { FAIL(); });
 }
 
 TEST(Setup, NearPlaneClipsIntoAFanWithOneId) {

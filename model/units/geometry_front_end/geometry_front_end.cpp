@@ -1,7 +1,7 @@
 #include "units/geometry_front_end/geometry_front_end.h"
 
 #include <deque>
-#include <unordered_set>
+#include <vector>
 
 namespace tilevis::sim {
 
@@ -23,22 +23,23 @@ void GeometryFrontEnd::prepare() {
   m_misses.assign(n, 0);
   m_cycles.assign(size_t(n) + 1, 0);
   m_bytes_prefix.assign(size_t(n) + 1, 0);
+  std::vector<bool> in_cache;  // per vertex of the draw
   uint32_t id = 0;
   for (const trace::Draw& d : f.draws) {
     // FIFO cache of vertex indices, emptied per draw.
     std::deque<uint32_t> fifo;
-    std::unordered_set<uint32_t> in_cache;
+    in_cache.assign(d.vertices.size(), false);
     const uint64_t vertex_bytes = m_cfg.position_bytes + d.varying_bytes_per_vertex;
     for (size_t t = 0; t < d.indices.size(); t += 3, ++id) {
       uint32_t misses = 0;
       for (int k = 0; k < 3; ++k) {
         const uint32_t v = d.indices[t + size_t(k)];
-        if (in_cache.count(v)) continue;
+        if (in_cache[v]) continue;
         ++misses;
         fifo.push_back(v);
-        in_cache.insert(v);
+        in_cache[v] = true;
         if (fifo.size() > m_cfg.vertex_cache_entries) {
-          in_cache.erase(fifo.front());
+          in_cache[fifo.front()] = false;
           fifo.pop_front();
         }
       }

@@ -1,12 +1,39 @@
 #include "units/silhouette_unit/silhouette_unit.h"
 
+#include <algorithm>
 #include <array>
 #include <deque>
 #include <map>
-#include <unordered_map>
-#include <unordered_set>
 
 namespace tilevis::sim {
+namespace {
+
+struct EdgeUse {
+  uint32_t lo, hi;   // the edge's vertex keys, lo <= hi
+  uint32_t triangle; // trace triangle
+  uint32_t id = 0;   // dense id of (lo, hi) within the draw
+};
+
+// Numbers the distinct (lo, hi) pairs of `uses` densely and returns how many there are: a
+// counting sort by lo, then each bucket (a vertex's edges: a few, or a fan's many) sorted by
+// hi. No hash.
+uint32_t dense_edge_ids(std::vector<EdgeUse>& uses, size_t vertices, std::vector<uint32_t>& scratch) {
+  std::vector<uint32_t> begin(vertices + 1, 0);
+  for (const EdgeUse& u : uses) ++begin[u.lo + 1];
+  for (size_t v = 1; v < begin.size(); ++v) begin[v] += begin[v - 1];
+  scratch.resize(uses.size());
+  std::vector<uint32_t> fill(begin.begin(), begin.end() - 1);
+  for (uint32_t i = 0; i < uses.size(); ++i) scratch[fill[uses[i].lo]++] = i;
+  uint32_t next = 0;
+  for (size_t v = 0; v < vertices; ++v) {
+    const auto b = scratch.begin() + begin[v], e = scratch.begin() + begin[v + 1];
+    if (e - b > 1) std::sort(b, e, [&](uint32_t x, uint32_t y) { return uses[x].hi < uses[y].hi; });
+    for (auto i = b; i != e; ++i) uses[*i].id = (i != b && uses[*i].hi == uses[*(i - 1)].hi) ? next - 1 : next++;
+  }
+  return next;
+}
+
+}  // namespace
 
 SilhouetteUnit::SilhouetteUnit(const sc_core::sc_module_name& name, const UnitEnv& env,
                                const SilhouetteUnitConfig& config)
@@ -29,6 +56,9 @@ void SilhouetteUnit::prepare() {
   const uint32_t n = m_work.trace_triangles();
   std::vector<uint64_t> ops(n, 0), wr(n, 0), rd(n, 0);
   const bool on = uses_evu(m_work.mode());
+  std::vector<EdgeUse> uses;
+  std::vector<uint32_t> scratch;
+  std::vector<uint8_t> state;
   uint32_t id = 0;
   for (const trace::Draw& d : f.draws) {
     const uint32_t first = id;
@@ -44,46 +74,55 @@ void SilhouetteUnit::prepare() {
         weld[v] = first_of.emplace(std::array<float, 4>{p.x, p.y, p.z, p.w}, v).first->second;
       }
     }
-    std::unordered_set<uint64_t> chip, spilled;
-    std::deque<uint64_t> order;  // insertion order on chip, for FIFO eviction (lazily pruned)
+    // The draw's looked-up edges in order, each as a dense id of its key (vertex pair), so
+    // that the hash's contents are a state per id: 0 absent, 1 on chip, 2 spilled.
+    uses.clear();
     for (uint32_t t = first; t < id; ++t) {
       if (m_work.setup_begin(t) == m_work.setup_begin(t + 1)) continue;  // frustum-culled: no edges
-      const bool clipped = s.triangles[m_work.setup_begin(t)].clipped;
       ops[t] = 3;
-      if (clipped) continue;  // edges made by clipping have no partner: boundaries, no look-up
+      if (s.triangles[m_work.setup_begin(t)].clipped) continue;  // edges made by clipping have no partner: boundaries, no look-up
       for (int k = 0; k < 3; ++k) {
         uint32_t a = d.indices[3 * size_t(t - first) + size_t(k)], b = d.indices[3 * size_t(t - first) + size_t(k + 1) % 3];
         if (!weld.empty()) a = weld[a], b = weld[b];
-        const uint64_t key = (uint64_t(std::min(a, b)) << 32) | std::max(a, b);
-        m_lookups.value += 1;
-        if (chip.erase(key)) {
+        uses.push_back({std::min(a, b), std::max(a, b), t});
+      }
+    }
+    const uint32_t keys = dense_edge_ids(uses, d.vertices.size(), scratch);
+    state.assign(keys, 0);
+    uint64_t on_chip = 0, spilled = 0;
+    std::deque<uint32_t> order;  // insertion order on chip, for FIFO eviction (lazily pruned)
+    for (const EdgeUse& u : uses) {
+      m_lookups.value += 1;
+      uint8_t& st = state[u.id];
+      if (st == 1) {
+        st = 0, --on_chip;
+        m_paired.value += 1;
+        continue;
+      }
+      if (spilled) {
+        ++rd[u.triangle];  // the miss must look in memory
+        m_probes.value += 1;
+        if (st == 2) {
+          st = 0, --spilled;
           m_paired.value += 1;
           continue;
         }
-        if (!spilled.empty()) {
-          ++rd[t];  // the miss must look in memory
-          m_probes.value += 1;
-          if (spilled.erase(key)) {
-            m_paired.value += 1;
-            continue;
-          }
-        }
-        if (chip.size() >= m_cfg.hash_entries) {
-          while (!chip.count(order.front())) order.pop_front();
-          spilled.insert(order.front());
-          chip.erase(order.front());
-          order.pop_front();
-          ++wr[t];
-          m_spills.value += 1;
-        }
-        chip.insert(key);
-        order.push_back(key);
-        m_peak.value = std::max(m_peak.value, double(chip.size() + spilled.size()));
       }
+      if (on_chip >= m_cfg.hash_entries) {
+        while (state[order.front()] != 1) order.pop_front();
+        state[order.front()] = 2;
+        order.pop_front();
+        --on_chip, ++spilled;
+        ++wr[u.triangle];
+        m_spills.value += 1;
+      }
+      st = 1, ++on_chip;
+      order.push_back(u.id);
+      m_peak.value = std::max(m_peak.value, double(on_chip + spilled));
     }
     // End of draw: what stays open is a boundary; spilled entries come back to be emitted.
-    rd[id - 1] += spilled.size();
-    m_readback.value += double(spilled.size());
+    rd[id - 1] += spilled;
+    m_readback.value += double(spilled);
   }
   m_cycles.assign(size_t(n) + 1, 0);
   m_spill_write.assign(size_t(n) + 1, 0);

@@ -11,6 +11,8 @@
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
+#include <ImfThreading.h>
+#include <thread>
 
 namespace tilevis::outputs {
 namespace fs = std::filesystem;
@@ -53,6 +55,7 @@ void write_ids(const Result& r, const fs::path& file) {
   atomic_write(file, [&](const fs::path& tmp) {
     Imf::Header header(int(r.width), int(r.height));
     header.compression() = Imf::ZIP_COMPRESSION;
+    header.zipCompressionLevel() = 1;
     for (uint32_t s = 0; s < r.samples; ++s) header.channels().insert(id_channel(s, r.samples), Imf::Channel(Imf::UINT));
     Imf::FrameBuffer fb;
     const size_t xs = sizeof(int32_t) * r.samples, ys = xs * r.width;
@@ -213,6 +216,8 @@ std::string file_fnv1a64(const fs::path& file) {
 }
 
 void write_result(const Result& r, const fs::path& dir) {
+  static const bool threads = [] { Imf::setGlobalThreadCount(int(std::thread::hardware_concurrency())); return true; }();
+  (void)threads;
   // The trace's identity beside its name, so that compare can tell results of different traces apart.
   nlohmann::json stats = r.stats;
   if (stats.contains("trace") && stats["trace"].is_string() && !stats.contains("trace_fnv1a64"))
