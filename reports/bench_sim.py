@@ -104,7 +104,8 @@ def main():
                 failures[scene.stem] = wall[0]
                 continue
             s = json.loads((d / "stats.json").read_text())
-            per[level] = {"wall_seconds": wall, "host_seconds": s["host_seconds"], "cycles": s["totals"]["cycles"],
+            per[level] = {"wall_seconds": wall, "host_seconds": s["host_seconds"],
+                          "prepare_seconds": s.get("host_prepare_seconds"), "cycles": s["totals"]["cycles"],
                           "triangles": s["totals"]["triangles_in"], "tiles": s["totals"]["tiles_rendered"]}
             if s.get("sampling"):
                 m = s["sampling"]
@@ -135,13 +136,14 @@ def main():
     lines = ["# SystemC tiler model: host time per fidelity level", "",
              f"Machine: {machine}. Commit: {commit}. Command: `python3 reports/bench_sim.py --bin {a.bin} --out {a.out}"
              f" --mode {a.mode} --tile {a.tile}`. Wall = the whole `tilevis sim` process (trace read, setup, "
-             "functional work, simulation, outputs); model = elaboration to results. Cycles are the frame's; "
+             "functional work, simulation, outputs); model = elaboration to results, of which prepare = elaboration "
+             "and the functional prepare that every level shares (setup, binning, the units' tables). Cycles are the frame's; "
              "'error' is their deviation from the reference level's (rtl; primitive where a build has no "
              "Verilator); 'faster' = the reference's model seconds / the level's. auto: interval = its 95 % "
              "confidence interval, tiles = simulated / in the frame.", "",
              "![speed against accuracy](sim_bench.png)", "",
-             "| scene | triangles | level | wall s | model s | faster | frame cycles | error | auto: interval, tiles |",
-             "|---|---|---|---|---|---|---|---|---|"]
+             "| scene | triangles | level | wall s | model s | prepare s | faster | frame cycles | error | auto: interval, tiles |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         extra = ""
         if "interval" in r:
@@ -150,8 +152,9 @@ def main():
                      f"{r['tiles_simulated']:,} / {r['tiles_total']:,}")
             if "geometry_triangles_simulated" in r:
                 extra += f"; geometry {r['geometry_triangles_simulated']:,} / {r['triangles']:,} triangles"
+        prep = "" if r.get("prepare_seconds") is None else f"{r['prepare_seconds']:.2f}"
         lines.append(f"| {r['scene']} | {r['triangles']:,} | {r['level']} | {r['wall_seconds']:.2f} | "
-                     f"{r['host_seconds']:.2f} | {r['speedup_vs_reference']:.1f}x | {r['cycles']:,} | "
+                     f"{r['host_seconds']:.2f} | {prep} | {r['speedup_vs_reference']:.1f}x | {r['cycles']:,} | "
                      f"{100 * r['cycles_vs_reference']:.2f} % | {extra} |")
     # Per level over the scenes: error and speed against the reference.
     lines += ["", "Per level over the scenes (median and largest error, median and smallest speed-up against the "
@@ -168,6 +171,14 @@ def main():
         lines.append(f"| {level} | {len(rs)} | {errs[len(errs) // 2]:.2f} % | {errs[-1]:.2f} % | "
                      f"{fast[len(fast) // 2]:.1f}x | {fast[0]:.1f}x | "
                      f"{f'{sum(holds)} of {len(holds)}' if holds else ''} |")
+    # auto against the full-detail tile level, per scene: what sampling buys in host time.
+    pairs = [(r["scene"], t["host_seconds"] / max(r["host_seconds"], 1e-9), t["wall_seconds"] / max(r["wall_seconds"], 1e-9))
+             for r in rows if r["level"] == "auto"
+             for t in rows if t["level"] == "tile" and t["scene"] == r["scene"]]
+    if pairs:
+        lines += ["", "auto against tile (tile's seconds / auto's), model and wall:", "",
+                  "| scene | model | wall |", "|---|---|---|"]
+        lines += [f"| {sc} | {m:.2f}x | {w:.2f}x |" for sc, m, w in pairs]
     if failures:
         lines += ["", "Fidelity rtl failed on (the reference is primitive there):", ""]
         lines += [f"- {k}: `{v}`" for k, v in sorted(failures.items())]

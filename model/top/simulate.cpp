@@ -80,6 +80,7 @@ SimOutput simulate(const trace::Frame& frame, const TilerConfig& config, const S
   const bool event_driven = config.sim.fidelity != Fidelity::analytic;
   Tiler tiler("tiler", config, work, event_driven && !options.vcd.empty());
   tiler.prepare();
+  out.host_prepare_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   if (event_driven) {
     sc_core::sc_trace_file* tf = nullptr;
@@ -134,7 +135,8 @@ SimOutput simulate(const trace::Frame& frame, const TilerConfig& config, const S
              {"triangles", work.triangle_accounts()},
              {"systemc_reports", out.systemc_reports},
              {"sampling", fc.sampled ? tiler.scheduler().sampling_json() : nlohmann::json(nullptr)},
-             {"host_seconds", out.host_seconds}};
+             {"host_seconds", out.host_seconds},
+             {"host_prepare_seconds", out.host_prepare_seconds}};
   return out;
 }
 

@@ -32,6 +32,7 @@ struct SimOutput {
   outputs::Result result;               // canonical outputs, stats.json included
   uint64_t cycles = 0;
   double host_seconds = 0;
+  double host_prepare_seconds = 0;  // of which elaboration and the functional prepare every level shares
   std::vector<std::string> systemc_reports;  // warnings and errors SystemC raised
 };
 

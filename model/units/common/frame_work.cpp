@@ -1,6 +1,7 @@
 #include "units/common/frame_work.h"
 
 #include <algorithm>
+#include <bit>
 #include <numeric>
 #include <stdexcept>
 #include <string>
@@ -175,14 +176,25 @@ void FrameWork::run_binning() {
   if (uses_evu(m_cfg.mode) && n_edges > 0) {
     std::unordered_map<EdgeKey, uint32_t, EdgeKeyHash> by_key;
     by_key.reserve(n_edges * 2);
+    // A bit per hash value (16 or more bits per edge): most triangle edges are no silhouette,
+    // and one clear bit says so without a look-up in the map.
+    const EdgeKeyHash hash;
+    std::vector<uint64_t> maybe(std::bit_ceil(std::max<size_t>(n_edges / 4, 1)), 0);
+    const size_t mask = maybe.size() * 64 - 1;
     for (uint32_t e = 0; e < n_edges; ++e) {
       const auto& se = m_setup.silhouettes[e];
-      by_key.emplace(edge_key(se.draw, se.a, se.b), e);
+      const EdgeKey key = edge_key(se.draw, se.a, se.b);
+      const size_t h = hash(key) & mask;
+      maybe[h / 64] |= uint64_t(1) << (h % 64);
+      by_key.emplace(key, e);
     }
     for (const vis::SetupTriangle& t : m_setup.triangles) {
       if (!t.front) continue;
       for (int k = 0; k < 3; ++k) {
-        auto it = by_key.find(edge_key(t.draw, t.v[k], t.v[(k + 1) % 3]));
+        const EdgeKey key = edge_key(t.draw, t.v[k], t.v[(k + 1) % 3]);
+        const size_t h = hash(key) & mask;
+        if (!(maybe[h / 64] >> (h % 64) & 1)) continue;
+        auto it = by_key.find(key);
         if (it != by_key.end() && owner[it->second] == kNone) owner[it->second] = t.id;
       }
     }
