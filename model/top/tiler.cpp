@@ -2,7 +2,8 @@
 
 #include <algorithm>
 #include <future>
-#include <thread>
+
+#include "visibility/parallel.h"
 
 namespace tilevis::sim {
 
@@ -118,7 +119,7 @@ void Tiler::prepare() {
   m_setup->prepare();
   // The front end's vertex cache and the silhouette hash read the trace and the setup and
   // nothing the binning writes: on a host with a second core they run beside it.
-  auto tables = std::async(std::thread::hardware_concurrency() > 1 ? std::launch::async : std::launch::deferred, [this] {
+  auto tables = std::async(vis::host_threads() > 1 ? std::launch::async : std::launch::deferred, [this] {
     m_front_end->prepare();
     m_silhouette->prepare();
   });

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cstddef>
+#include <cstdlib>
 #include <exception>
 #include <mutex>
 #include <thread>
@@ -13,8 +14,16 @@
 
 namespace tilevis::vis {
 
-// Threads the host offers (at least one).
-inline unsigned host_threads() { return std::max(1u, std::thread::hardware_concurrency()); }
+// Threads to use: TILEVIS_THREADS when set to a positive number (1: everything on the calling
+// thread), else what the host offers.
+inline unsigned host_threads() {
+  if (const char* env = std::getenv("TILEVIS_THREADS")) {
+    char* end = nullptr;
+    const unsigned long n = std::strtoul(env, &end, 10);
+    if (end != env && *end == '\0' && n > 0) return unsigned(std::min<unsigned long>(n, 1024));
+  }
+  return std::max(1u, std::thread::hardware_concurrency());
+}
 
 // Runs fn(i, scratch) for every i in [0, n) on up to host_threads() threads, each with a
 // Scratch of its own; an index goes to whichever thread is free. If any call throws, the

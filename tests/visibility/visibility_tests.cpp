@@ -6,6 +6,7 @@
 #include <numeric>
 #include <stdexcept>
 #include <string>
+#include <thread>
 
 
 #include <gtest/gtest.h>
@@ -116,6 +117,24 @@ TEST(ForEachIndex, VisitsEveryIndexOnceAndRethrowsTheLowestFailure) {
     EXPECT_STREQ(e.what(), "30");
   }
   vis::for_each_index<Scratch>(0, [](size_t, Scratch&) { FAIL(); });
+}
+
+TEST(ForEachIndex, TilevisThreadsSetsTheCount) {
+  const char* old = std::getenv("TILEVIS_THREADS");
+  const std::string saved = old ? old : "";
+  setenv("TILEVIS_THREADS", "1", 1);
+  EXPECT_EQ(vis::host_threads(), 1u);
+  setenv("TILEVIS_THREADS", "3", 1);
+  EXPECT_EQ(vis::host_threads(), 3u);
+  setenv("TILEVIS_THREADS", "zero", 1);  // not a count: the host's
+  EXPECT_EQ(vis::host_threads(), std::max(1u, std::thread::hardware_concurrency()));
+  // One thread: every index on the calling thread, in order.
+  setenv("TILEVIS_THREADS", "1", 1);
+  std::vector<size_t> order;
+  vis::for_each_index<int>(5, [&](size_t i, int&) { order.push_back(i); });
+  EXPECT_EQ(order, (std::vector<size_t>{0, 1, 2, 3, 4}));
+  if (old) setenv("TILEVIS_THREADS", saved.c_str(), 1);
+  else unsetenv("TILEVIS_THREADS");
 }
 
 TEST(Setup, NearPlaneClipsIntoAFanWithOneId) {
