@@ -153,10 +153,11 @@ TEST(DramController, ReadsOfBufferedOrInFlightBurstsCostNoBurst) {
   EXPECT_EQ(c.read(tck(1), 0, 32).done, tck(1));  // from the write buffer
   const uint64_t first = c.read(tck(2), 8192, 32).done;
   EXPECT_EQ(first, tck(2 + 39 + 36 + 8));
-  EXPECT_EQ(c.read(tck(3), 8192, 32).done, first);  // merged with the one in flight
+  EXPECT_EQ(c.read(tck(3), 8192, 32).done, first);  // merged with its own one in flight
+  EXPECT_EQ(c.read(tck(3), 8192, 32, 1).done, first + tck(8));  // another requester's: a burst of its own
   EXPECT_EQ(c.counters().reads_forwarded, 1u);
   EXPECT_EQ(c.counters().reads_merged, 1u);
-  EXPECT_EQ(c.dram().counters().bursts, 1u);
+  EXPECT_EQ(c.dram().counters().bursts, 2u);
   ControllerConfig no_merge;
   no_merge.read_merge = 0;
   DramController d{DramConfig{}, no_merge};

@@ -53,7 +53,7 @@ void DramController::advance(uint32_t c, uint64_t at) {
   retire(c, at);
 }
 
-uint64_t DramController::read_burst(uint64_t at, uint64_t address, uint64_t& queued) {
+uint64_t DramController::read_burst(uint64_t at, uint64_t address, int source, uint64_t& queued) {
   const uint32_t c = m_dram.locate(address).channel;
   Channel& ch = m_ch[c];
   advance(c, at);
@@ -66,7 +66,7 @@ uint64_t DramController::read_burst(uint64_t at, uint64_t address, uint64_t& que
     }
   if (m_cfg.read_merge)
     for (const Read& r : ch.reads)
-      if (r.address == address) {  // in flight: the burst's data serves this read too
+      if (r.address == address && r.source == source) {  // in flight: its data serves this read too
         ++m_n.reads_merged;
         queued = 0;
         return r.end;
@@ -80,7 +80,7 @@ uint64_t DramController::read_burst(uint64_t at, uint64_t address, uint64_t& que
   m_n.read_bus_wait_ps += s.bus_wait;
   queued = accept - at;
   const uint64_t end = s.data + m_dram.burst_ps();
-  const Read r{end, address};
+  const Read r{end, address, source};
   ch.reads.insert(std::upper_bound(ch.reads.begin(), ch.reads.end(), r, [](const Read& x, const Read& y) { return x.end < y.end; }), r);
   return end;
 }
@@ -125,12 +125,12 @@ uint64_t DramController::write_burst(uint64_t at, uint64_t address) {
   return t;
 }
 
-DramController::ReadDone DramController::read(uint64_t at, uint64_t address, uint64_t bytes) {
+DramController::ReadDone DramController::read(uint64_t at, uint64_t address, uint64_t bytes, int source) {
   ReadDone r{at, 0};
   const uint64_t bb = m_dram.config().burst_bytes;
   for (uint64_t a = address / bb * bb; a < address + bytes; a += bb) {
     uint64_t queued = 0;
-    r.done = std::max(r.done, read_burst(at, a, queued));
+    r.done = std::max(r.done, read_burst(at, a, source, queued));
     r.queued = std::max(r.queued, queued);
   }
   return r;

@@ -5,7 +5,8 @@
 //     call returns its time, so a later read cannot overtake one already promised); a
 //     read that finds the queue full waits for a slot. A read of a burst still in the
 //     write buffer is served from it (gem5: "serviced by the write queue"), and one of a
-//     burst already in the read queue takes that burst's data (read_merge).
+//     burst that the same requester already has in the read queue takes that burst's
+//     data (read_merge).
 //   - a write buffer of `write_buffer` bursts. A posted write is accepted at once while
 //     the buffer has room; a write to a burst already in the buffer merges with it (write
 //     combining: two partial writes of one burst cost one burst on the bus). A writer
@@ -41,16 +42,18 @@ struct ControllerConfig {
   uint32_t write_high = 54;      // batch drain from here: 85 % of 64 (gem5 write_high_thresh_perc)
   uint32_t write_low = 32;       // down to here; idle drains above it: 50 % (gem5 write_low_thresh_perc)
   uint32_t frfcfs_window = 64;   // oldest writes searched for a row hit (gem5: the whole queue)
-  // 1: a read of a burst already in the read queue (in flight) takes that burst's data
-  // instead of a second burst (assumption: the fabric's miss-status registers merge them,
-  // as a GPU's L2 does; gem5's and DRAMSys's controllers do not). 0: every read is a burst.
+  // 1: a requester's read of a burst that its own earlier read has in flight (in the read
+  // queue) takes that burst's data instead of a second burst (assumption: each requester's
+  // port keeps its misses in flight in miss-status registers and merges a second miss to
+  // the same line, as caches and fetch units do; two requesters' reads do not merge, there
+  // being no shared cache in the model). 0: every read is a burst.
   uint32_t read_merge = 1;
 };
 
 struct ControllerCounters {
   uint64_t reads = 0;              // read bursts asked for
   uint64_t reads_forwarded = 0;    // read bursts served from the write buffer
-  uint64_t reads_merged = 0;       // read bursts served by the same burst already in the read queue
+  uint64_t reads_merged = 0;       // read bursts served by the same requester's burst in the read queue
   uint64_t writes = 0;             // write bursts posted (before combining)
   uint64_t writes_combined = 0;    // write bursts merged into one already buffered
   uint64_t drains = 0;             // batches forced by the high watermark
@@ -78,7 +81,8 @@ class DramController {
     // per channel ahead of its data.
     uint64_t queued = 0;
   };
-  ReadDone read(uint64_t at, uint64_t address, uint64_t bytes);
+  // `source`: the requester (its reads merge with its own in flight).
+  ReadDone read(uint64_t at, uint64_t address, uint64_t bytes, int source = 0);
   // A posted write: when its last burst is in the write buffer (at, unless it was full).
   uint64_t write(uint64_t at, uint64_t address, uint64_t bytes);
   // Sends every buffered write (the frame's end), so that the counters hold every burst.
@@ -98,6 +102,7 @@ class DramController {
   };
   struct Read {
     uint64_t end, address;
+    int source;
   };
   struct Channel {
     std::vector<Write> pending;      // arrival order
@@ -109,7 +114,7 @@ class DramController {
   uint64_t send(uint32_t c, size_t index, uint64_t at);  // one write to the bus; its data time
   void retire(uint32_t c, uint64_t at);      // sent writes and reads done by `at` leave
   // One read burst: its data's end, and (queued) its waits for a slot and for the bus.
-  uint64_t read_burst(uint64_t at, uint64_t address, uint64_t& queued);
+  uint64_t read_burst(uint64_t at, uint64_t address, int source, uint64_t& queued);
   uint64_t write_burst(uint64_t at, uint64_t address);
 
   Dram m_dram;

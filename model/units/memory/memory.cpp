@@ -29,7 +29,7 @@ Memory::Memory(const sc_core::sc_module_name& name, const MemoryConfig& config, 
       m_read_bursts(m_stats.add("read_bursts", "bursts", "read bursts asked of the controller")),
       m_write_bursts(m_stats.add("write_bursts", "bursts", "write bursts posted to the controller, before combining")),
       m_reads_forwarded(m_stats.add("reads_forwarded", "bursts", "read bursts served from the write buffer")),
-      m_reads_merged(m_stats.add("reads_merged", "bursts", "read bursts served by the same burst already in the read queue")),
+      m_reads_merged(m_stats.add("reads_merged", "bursts", "read bursts served by the same requester's burst already in the read queue")),
       m_writes_combined(m_stats.add("writes_combined", "bursts", "write bursts merged into one already in the write buffer")),
       m_drains(m_stats.add("write_drains", "batches", "write batches forced by the write buffer's high watermark")),
       m_drained_forced(m_stats.add("writes_drained_forced", "bursts", "write bursts sent in forced batches (or by a full buffer)")),
@@ -63,7 +63,7 @@ uint64_t Memory::read_latency_cycles() const {
 }
 
 sc_core::sc_time Memory::occupy(const sc_core::sc_time& at, uint64_t address, uint64_t bytes, bool read, int stream,
-                                bool hidden) {
+                                bool hidden, int port) {
   if (bytes == 0) return sc_core::SC_ZERO_TIME;
   (read ? m_read : m_written).value += double(bytes);
   m_transactions.value += 1;
@@ -77,7 +77,7 @@ sc_core::sc_time Memory::occupy(const sc_core::sc_time& at, uint64_t address, ui
   if (!read) {
     wait = m_ctrl.write(at_ps, address, bytes) - at_ps;
   } else {
-    const DramController::ReadDone r = m_ctrl.read(at_ps, address, bytes);
+    const DramController::ReadDone r = m_ctrl.read(at_ps, address, bytes, port);
     wait = hidden ? r.queued : r.done + m_controller_ps - at_ps;
   }
   return sc_core::sc_time::from_value(wait * ps);
@@ -128,7 +128,7 @@ void Memory::b_transport(int id, tlm::tlm_generic_payload& p, sc_core::sc_time& 
   const sc_core::sc_time at = sc_core::sc_time_stamp() + delay;
   LatencyHidden* hidden = nullptr;
   p.get_extension(hidden);
-  delay += occupy(at, p.get_address(), p.get_data_length(), p.is_read(), size_t(id) < m_stream_of.size() ? m_stream_of[size_t(id)] : -1, hidden != nullptr);
+  delay += occupy(at, p.get_address(), p.get_data_length(), p.is_read(), size_t(id) < m_stream_of.size() ? m_stream_of[size_t(id)] : -1, hidden != nullptr, id);
   p.set_response_status(tlm::TLM_OK_RESPONSE);
 }
 

@@ -55,9 +55,10 @@ class Memory : public sc_core::sc_module {
   StatsGroup& stats() { return m_stats; }
   uint64_t bytes() const { return uint64_t(m_read.value + m_written.value); }
 
-  // Delay of one transfer issued at `at` (what b_transport annotates).
+  // Delay of one transfer issued at `at` (what b_transport annotates). `port`: the socket
+  // it came through (a requester's reads merge only with its own in flight; -1: none).
   sc_core::sc_time occupy(const sc_core::sc_time& at, uint64_t address, uint64_t bytes, bool read, int stream,
-                          bool hidden = false);
+                          bool hidden = false, int port = -1);
   // The analytic level: `traffic` issued at cycle `at`, returns the cycles until it is done.
   uint64_t service(uint64_t at, const Traffic& traffic, bool read, int stream);
   // A read's unloaded latency (a row miss plus the controller), in cycles of the clock.
