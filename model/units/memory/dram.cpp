@@ -18,6 +18,8 @@ Dram::Dram(const DramConfig& config)
   if (config.row_bytes % config.burst_bytes || config.interleave_bytes % config.burst_bytes)
     throw std::invalid_argument("DRAM: row and interleave sizes must be whole bursts");
   if (config.rfc >= config.refi) throw std::invalid_argument("DRAM: refresh cycle time must be below its interval");
+  if (config.banks > 1 && !(config.banks & (config.banks - 1)))
+    while ((1u << m_bank_bits) < config.banks) ++m_bank_bits;
 }
 
 Dram::Location Dram::locate(uint64_t a) const {
@@ -32,14 +34,20 @@ Dram::Location Dram::locate(uint64_t a) const {
   // digits (base `banks`) are folded into the bank index, so that streams whose bases
   // are far apart (the regions of traffic.h) do not all start in the same bank.
   uint64_t fold = 0;
+  if (m_bank_bits) {  // a power of two (JESD209-4: 8): the same digits by shifts
+    const uint64_t mask = m_cfg.banks - 1;
+    for (uint64_t r = l.row; r; r >>= m_bank_bits) fold += r & mask;
+    l.bank = uint32_t((row_index + fold) & mask);
+    return l;
+  }
   for (uint64_t r = l.row; r; r /= m_cfg.banks) fold += r % m_cfg.banks;
   l.bank = uint32_t((row_index + fold) % m_cfg.banks);
   return l;
 }
 
-Dram::Plan Dram::plan_burst(uint64_t t, uint64_t address, bool read) const {
+Dram::Plan Dram::plan_burst(uint64_t t, const Location& where, bool read) const {
   Plan p;
-  p.where = locate(address);
+  p.where = where;
   const Channel& ch = m_channels[p.where.channel];
   const Bank& b = m_banks[size_t(p.where.channel) * m_cfg.banks + p.where.bank];
   // All-bank refresh every tREFI, lasting tRFC: a command inside a window waits for its
@@ -79,10 +87,8 @@ Dram::Plan Dram::plan_burst(uint64_t t, uint64_t address, bool read) const {
   return p;
 }
 
-BurstSlot Dram::plan(uint64_t at, uint64_t address, bool read) const { return plan_burst(at, address, read).slot; }
-
-BurstSlot Dram::issue(uint64_t at, uint64_t address, bool read) {
-  const Plan p = plan_burst(at, address, read);
+BurstSlot Dram::issue(uint64_t at, const Location& where, bool read) {
+  const Plan p = plan_burst(at, where, read);
   Channel& ch = m_channels[p.where.channel];
   Bank& b = m_banks[size_t(p.where.channel) * m_cfg.banks + p.where.bank];
   ++m_n.bursts;

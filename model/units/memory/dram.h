@@ -68,6 +68,14 @@ class Dram {
  public:
   explicit Dram(const DramConfig& config);
 
+  // Where an address goes (row:bank:column within a channel, channels interleaved, the
+  // bank permuted by the row).
+  struct Location {
+    uint32_t channel, bank;
+    uint64_t row;
+  };
+  Location locate(uint64_t address) const;
+
   // A request of `bytes` at `address` arriving at time `at`, its bursts issued at once in
   // address order. A read: the time its last burst has left the data bus. A write: the
   // time the DRAM takes its first burst's column command.
@@ -76,10 +84,19 @@ class Dram {
   // before it to its bank; its data takes the first idle stretch of its channel's bus it
   // fits in (a bank that is ready early fills the bus while another opens a row): where
   // it would go (plan) and sending it (issue).
-  BurstSlot plan(uint64_t at, uint64_t address, bool read) const;
-  BurstSlot issue(uint64_t at, uint64_t address, bool read);
+  // `where`: locate(address), for a caller that has it.
+  BurstSlot plan(uint64_t at, uint64_t address, bool read) const { return plan_burst(at, locate(address), read).slot; }
+  BurstSlot plan(uint64_t at, const Location& where, bool read) const { return plan_burst(at, where, read).slot; }
+  BurstSlot issue(uint64_t at, uint64_t address, bool read) { return issue(at, locate(address), read); }
+  BurstSlot issue(uint64_t at, const Location& where, bool read);
   // When the channel's data bus is free of every burst issued so far.
   uint64_t bus_free(uint32_t channel) const { return m_channels[channel].bus_free; }
+  // The earliest time a burst's data could start on the channel's bus (its first idle
+  // stretch, or bus_free).
+  uint64_t bus_first_idle(uint32_t channel) const {
+    const Channel& ch = m_channels[channel];
+    return ch.gaps.empty() ? ch.bus_free : ch.gaps.front().start;
+  }
   // Time of one burst on the bus (CCD).
   uint64_t burst_ps() const { return m_burst_ps; }
   // The row open in a bank (-1: closed), as the last burst issued left it.
@@ -87,14 +104,6 @@ class Dram {
 
   const DramConfig& config() const { return m_cfg; }
   const DramCounters& counters() const { return m_n; }
-
-  // Where an address goes (row:bank:column within a channel, channels interleaved, the
-  // bank permuted by the row).
-  struct Location {
-    uint32_t channel, bank;
-    uint64_t row;
-  };
-  Location locate(uint64_t address) const;
 
  private:
   struct Bank {
@@ -123,10 +132,11 @@ class Dram {
     uint64_t refresh_wait = 0;  // time waited for a refresh to end
     uint64_t activate = 0;      // when the row was opened (miss, conflict)
   };
-  Plan plan_burst(uint64_t at, uint64_t address, bool read) const;
+  Plan plan_burst(uint64_t at, const Location& where, bool read) const;
 
   DramConfig m_cfg;
   uint64_t m_tck, m_burst_ps, m_refi, m_rfc;
+  uint32_t m_bank_bits = 0;  // log2(banks) where that is a whole number above 0, else 0
   std::vector<Channel> m_channels;
   std::vector<Bank> m_banks;  // channel-major
   DramCounters m_n;

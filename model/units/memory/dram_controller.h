@@ -28,6 +28,7 @@
 // min_writes_per_switch, a rank's power-down.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <deque>
 #include <vector>
@@ -97,8 +98,7 @@ class DramController {
  private:
   struct Write {
     uint64_t address, arrived;
-    uint64_t row;
-    uint32_t bank;
+    Dram::Location where;
   };
   struct Read {
     uint64_t end, address;
@@ -108,17 +108,22 @@ class DramController {
     std::vector<Write> pending;      // arrival order
     std::deque<uint64_t> sent;       // data times of sent writes not yet on the bus (ascending)
     std::deque<Read> reads;          // reads in the queue, by data end (ascending)
+    // How many of each are in a slot keyed by the burst's address (a counting filter: a
+    // zero spares the search for a burst to combine, forward or merge with).
+    std::array<uint32_t, 256> pending_keys{}, read_keys{};
   };
+  size_t key(uint64_t address) const { return size_t(address / m_burst_bytes) & 255; }
   void advance(uint32_t c, uint64_t at);     // idle-gap drains before `at`
   size_t pick(uint32_t c) const;             // FR-FCFS among pending writes
   uint64_t send(uint32_t c, size_t index, uint64_t at);  // one write to the bus; its data time
   void retire(uint32_t c, uint64_t at);      // sent writes and reads done by `at` leave
-  // One read burst: its data's end, and (queued) its waits for a slot and for the bus.
+  // One read burst: its data's end, and (queued) its wait for a read-queue slot.
   uint64_t read_burst(uint64_t at, uint64_t address, int source, uint64_t& queued);
   uint64_t write_burst(uint64_t at, uint64_t address);
 
   Dram m_dram;
   ControllerConfig m_cfg;
+  uint64_t m_wl_ps, m_burst_bytes;
   std::vector<Channel> m_ch;
   ControllerCounters m_n;
 };
