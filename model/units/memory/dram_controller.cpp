@@ -59,7 +59,7 @@ void DramController::advance(uint32_t c, uint64_t at) {
   retire(c, at);
 }
 
-uint64_t DramController::read_burst(uint64_t at, uint64_t address, int source, uint64_t& queued) {
+uint64_t DramController::read_burst(uint64_t at, uint64_t address, int source, uint64_t& accepted) {
   const Dram::Location l = m_dram.locate(address);
   const uint32_t c = l.channel;
   Channel& ch = m_ch[c];
@@ -69,14 +69,14 @@ uint64_t DramController::read_burst(uint64_t at, uint64_t address, int source, u
     for (const Write& w : ch.pending)
       if (w.address == address) {
         ++m_n.reads_forwarded;
-        queued = 0;
+        accepted = at;
         return at;
       }
   if (m_cfg.read_merge && ch.read_keys[key(address)])
     for (const Read& r : ch.reads)
       if (r.address == address && r.source == source) {  // in flight: its data serves this read too
         ++m_n.reads_merged;
-        queued = 0;
+        accepted = at;
         return r.end;
       }
   uint64_t accept = at;
@@ -86,7 +86,7 @@ uint64_t DramController::read_burst(uint64_t at, uint64_t address, int source, u
   }
   const BurstSlot s = m_dram.issue(accept, l, true);
   m_n.read_bus_wait_ps += s.bus_wait;
-  queued = accept - at;
+  accepted = accept;
   const uint64_t end = s.data + m_dram.burst_ps();
   const Read r{end, address, source};
   ++ch.read_keys[key(address)];
@@ -137,13 +137,12 @@ uint64_t DramController::write_burst(uint64_t at, uint64_t address) {
 }
 
 DramController::ReadDone DramController::read(uint64_t at, uint64_t address, uint64_t bytes, int source) {
+  // The bursts enter the read queue in order: one that waits for a slot holds the rest.
   ReadDone r{at, 0};
   const uint64_t bb = m_dram.config().burst_bytes;
-  for (uint64_t a = address / bb * bb; a < address + bytes; a += bb) {
-    uint64_t queued = 0;
-    r.done = std::max(r.done, read_burst(at, a, source, queued));
-    r.queued = std::max(r.queued, queued);
-  }
+  uint64_t t = at;
+  for (uint64_t a = address / bb * bb; a < address + bytes; a += bb) r.done = std::max(r.done, read_burst(t, a, source, t));
+  r.queued = t - at;
   return r;
 }
 

@@ -117,8 +117,9 @@ class DramController {
   size_t pick(uint32_t c) const;             // FR-FCFS among pending writes
   uint64_t send(uint32_t c, size_t index, uint64_t at);  // one write to the bus; its data time
   void retire(uint32_t c, uint64_t at);      // sent writes and reads done by `at` leave
-  // One read burst: its data's end, and (queued) its wait for a read-queue slot.
-  uint64_t read_burst(uint64_t at, uint64_t address, int source, uint64_t& queued);
+  // One read burst arriving at `at`: its data's end, and (accepted) when it had a slot in
+  // the read queue.
+  uint64_t read_burst(uint64_t at, uint64_t address, int source, uint64_t& accepted);
   uint64_t write_burst(uint64_t at, uint64_t address);
 
   Dram m_dram;
