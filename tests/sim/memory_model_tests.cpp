@@ -223,6 +223,20 @@ TEST(DramController, AHiddenReaderWaitsOnlyForAReadQueueSlot) {
   EXPECT_EQ(c.counters().read_queue_full_ps, tck(39 + 36 + 8));
 }
 
+TEST(DramController, ARequestsBurstsEnterTheReadQueueInOrder) {
+  // Read queue of two, four bursts of one row (128 bytes at 0, channel 0): the first two
+  // enter at 0 (a miss: data 75..83 tCK, then a hit: 83..91); the third enters when the
+  // first leaves (83) and its data follows RL later (119..127); the fourth enters when the
+  // second leaves (91) and follows on the bus (127..135). Its reader waits 91 tCK.
+  ControllerConfig q;
+  q.read_queue = 2;
+  DramController c{DramConfig{}, q};
+  const DramController::ReadDone r = c.read(0, 0, 128);
+  EXPECT_EQ(r.queued, tck(91));
+  EXPECT_EQ(r.done, tck(135));
+  EXPECT_EQ(c.counters().read_queue_full_ps, tck(91));  // 83 for the third, 8 more for the fourth
+}
+
 TEST(DramController, TheWaitsNeverLeaveTheBusScheduleBehind) {
   // A reader and a writer that each wait exactly what they are told and do nothing else,
   // streaming 8 MiB each over every channel: neither ever runs ahead of the data bus by
