@@ -1,9 +1,11 @@
 // The DRAM controller in front of the device (dram.h), plain C++ (no SystemC), in the
 // manner of gem5's MemCtrl, DRAMSys's and Ramulator's controllers, kept call-based: every
 // call says at once when its request is done, no per-cycle process. Per channel:
-//   - a read queue of `read_queue` bursts. Reads are served first, in arrival order (a
-//     call returns its time, so a later read cannot overtake one already promised); a
-//     read that finds the queue full waits for a slot. A read of a burst still in the
+//   - a read queue of `read_queue` bursts. Reads are served first, issued in arrival
+//     order (a call returns its time, so a later read cannot delay one already promised;
+//     it may still take an idle stretch of the bus ahead of it where its bank is ready
+//     first: dram.h); a read that finds the queue full waits for a slot, a slot being
+//     held until the burst's data has left the bus. A read of a burst still in the
 //     write buffer is served from it (gem5: "serviced by the write queue"), and one of a
 //     burst that the same requester already has in the read queue takes that burst's
 //     data (read_merge).
@@ -17,9 +19,11 @@
 //     arrives. Which write goes next: FR-FCFS over the oldest `frfcfs_window` entries
 //     (a write to its bank's open row first, else the oldest).
 // What a unit waits for therefore follows the bus schedule: a writer's stall is a drain
-// time, bounded by the buffer; a latency-hidden reader's wait is its data's place behind
-// the reads (and forced write batches) queued ahead of it on the bus, so no debt builds
-// up in one phase to be paid in another.
+// time, and the bus is never more than the write buffer behind the writers; a
+// latency-hidden reader waits for read-queue slots, which free as the bus delivers the
+// reads ahead of it (and the forced write batches ahead of those), so the bus is never
+// more than the read queue behind the readers. No debt builds up in one phase to be paid
+// in another (tests/sim/memory_model_tests.cpp: TheWaitsNeverLeaveTheBusScheduleBehind).
 //
 // Defaults: gem5's MemCtrl/DRAMInterface (src/mem/MemCtrl.py, DRAMInterface.py: read
 // buffer 32 and write buffer 64 bursts, writes forced at 85 % and switched back at 50 %,
