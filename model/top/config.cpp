@@ -156,6 +156,19 @@ Registry::Registry() {
   TV_UINT("memory.refi", memory.dram.refi, "tCK", 1, 1u << 30, "all-bank refresh interval" JEDEC);
   TV_UINT("memory.rfc", memory.dram.rfc, "tCK", 0, 1u << 30, "all-bank refresh cycle time" JEDEC);
   TV_UINT("memory.controller_latency_ns", memory.controller_latency_ns, "ns", 0, 100000, "fabric and controller latency of a read (assumption)");
+  // DRAM controller (units/memory/dram_controller.h): gem5 MemCtrl's defaults.
+#define GEM5 " (assumption: gem5 MemCtrl/DRAMInterface default)"
+  TV_UINT("memory.read_queue", memory.controller.read_queue, "bursts", 1, 1u << 16, "read queue per channel" GEM5);
+  TV_UINT("memory.write_buffer", memory.controller.write_buffer, "bursts", 1, 1u << 16,
+          "write buffer per channel; a posted write waits only while it is full" GEM5);
+  TV_UINT("memory.write_high", memory.controller.write_high, "bursts", 1, 1u << 16,
+          "write-buffer occupancy that forces a batch of writes ahead of reads (85 % of 64)" GEM5);
+  TV_UINT("memory.write_low", memory.controller.write_low, "bursts", 0, 1u << 16,
+          "a forced batch drains down to this; writes above it also go in the bus's idle gaps (50 % of 64)" GEM5);
+  TV_UINT("memory.frfcfs_window", memory.controller.frfcfs_window, "bursts", 1, 1u << 16,
+          "oldest buffered writes searched for a row hit (FR-FCFS; assumption: the whole buffer, as gem5 searches its whole queue)");
+  TV_UINT("memory.read_merge", memory.controller.read_merge, "-", 0, 1,
+          "1: a requester's read of a burst its own earlier read has in flight takes that data, as its miss registers merge them (assumption); 0: every read is a burst");
   TV_UINT("framebuffer.colour_bytes", framebuffer.colour_bytes, "bytes", 1, 16, "colour per sample (assumption: RGBA8)");
   TV_UINT("framebuffer.depth_bytes", framebuffer.depth_bytes, "bytes", 1, 8, "depth/stencil per sample (assumption: D24S8)");
 
@@ -238,6 +251,7 @@ Registry::Registry() {
 }
 
 #undef JEDEC
+#undef GEM5
 #undef TV_UINT
 #undef TV_REAL
 
@@ -289,6 +303,9 @@ void check(const TilerConfig& c, const std::string& where) {
   if (d.row_bytes % d.burst_bytes) fail("memory.row_bytes must be a multiple of memory.burst_bytes");
   if (d.interleave_bytes % d.burst_bytes) fail("memory.interleave_bytes must be a multiple of memory.burst_bytes");
   if (d.rfc >= d.refi) fail("memory.rfc must be below memory.refi");
+  const ControllerConfig& q = c.memory.controller;
+  if (q.write_high > q.write_buffer) fail("memory.write_high must not exceed memory.write_buffer");
+  if (q.write_low >= q.write_high) fail("memory.write_low must be below memory.write_high");
   const CacheConfig& k = c.fetch.cache;
   if (k.bytes % (uint64_t(k.line_bytes) * k.ways))
     fail("fetch.cache_bytes must be a multiple of fetch.cache_line_bytes x fetch.cache_ways");

@@ -1,9 +1,12 @@
 // DRAM timing, plain C++ (no SystemC): channels, banks with one open row each, the
 // command timings that decide row hits, misses and conflicts, the data bus per channel
-// and all-bank refresh. Requests are served in arrival order per bank (an in-order,
-// open-page controller); a request is cut into bursts that go to their channel and bank
-// by the address map below, so a stream spreads over the channels and a scattered one
-// pays row misses. Times are picoseconds.
+// and all-bank refresh. This is the device: it serves each burst it is given in the order
+// it is given (issue()), open page; which burst goes when is the controller's choice
+// (dram_controller.h: read queue, write buffer, FR-FCFS). access() serves a request's
+// bursts in arrival order with no controller in front, for the device's own tests. A
+// request is cut into bursts that go to their channel and bank by the address map below,
+// so a stream spreads over the channels and a scattered one pays row misses. Times are
+// picoseconds.
 //
 // Defaults: JEDEC LPDDR4-4266 (JESD209-4; LPDDR4X has the same core timings at a lower
 // I/O voltage, JESD209-4-1), the values in tCK of DRAMSys's memspec
@@ -11,9 +14,11 @@
 // (32 bytes per burst), 8 banks, 1,024 columns of 16 bits (2 KiB rows), CCD 8, RCD 39,
 // RPpb 39, RAS 90, RL 36, WL 18, REFI 8,341, RFCab 812. Four x16 channels (a 64-bit
 // interface, as in most phone SoCs) and the 256-byte channel interleave are assumptions.
-// Not modelled: read/write turnaround (WTR), tFAW/tRRD, per-bank refresh, power-down.
+// Not modelled: read/write turnaround (WTR), tFAW/tRRD, per-bank refresh, power-down,
+// command-bus conflicts.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -52,21 +57,16 @@ struct DramCounters {
   uint64_t bus_busy_ps = 0;      // data-bus time, summed over channels
 };
 
+// When one burst goes: its column command and its data on the bus (data .. data + burst).
+struct BurstSlot {
+  uint64_t column = 0;
+  uint64_t data = 0;
+  uint64_t bus_wait = 0;  // data time lost to the bus being busy with earlier bursts
+};
+
 class Dram {
  public:
   explicit Dram(const DramConfig& config);
-
-  // A request of `bytes` at `address` arriving at time `at`. A read: the time its last
-  // burst has left the data bus. A write: the time the DRAM takes its first burst's
-  // column command.
-  uint64_t access(uint64_t at, uint64_t address, uint64_t bytes, bool read);
-  // How far the data buses are behind time `at`, averaged over the channels: what a reader
-  // that keeps many requests in flight over every channel (a prefetching stream) or a
-  // writer into the controller's buffer waits for. Zero while the DRAM keeps up.
-  uint64_t backlog(uint64_t at) const;
-
-  const DramConfig& config() const { return m_cfg; }
-  const DramCounters& counters() const { return m_n; }
 
   // Where an address goes (row:bank:column within a channel, channels interleaved, the
   // bank permuted by the row).
@@ -76,24 +76,67 @@ class Dram {
   };
   Location locate(uint64_t address) const;
 
+  // A request of `bytes` at `address` arriving at time `at`, its bursts issued at once in
+  // address order. A read: the time its last burst has left the data bus. A write: the
+  // time the DRAM takes its first burst's column command.
+  uint64_t access(uint64_t at, uint64_t address, uint64_t bytes, bool read);
+  // One burst (`address` burst-aligned), not before `at` and after every command issued
+  // before it to its bank; its data takes the first idle stretch of its channel's bus it
+  // fits in (a bank that is ready early fills the bus while another opens a row): where
+  // it would go (plan) and sending it (issue).
+  // `where`: locate(address), for a caller that has it.
+  BurstSlot plan(uint64_t at, uint64_t address, bool read) const { return plan_burst(at, locate(address), read).slot; }
+  BurstSlot plan(uint64_t at, const Location& where, bool read) const { return plan_burst(at, where, read).slot; }
+  BurstSlot issue(uint64_t at, uint64_t address, bool read) { return issue(at, locate(address), read); }
+  BurstSlot issue(uint64_t at, const Location& where, bool read);
+  // When the channel's data bus is free of every burst issued so far.
+  uint64_t bus_free(uint32_t channel) const { return m_channels[channel].bus_free; }
+  // The earliest time a burst's data could start on the channel's bus (its first idle
+  // stretch, or bus_free).
+  uint64_t bus_first_idle(uint32_t channel) const {
+    const Channel& ch = m_channels[channel];
+    return ch.gaps.empty() ? ch.bus_free : ch.gaps.front().start;
+  }
+  // Time of one burst on the bus (CCD).
+  uint64_t burst_ps() const { return m_burst_ps; }
+  // The row open in a bank (-1: closed), as the last burst issued left it.
+  int64_t open_row(uint32_t channel, uint32_t bank) const { return m_banks[size_t(channel) * m_cfg.banks + bank].open_row; }
+
+  const DramConfig& config() const { return m_cfg; }
+  const DramCounters& counters() const { return m_n; }
+
  private:
   struct Bank {
     int64_t open_row = -1;
     uint64_t activated = 0;  // last activate
     uint64_t ready = 0;      // earliest next column command
   };
+  struct Gap {
+    uint64_t start, end;
+  };
   struct Channel {
     uint64_t bus_free = 0;
-    // The channel's data backlog: when the bursts it has accepted would have left the bus had
-    // they been sent back to back from the time each arrived (data, not latency, so that a
-    // row miss's wait is not counted as bytes queued).
-    uint64_t queued_until = 0;
     uint64_t refreshed = 0;  // refresh windows already applied (count)
+    // Idle stretches of the data bus before bus_free (ascending, at most kGaps): a burst
+    // whose bank is ready early takes the first one it fits in, ahead of bursts issued
+    // before it on other banks (first ready), without moving any of them.
+    std::vector<Gap> gaps;
   };
-  uint64_t burst(uint64_t at, uint64_t address, bool read);
+  static constexpr size_t kGaps = 32;
+  enum class RowState { hit, miss, conflict };
+  struct Plan {
+    BurstSlot slot;
+    Location where;
+    RowState row = RowState::hit;
+    uint64_t window = 0;        // the refresh window the command falls in
+    uint64_t refresh_wait = 0;  // time waited for a refresh to end
+    uint64_t activate = 0;      // when the row was opened (miss, conflict)
+  };
+  Plan plan_burst(uint64_t at, const Location& where, bool read) const;
 
   DramConfig m_cfg;
   uint64_t m_tck, m_burst_ps, m_refi, m_rfc;
+  uint32_t m_bank_bits = 0;  // log2(banks) where that is a whole number above 0, else 0
   std::vector<Channel> m_channels;
   std::vector<Bank> m_banks;  // channel-major
   DramCounters m_n;

@@ -1,6 +1,7 @@
-// The memory system behind a TLM-2.0 target socket: the DRAM timing model (dram.h:
-// channels, banks, rows, refresh) shared by every requester, plus the fabric and
-// controller latency a read pays on top. Each requester binds through attach() under a
+// The memory system behind a TLM-2.0 target socket: the DRAM controller (dram_controller.h:
+// read queue, write buffer with combining and watermark drains, FR-FCFS) in front of the
+// DRAM timing model (dram.h: channels, banks, rows, refresh), shared by every requester,
+// plus the fabric and controller latency a read pays on top. Each requester binds through attach() under a
 // stream name, and the stats count its bytes. Timing only: no data is stored; the
 // transaction's address says where the bytes lie (traffic.h's regions), its length how
 // many.
@@ -16,6 +17,7 @@
 
 #include "units/common/stats.h"
 #include "units/memory/dram.h"
+#include "units/memory/dram_controller.h"
 #include "units/memory/traffic.h"
 
 namespace tilevis::sim {
@@ -24,9 +26,10 @@ class UnitBase;
 
 // On a read whose address was known ahead (prefetched from a control stream or an index
 // stream) or whose latency the unit hides (shader threads waiting on texture): the reader
-// keeps requests in flight over every channel, so it waits only while the DRAM as a whole
-// is behind (Dram::backlog, its own bytes included), not for the latency of each request;
-// row conflicts and refresh still cost it the bus time they take.
+// keeps requests in flight, so it waits only for its data's place on the bus behind the
+// reads queued ahead of it (and a forced write batch), not for the latency of each request
+// (DramController::ReadDone::queued); row conflicts and refresh still cost it the bus time
+// they take.
 struct LatencyHidden : tlm::tlm_extension<LatencyHidden> {
   tlm::tlm_extension_base* clone() const override { return new LatencyHidden; }
   void copy_from(const tlm::tlm_extension_base&) override {}
@@ -34,6 +37,7 @@ struct LatencyHidden : tlm::tlm_extension<LatencyHidden> {
 
 struct MemoryConfig {
   DramConfig dram;
+  ControllerConfig controller;
   // Interconnect and controller latency of a read beyond the DRAM's own (assumption: a
   // mobile SoC's unloaded DRAM read takes ~100 ns; the LPDDR4 row miss, RCD + RL + a
   // burst, is ~39 ns of it).
@@ -51,22 +55,24 @@ class Memory : public sc_core::sc_module {
   StatsGroup& stats() { return m_stats; }
   uint64_t bytes() const { return uint64_t(m_read.value + m_written.value); }
 
-  // Delay of one transfer issued at `at` (what b_transport annotates).
+  // Delay of one transfer issued at `at` (what b_transport annotates). `port`: the socket
+  // it came through (a requester's reads merge only with its own in flight; -1: none).
   sc_core::sc_time occupy(const sc_core::sc_time& at, uint64_t address, uint64_t bytes, bool read, int stream,
-                          bool hidden = false);
+                          bool hidden = false, int port = -1);
   // The analytic level: `traffic` issued at cycle `at`, returns the cycles until it is done.
   uint64_t service(uint64_t at, const Traffic& traffic, bool read, int stream);
   // A read's unloaded latency (a row miss plus the controller), in cycles of the clock.
   uint64_t read_latency_cycles() const;
   // Copies the DRAM's counters into the stats (call once the frame is done).
   void finish(uint64_t frame_cycles);
-  const Dram& dram() const { return m_dram; }
+  const Dram& dram() const { return m_ctrl.dram(); }
+  const DramController& controller() const { return m_ctrl; }
 
  private:
   void b_transport(int id, tlm::tlm_generic_payload& p, sc_core::sc_time& delay);
 
   MemoryConfig m_cfg;
-  Dram m_dram;
+  DramController m_ctrl;
   sc_core::sc_time m_period;
   uint64_t m_period_ps, m_controller_ps;
   StatsGroup m_stats;
@@ -81,6 +87,20 @@ class Memory : public sc_core::sc_module {
   Stat& m_refresh_wait;
   Stat& m_busy;
   Stat& m_utilisation;
+  Stat& m_read_bursts;
+  Stat& m_write_bursts;
+  Stat& m_reads_forwarded;
+  Stat& m_reads_merged;
+  Stat& m_writes_combined;
+  Stat& m_drains;
+  Stat& m_drained_forced;
+  Stat& m_drained_idle;
+  Stat& m_full_stalls;
+  Stat& m_write_stall;
+  Stat& m_occupancy_mean;
+  Stat& m_occupancy_peak;
+  Stat& m_read_queue_full;
+  Stat& m_read_bus_wait;
   std::vector<Stat*> m_streams;      // per stream
   std::vector<int> m_stream_of;      // per bound socket, in bind order: its stream
 };
