@@ -18,7 +18,7 @@ find_package(GTest REQUIRED)
 find_package(glm REQUIRED)
 find_package(assimp REQUIRED)
 find_package(benchmark REQUIRED)
-find_package(Boost 1.74 REQUIRED)   # header-only multiprecision: exact test oracles
+find_package(Boost 1.74 REQUIRED)   # header-only: multiprecision (exact test oracles), math (the sampler's quantiles)
 pkg_check_modules(SYSTEMC REQUIRED IMPORTED_TARGET systemc)
 
 add_library(tilevis_systemc INTERFACE)

@@ -4,41 +4,21 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <boost/math/distributions/normal.hpp>
+#include <boost/math/distributions/students_t.hpp>
+
 namespace tilevis::sim {
 
 double normal_quantile(double confidence) {
   if (!(confidence > 0.0 && confidence < 1.0)) throw std::invalid_argument("confidence must lie in (0, 1)");
-  // P(|Z| <= z) = erf(z / sqrt 2): bisection on a monotone function, to double precision.
-  double lo = 0.0, hi = 40.0;
-  for (int i = 0; i < 200; ++i) {
-    const double mid = 0.5 * (lo + hi);
-    (std::erf(mid / std::sqrt(2.0)) < confidence ? lo : hi) = mid;
-  }
-  return 0.5 * (lo + hi);
+  // P(|Z| <= z) = confidence: the upper (1 - confidence) / 2 quantile.
+  return boost::math::quantile(boost::math::complement(boost::math::normal(), (1.0 - confidence) / 2));
 }
 
 double student_quantile(double confidence, double dof) {
   if (!(confidence > 0.0 && confidence < 1.0)) throw std::invalid_argument("confidence must lie in (0, 1)");
   if (!(dof >= 1.0)) throw std::invalid_argument("degrees of freedom must be at least 1");
-  // P(|T| <= t) = 2 * integral of the density over [0, t] (Simpson, 2000 steps), bisected.
-  const double c = std::exp(std::lgamma((dof + 1) / 2) - std::lgamma(dof / 2)) / std::sqrt(dof * M_PI);
-  auto mass = [&](double t) {
-    const int n = 2000;
-    const double h = t / n;
-    double s = 0;
-    for (int i = 0; i <= n; ++i) {
-      const double f = c * std::pow(1.0 + (i * h) * (i * h) / dof, -(dof + 1) / 2);
-      s += f * (i == 0 || i == n ? 1 : (i % 2 ? 4 : 2));
-    }
-    return 2.0 * s * h / 3.0;
-  };
-  double lo = 0.0, hi = 1.0;
-  while (mass(hi) < confidence) hi *= 2;
-  for (int i = 0; i < 60; ++i) {
-    const double mid = 0.5 * (lo + hi);
-    (mass(mid) < confidence ? lo : hi) = mid;
-  }
-  return 0.5 * (lo + hi);
+  return boost::math::quantile(boost::math::complement(boost::math::students_t(dof), (1.0 - confidence) / 2));
 }
 
 TileSampler::TileSampler(std::vector<double> triangles, const SamplingConfig& config, uint64_t stream)
