@@ -120,7 +120,7 @@ Registry::Registry() {
   TV_UINT("sim.sample_geometry_warm", scheduler.sampling.geometry_warm, "triangles", 0, 1u << 24,
           "fidelity auto: triangles at the start of a geometry cluster that follows an unsimulated one, simulated but not measured");
   TV_REAL("sim.sample_certainty", scheduler.sampling.certainty_ratio, "ratio", 1.0, 1e9,
-          "fidelity auto: tiles with more than this many times the mean binned triangles are all simulated");
+          "fidelity auto: tiles with more than this many times the mean binned work (triangles x the EVU's edge rows) are all simulated");
   TV_UINT("sim.sample_seed", scheduler.sampling.seed, "", 0, std::numeric_limits<uint64_t>::max(),
           "fidelity auto: seed of the sample (the same seed, the same tiles)");
   add_enum<Mode>("sim.mode", "visibility: analytic (EVU), hybrid (EVU, and the HSR unit for tiles where the analytic answer can be wrong), hsr (per-pixel HSR unit), early_z, none",

@@ -37,6 +37,7 @@ Tiler::Tiler(const sc_core::sc_module_name& name, const TilerConfig& config, Fra
   m_tiling = std::make_unique<TilingEngine>("tiling", m_env, config.tiling, *m_pb);
   TileSchedulerConfig scheduler = config.scheduler;
   scheduler.sampled = config.sim.fidelity == Fidelity::automatic;
+  scheduler.sampling.reject_lanes = uses_evu(config.sim.mode) ? config.evu.reject.lanes : 0;
   m_scheduler = std::make_unique<TileScheduler>("scheduler", m_env, scheduler);
 
   auto fifo = [&](const char* n, int depth) {

@@ -102,6 +102,7 @@ class FrameWork {
   void prepare_segment(uint32_t k);                          // binning of the segment
   const std::vector<uint32_t>& segment_tiles() const { return m_seg_tiles; }  // non-empty, row-major
   uint32_t tile_triangle_count(uint32_t tile) const;        // binned in the open segment (before open_tile)
+  uint32_t tile_edge_count(uint32_t tile) const;            // silhouette edges binned likewise (0: per-pixel modes)
   TileWork* open_tile(uint32_t tile);                        // TileFetch
   void resolve_tile(TileWork& w);                            // the mode's visibility step
   void close_tile(TileWork* w);                              // TileWriter: results kept, work freed

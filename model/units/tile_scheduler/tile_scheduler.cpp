@@ -97,7 +97,9 @@ void TileScheduler::dispatch_sampled(uint32_t segment, const std::vector<uint32_
   // The take-all stratum: heavy tiles (tile_sampler.h); the others are sampled in clusters.
   std::vector<double> triangles(tiles.size());
   double mean = 0;
-  for (size_t i = 0; i < tiles.size(); ++i) mean += triangles[i] = double(m_work.tile_triangle_count(tiles[i]));
+  for (size_t i = 0; i < tiles.size(); ++i)
+    mean += triangles[i] = tile_work(m_work.tile_triangle_count(tiles[i]), m_work.tile_edge_count(tiles[i]),
+                                     m_cfg.sampling.reject_lanes);
   mean /= double(std::max<size_t>(tiles.size(), 1));
   // Whole clusters are taken: a heavy tile keeps the tiles before it in its cluster, whose
   // overlap with it is part of its cost (a heavy tile after an unsimulated one was 35 % dearer
