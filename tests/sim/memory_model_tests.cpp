@@ -4,6 +4,7 @@
 // calling the model.
 #include <gtest/gtest.h>
 
+#include <random>
 #include <set>
 
 #include "units/memory/cache.h"
@@ -52,6 +53,26 @@ TEST(Dram, FarApartStreamsStartInDifferentBanks) {
   std::set<uint32_t> banks;
   for (uint64_t g = 0; g < 6; ++g) banks.insert(d.locate(g << 30).bank);
   EXPECT_GE(banks.size(), 5u);
+}
+
+TEST(Dram, TheAddressMapByShiftsIsTheMapByDivisions) {
+  // Power-of-two sizes (the defaults) take shifts and masks: the same map, written out here
+  // with divisions as dram.h states it, over addresses of every region and odd offsets.
+  const DramConfig c;
+  Dram d{c};
+  std::mt19937_64 rng(7);
+  for (int i = 0; i < 100000; ++i) {
+    const uint64_t a = (uint64_t(i % 6) << 30) + (rng() % (uint64_t(1) << 29));
+    const uint64_t block = a / c.interleave_bytes;
+    const uint64_t local = (block / c.channels) * c.interleave_bytes + a % c.interleave_bytes;
+    const uint64_t row_index = local / c.row_bytes, row = row_index / c.banks;
+    uint64_t fold = 0;
+    for (uint64_t r = row; r; r /= c.banks) fold += r % c.banks;
+    const Dram::Location l = d.locate(a);
+    ASSERT_EQ(l.channel, block % c.channels) << a;
+    ASSERT_EQ(l.row, row) << a;
+    ASSERT_EQ(l.bank, (row_index + fold) % c.banks) << a;
+  }
 }
 
 TEST(Dram, ChannelsServeAStreamSideBySide) {

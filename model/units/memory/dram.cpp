@@ -1,6 +1,7 @@
 #include "units/memory/dram.h"
 
 #include <algorithm>
+#include <bit>
 #include <stdexcept>
 
 namespace tilevis::sim {
@@ -20,9 +21,31 @@ Dram::Dram(const DramConfig& config)
   if (config.rfc >= config.refi) throw std::invalid_argument("DRAM: refresh cycle time must be below its interval");
   if (config.banks > 1 && !(config.banks & (config.banks - 1)))
     while ((1u << m_bank_bits) < config.banks) ++m_bank_bits;
+  // Every size a power of two (the defaults): the address map by shifts and masks.
+  auto log2_exact = [](uint64_t v) { return v && !(v & (v - 1)) ? std::countr_zero(v) : -1; };
+  const int il = log2_exact(config.interleave_bytes), ch = log2_exact(config.channels), row = log2_exact(config.row_bytes);
+  if (m_bank_bits && il >= 0 && ch >= 0 && row >= 0) {
+    m_il_bits = uint32_t(il);
+    m_channel_bits = uint32_t(ch);
+    m_row_bits = uint32_t(row);
+    m_shift_map = true;
+  }
 }
 
 Dram::Location Dram::locate(uint64_t a) const {
+  if (m_shift_map) {
+    const uint64_t block = a >> m_il_bits;
+    Location l;
+    l.channel = uint32_t(block & (m_cfg.channels - 1));
+    const uint64_t local = ((block >> m_channel_bits) << m_il_bits) | (a & (m_cfg.interleave_bytes - 1));
+    const uint64_t row_index = local >> m_row_bits;
+    l.row = row_index >> m_bank_bits;
+    const uint64_t mask = m_cfg.banks - 1;
+    uint64_t fold = 0;
+    for (uint64_t r = l.row; r; r >>= m_bank_bits) fold += r & mask;
+    l.bank = uint32_t((row_index + fold) & mask);
+    return l;
+  }
   const uint64_t il = m_cfg.interleave_bytes;
   const uint64_t block = a / il;
   Location l;

@@ -137,6 +137,9 @@ class Dram {
   DramConfig m_cfg;
   uint64_t m_tck, m_burst_ps, m_refi, m_rfc;
   uint32_t m_bank_bits = 0;  // log2(banks) where that is a whole number above 0, else 0
+  // Every size of the address map a power of two: locate() by shifts (same map).
+  bool m_shift_map = false;
+  uint32_t m_il_bits = 0, m_channel_bits = 0, m_row_bits = 0;
   std::vector<Channel> m_channels;
   std::vector<Bank> m_banks;  // channel-major
   DramCounters m_n;
