@@ -195,6 +195,176 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team, uint64_t* stag
   }
 }
 
+// Items with long candidate chains: a block per item. The chain is sequential by definition
+// (each candidate splits the pieces the earlier ones left), but within a step the pieces are
+// independent: a warp re-tested them 32 at a time, so an item with hundreds of pieces took
+// tens of rounds per step and the few such items were the frame (slivers, hot_tile,
+// teapot_stadium, armadillo_box, interpenetrating: `k_clip_items` at 2 % occupancy). Here the
+// block's threads take kLongBlock pieces a round; the ballots' counts, summed over the warps in
+// order, give each outside part the slot a sequential loop gives it (the same canonical order),
+// and one bump per round gives the round's polygon edges (from the block's chunk of the pool).
+// Exact's block is half float's: its 255 registers a thread (wide arithmetic) fill the SM's
+// register file at 256 threads; 512 would spill.
+inline constexpr uint32_t kLongBlock = 512, kLongChain = 48, kLongStage = 4096;
+template <class P>
+inline constexpr uint32_t kLongBlockOf = P::kExact ? kLongBlock / 2 : kLongBlock;
+
+struct LongShared {
+  uint32_t wcnt[kLongBlock / 32], wneed[kLongBlock / 32];
+  uint64_t base, poly_at, step_at, chunk_at, chunk_left, next_grab;
+};
+
+template <class P>
+__device__ uint64_t long_take(const ClipArgs<P>& a, LongShared& sh, uint64_t total) {  // thread 0 only
+  if (total > sh.chunk_left) {
+    const uint64_t grab = tmax(total, sh.next_grab);
+    sh.next_grab = tmin<uint64_t>(2 * sh.next_grab, 1024);
+    const uint64_t at = bump(&a.counters[kEdgesUsed], grab, a.pool_cap);
+    if (at == ~uint64_t{0}) return at;
+    sh.chunk_at = at;
+    sh.chunk_left = grab;
+  }
+  const uint64_t at = sh.chunk_at;
+  sh.chunk_at += total;
+  sh.chunk_left -= total;
+  return at;
+}
+
+template <class P>
+__device__ void clip_item_block(const ClipArgs<P>& a, uint32_t j, uint64_t* stage, LongShared& sh) {
+  const uint32_t t = threadIdx.x, lane = t & 31u, warp = t / 32, n_warps = blockDim.x / 32;
+  const uint32_t c = a.cand_count[j], off = a.cand_offset[j];
+  const uint32_t tile = uint32_t(a.item_key[j]);
+  const TileTri<P>& tt = a.tris[a.item_tri[j]];
+  if (candidates_overflowed(a) || uint64_t(off) + c > a.cand_cap) return;
+  for (uint32_t k = t; k < c; k += blockDim.x) {
+    const uint32_t x = a.cand_edges[off + k];
+    uint32_t r = 0;
+    for (uint32_t m = 0; m < c; ++m) r += a.cand_edges[off + m] < x;
+    a.cand_sorted[off + r] = x;
+  }
+  const uint64_t want = tmin<uint64_t>(piece_bound(c), uint64_t(a.slot_factor) * (c + 1));
+  if (t == 0) {
+    sh.chunk_at = sh.chunk_left = 0;
+    sh.next_grab = 2 * kTileCap;
+    sh.base = bump(&a.counters[kSlotsUsed], want, a.slot_cap);
+    sh.poly_at = sh.base == ~uint64_t{0} ? sh.base : long_take(a, sh, kTileCap);
+  }
+  __syncthreads();  // also: cand_sorted is written
+  const uint64_t base = sh.base, poly_at = sh.poly_at;
+  if (poly_at == ~uint64_t{0}) {
+    if (t == 0) atomic_add(&a.counters[kClipOverflow], 1);
+    if (base != ~uint64_t{0})
+      for (uint64_t k = t; k < want; k += blockDim.x) a.slot_item[base + k] = kNone;
+    return;
+  }
+  uint64_t* const slots = want <= kLongStage ? stage : a.slot_poly + base;
+  if (t == 0) {
+    bool overflow = false;
+    const uint32_t n = tile_polygon<P>(tt, a.grid.rect(tile), a.pool + poly_at, overflow);
+    slots[0] = (poly_at << 32) | n;
+    a.item_slot[j] = uint32_t(base);
+  }
+  __syncthreads();
+  uint32_t count = 1, splits = 0, anomalies = 0, regularized = 0;
+  bool failed = false;
+  SilEdge<P> next_e = a.edges[a.cand_sorted[off]];
+  for (uint32_t ci = 0; ci < c && !failed; ++ci) {
+    const SilEdge<P> e = next_e;
+    if (ci + 1 < c) next_e = a.edges[a.cand_sorted[off + ci + 1]];
+    const uint32_t n = count;
+    uint32_t appended = 0;
+    for (uint32_t k0 = 0; k0 < n; k0 += blockDim.x) {
+      const uint32_t k = k0 + t;
+      bool flag = false;
+      uint64_t sp = 0;
+      PEdge<P> copy[kCopyEdges];
+      const PEdge<P>* poly = nullptr;
+      if (k < n) {
+        sp = slots[k];
+        poly = a.pool + (sp >> 32);
+        if (uint32_t(sp) <= kCopyEdges) {
+          for (uint32_t i = 0; i < kCopyEdges; ++i)
+            if (i < uint32_t(sp)) copy[i] = poly[i];
+          poly = copy;
+        }
+        flag = survives<P>(poly, uint32_t(sp), tt, e);
+      }
+      const uint32_t mask = __ballot_sync(0xffffffffu, flag);
+      if (lane == 0) sh.wcnt[warp] = __popc(mask);
+      __syncthreads();
+      uint32_t before = 0, total = 0;
+      for (uint32_t w = 0; w < n_warps; ++w) {
+        const uint32_t v = sh.wcnt[w];
+        before += w < warp ? v : 0;
+        total += v;
+      }
+      const uint64_t dst = uint64_t(n) + appended + before + __popc(mask & ((1u << lane) - 1u));
+      const uint32_t m = uint32_t(sp);
+      const bool room = dst < want;
+      if (flag && !room) atomic_add(&a.counters[kReserveOverflow], 1);
+      const uint32_t need = flag && room ? 2 * (m + 1) : 0;
+      const uint32_t incl = WarpTeam{}.scan(need);
+      if (lane == 31) sh.wneed[warp] = incl;
+      __syncthreads();
+      uint64_t need_before = 0, need_total = 0;
+      for (uint32_t w = 0; w < n_warps; ++w) {
+        const uint32_t v = sh.wneed[w];
+        need_before += w < warp ? v : 0;
+        need_total += v;
+      }
+      if (t == 0 && total) sh.step_at = long_take(a, sh, need_total);
+      __syncthreads();
+      const uint64_t step_at = total ? sh.step_at : 0;
+      const bool fail = flag && (!room || step_at == ~uint64_t{0});
+      if (flag && !fail) {
+        const uint64_t at = step_at + need_before + incl - need;
+        PolyOut<P> in{a.pool + at, 0, m + 1, false}, out{a.pool + at + m + 1, 0, m + 1, false};
+        bool regular = false;
+        split<P>(poly, m, e.line, in, out, &regular);
+        regularized += regular ? 1 : 0;
+        if (in.overflow || out.overflow) {
+          ++anomalies;
+          in.n = tmin(in.n, m + 1);
+          out.n = tmin(out.n, m + 1);
+        }
+        slots[k] = (at << 32) | in.n;
+        slots[dst] = ((at + m + 1) << 32) | out.n;
+        ++splits;
+      }
+      appended += total;
+      // Every thread's slots are written before the next round reads them; sh is reused.
+      if (__syncthreads_or(fail)) failed = true;
+    }
+    count = n + appended;
+  }
+  for (uint64_t k = t; k < want; k += blockDim.x) {
+    if (k < count && slots != a.slot_poly + base) a.slot_poly[base + k] = slots[k];
+    a.slot_item[base + k] = k < count ? j : kNone;
+  }
+  count_add(&a.rows[uint64_t(tile) * kTileColumns + kColClips], splits);
+  count_add(&a.counters[kFloatAnomalies], anomalies);
+  count_add(&a.counters[kFloatRegularized], regularized);
+  if (t == 0) {
+    if (failed) atomic_add(&a.counters[kClipOverflow], 1);
+    a.piece_count[j] = count;
+    atomic_add(&a.rows[uint64_t(tile) * kTileColumns + kColPieces], int64_t(count));
+    atomic_max(&a.counters[kMaxTilePieces], uint64_t(count));
+  }
+  __syncthreads();  // the stage and sh are reused by the block's next item
+}
+
+template <class P>
+__global__ void __launch_bounds__(kLongBlockOf<P>) k_clip_long(ClipArgs<P> a, const uint64_t* count, uint64_t cap) {
+  __shared__ uint64_t stage[kLongStage];
+  __shared__ LongShared sh;
+  const uint64_t n = *count < cap ? *count : cap;
+  for (uint64_t w = blockIdx.x; w < n; w += gridDim.x) {
+    const uint32_t j = a.clip_items[w];
+    if (a.cand_count[j] >= kLongChain) clip_item_block<P>(a, j, stage, sh);
+  }
+}
+
 template <class P>
 TV_HD void clip_item_host(const ClipArgs<P>& a, uint64_t w) {
   clip_item<P>(a, w, HostTeam{}, nullptr);
@@ -213,7 +383,8 @@ __global__ void k_clip_items(ClipArgs<P> a, const uint64_t* count, uint64_t cap)
   const uint64_t warp = (uint64_t(blockIdx.x) * blockDim.x + threadIdx.x) / 32;
   const uint64_t warps = uint64_t(gridDim.x) * blockDim.x / 32;
   __shared__ uint64_t stage[kClipBlock / 32][kStageSlots];
-  for (uint64_t w = warp; w < n; w += warps) clip_item<P>(a, w, WarpTeam{}, stage[threadIdx.x / 32]);
+  for (uint64_t w = warp; w < n; w += warps)
+    if (a.cand_count[a.clip_items[w]] < kLongChain) clip_item<P>(a, w, WarpTeam{}, stage[threadIdx.x / 32]);
 }
 
 }  // namespace
@@ -254,9 +425,17 @@ bool stage_clip(Pipeline<P>& p) {
   if (ex.where == Where::cpu) {
     ex.launch_dyn(k_clip_items<P>, clip_item_host<P>, p.counters.get() + kClipItems, ni, a);
   } else {
+    // The long chains on side stream 1 (idle from cull to the fold), launched first so that
+    // their blocks start at once; the others beside them.
+    ex.branch(1);
+    ++ex.queued;
+    k_clip_long<P><<<ex.grid_blocks / 2, kLongBlockOf<P>, 0, ex.stream>>>(a, p.counters.get() + kClipItems, ni);
+    TV_CUDA(cudaGetLastError());
+    ex.on_main();
     ++ex.queued;
     k_clip_items<P><<<ex.grid_blocks * 2, kClipBlock, 0, ex.stream>>>(a, p.counters.get() + kClipItems, ni);
     TV_CUDA(cudaGetLastError());
+    ex.merge(1);
   }
 
   // Device-sized: the overflow counters are checked once the frame has ended (pools_fit).

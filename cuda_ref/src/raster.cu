@@ -82,33 +82,37 @@ TV_HD uint64_t raster_box(const RasterArgs<P>& a, const typename P::Line* lines,
     return covered;
   }
   if constexpr (!P::kExact && N > 0) {
-    // Float: the same runs, each sample evaluated as covers() does (in_half: eval's rounded
-    // products, never fused, so a row's b (y - oy) term is computed once per run, bit for bit).
-    bool owns_b[N];
-    for (int i = 0; i < N; ++i) owns_b[i] = l[i].owns_boundary();
-    const uint32_t runs = (b.w + kRun - 1) / kRun;
-    const uint32_t units = runs * b.h * S;  // <= 4096 * 4096 * 16
-    for (uint32_t u = team.lane(); u < units; u += Team::kSize) {
-      const uint32_t run = runs == 1 ? 0 : u % runs, rest = runs == 1 ? u : u / runs;
-      const uint32_t k = S == 1 ? 0 : rest % S, row = S == 1 ? rest : rest / S;
-      const int64_t px0 = b.px0 + int64_t(run) * kRun, py = b.py0 + row;
-      const int64_t px_end = tmin<int64_t>(px0 + kRun, b.px0 + b.w);
-      const uint32_t sxy = a.sample_xy[k];
-      const int32_t sx = int32_t(sxy & 0xffffu);
-      const float fy = float(int32_t((py << sb) + (sxy >> 16)));
-      float r[N];
-      for (int i = 0; i < N; ++i) r[i] = l[i].row(fy);
-      for (int64_t px = px0; px < px_end; ++px) {
-        const float fx = float(int32_t((px << sb) + sx));
-        bool in = true;
-        for (int i = 0; i < N; ++i) {
-          const float v = l[i].eval_row(fx, r[i]);
-          in &= v > 0 || (v == 0 && owns_b[i]);
+    // Float, a box at least a run wide: the same runs, each sample evaluated as covers() does
+    // (in_half: eval's rounded products, never fused, so a row's b (y - oy) term is computed
+    // once per run, bit for bit). Narrower boxes take a sample per lane (below): runs there
+    // leave lanes idle (bunny float raster 0.032 -> 0.049 ms with runs everywhere).
+    if (b.w >= kRun) {
+      bool owns_b[N];
+      for (int i = 0; i < N; ++i) owns_b[i] = l[i].owns_boundary();
+      const uint32_t runs = (b.w + kRun - 1) / kRun;
+      const uint32_t units = runs * b.h * S;  // <= 4096 * 4096 * 16
+      for (uint32_t u = team.lane(); u < units; u += Team::kSize) {
+        const uint32_t run = runs == 1 ? 0 : u % runs, rest = runs == 1 ? u : u / runs;
+        const uint32_t k = S == 1 ? 0 : rest % S, row = S == 1 ? rest : rest / S;
+        const int64_t px0 = b.px0 + int64_t(run) * kRun, py = b.py0 + row;
+        const int64_t px_end = tmin<int64_t>(px0 + kRun, b.px0 + b.w);
+        const uint32_t sxy = a.sample_xy[k];
+        const int32_t sx = int32_t(sxy & 0xffffu);
+        const float fy = float(int32_t((py << sb) + (sxy >> 16)));
+        float r[N];
+        for (int i = 0; i < N; ++i) r[i] = l[i].row(fy);
+        for (int64_t px = px0; px < px_end; ++px) {
+          const float fx = float(int32_t((px << sb) + sx));
+          bool in = true;
+          for (int i = 0; i < N; ++i) {
+            const float v = l[i].eval_row(fx, r[i]);
+            in &= v > 0 || (v == 0 && owns_b[i]);
+          }
+          if (in) hit(px, py, k);
         }
-        if (in) hit(px, py, k);
       }
+      return covered;
     }
-    return covered;
   }
   const uint32_t cells = b.w * b.h * S;  // <= 4096 * 4096 * 16
   for (uint32_t c = team.lane(); c < cells; c += Team::kSize) {
