@@ -7,6 +7,8 @@
 // No hand-sized buffers (SVGPU §4.3's failure): piece slots and polygon edges come from pools
 // with device-side bump counters. An item that finds its pool exhausted stops and is counted;
 // the host grows the pools from the counters and runs the frame again.
+#include <cstdlib>
+
 #include "pipeline.cuh"
 
 namespace tilevis::cuda {
@@ -39,6 +41,7 @@ struct ClipArgs {
   uint64_t* counters;
   uint32_t slot_factor;
   uint64_t n_items;
+  uint32_t long_chain;  // items with this many candidates or more: a block each (GPU)
 };
 
 // A run whose candidate list overflowed has per-item counts without all their records: it is
@@ -361,7 +364,7 @@ __global__ void __launch_bounds__(kLongBlockOf<P>) k_clip_long(ClipArgs<P> a, co
   const uint64_t n = *count < cap ? *count : cap;
   for (uint64_t w = blockIdx.x; w < n; w += gridDim.x) {
     const uint32_t j = a.clip_items[w];
-    if (a.cand_count[j] >= kLongChain) clip_item_block<P>(a, j, stage, sh);
+    if (a.cand_count[j] >= a.long_chain) clip_item_block<P>(a, j, stage, sh);
   }
 }
 
@@ -384,7 +387,7 @@ __global__ void k_clip_items(ClipArgs<P> a, const uint64_t* count, uint64_t cap)
   const uint64_t warps = uint64_t(gridDim.x) * blockDim.x / 32;
   __shared__ uint64_t stage[kClipBlock / 32][kStageSlots];
   for (uint64_t w = warp; w < n; w += warps)
-    if (a.cand_count[a.clip_items[w]] < kLongChain) clip_item<P>(a, w, WarpTeam{}, stage[threadIdx.x / 32]);
+    if (a.cand_count[a.clip_items[w]] < a.long_chain) clip_item<P>(a, w, WarpTeam{}, stage[threadIdx.x / 32]);
 }
 
 }  // namespace
@@ -419,6 +422,8 @@ bool stage_clip(Pipeline<P>& p) {
   a.counters = p.counters.get();
   a.slot_factor = p.caps.slot_factor;
   a.n_items = ni;
+  static const uint32_t long_chain = std::getenv("TILEVIS_CLIP_LONG") ? uint32_t(std::atoi(std::getenv("TILEVIS_CLIP_LONG"))) : kLongChain;
+  a.long_chain = long_chain;
 
   ex.exclusive_scan(a.cand_count, p.cand_offset.get(), p.N(kSzItems, ni), ni);
   ex.launch_dyn(k_cand_scatter<P>, cand_scatter<P>, p.counters.get() + kCandidates, p.caps.candidates, a);
