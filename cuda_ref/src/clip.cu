@@ -7,8 +7,6 @@
 // No hand-sized buffers (SVGPU §4.3's failure): piece slots and polygon edges come from pools
 // with device-side bump counters. An item that finds its pool exhausted stops and is counted;
 // the host grows the pools from the counters and runs the frame again.
-#include <cstdlib>
-
 #include "pipeline.cuh"
 
 namespace tilevis::cuda {
@@ -41,7 +39,6 @@ struct ClipArgs {
   uint64_t* counters;
   uint32_t slot_factor;
   uint64_t n_items;
-  uint32_t long_chain;  // items with this many candidates or more: a block each (GPU)
 };
 
 // A run whose candidate list overflowed has per-item counts without all their records: it is
@@ -206,9 +203,11 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team, uint64_t* stag
 // block's threads take kLongBlock pieces a round; the ballots' counts, summed over the warps in
 // order, give each outside part the slot a sequential loop gives it (the same canonical order),
 // and one bump per round gives the round's polygon edges (from the block's chunk of the pool).
+// kLongChain from a sweep on the H200 (48, 96, 160, 320: 96 best or within noise of it on
+// hot_tile, slivers, armadillo_box, interpenetrating, teapot_stadium, million, both precisions).
 // Exact's block is half float's: its 255 registers a thread (wide arithmetic) fill the SM's
 // register file at 256 threads; 512 would spill.
-inline constexpr uint32_t kLongBlock = 512, kLongChain = 48, kLongStage = 4096;
+inline constexpr uint32_t kLongBlock = 512, kLongChain = 96, kLongStage = 4096;
 template <class P>
 inline constexpr uint32_t kLongBlockOf = P::kExact ? kLongBlock / 2 : kLongBlock;
 
@@ -364,7 +363,7 @@ __global__ void __launch_bounds__(kLongBlockOf<P>) k_clip_long(ClipArgs<P> a, co
   const uint64_t n = *count < cap ? *count : cap;
   for (uint64_t w = blockIdx.x; w < n; w += gridDim.x) {
     const uint32_t j = a.clip_items[w];
-    if (a.cand_count[j] >= a.long_chain) clip_item_block<P>(a, j, stage, sh);
+    if (a.cand_count[j] >= kLongChain) clip_item_block<P>(a, j, stage, sh);
   }
 }
 
@@ -387,7 +386,7 @@ __global__ void k_clip_items(ClipArgs<P> a, const uint64_t* count, uint64_t cap)
   const uint64_t warps = uint64_t(gridDim.x) * blockDim.x / 32;
   __shared__ uint64_t stage[kClipBlock / 32][kStageSlots];
   for (uint64_t w = warp; w < n; w += warps)
-    if (a.cand_count[a.clip_items[w]] < a.long_chain) clip_item<P>(a, w, WarpTeam{}, stage[threadIdx.x / 32]);
+    if (a.cand_count[a.clip_items[w]] < kLongChain) clip_item<P>(a, w, WarpTeam{}, stage[threadIdx.x / 32]);
 }
 
 }  // namespace
@@ -422,8 +421,6 @@ bool stage_clip(Pipeline<P>& p) {
   a.counters = p.counters.get();
   a.slot_factor = p.caps.slot_factor;
   a.n_items = ni;
-  static const uint32_t long_chain = std::getenv("TILEVIS_CLIP_LONG") ? uint32_t(std::atoi(std::getenv("TILEVIS_CLIP_LONG"))) : kLongChain;
-  a.long_chain = long_chain;
 
   ex.exclusive_scan(a.cand_count, p.cand_offset.get(), p.N(kSzItems, ni), ni);
   ex.launch_dyn(k_cand_scatter<P>, cand_scatter<P>, p.counters.get() + kCandidates, p.caps.candidates, a);
