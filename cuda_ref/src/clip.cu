@@ -356,14 +356,229 @@ __device__ void clip_item_block(const ClipArgs<P>& a, uint32_t j, uint64_t* stag
   __syncthreads();  // the stage and sh are reused by the block's next item
 }
 
+// The same items as a tree of walks (the block's threads each walking one piece through the
+// remaining candidates). A piece's history is its own: at candidate ci it is tested and maybe
+// split, the inside part staying in its slot and the outside part starting at ci + 1; no piece's
+// steps read another's. So a thread takes a piece, walks it to the end of the chain, and queues
+// the outside parts it cuts off for any thread to take: the longest dependent chain is one
+// piece's walk (mostly cheap rejections), not every candidate's round over all pieces. Each
+// piece records its parent and the candidate that cut it off; the slots a sequential loop gives
+// (at candidate ci the new parts follow the existing pieces in their parents' slot order) are
+// then assigned in candidate order, so the canonical piece order, every polygon and every
+// counter are those of clip_item. Items whose reservation passes kTreeSlots use the rounds
+// above (clip_item_block).
+inline constexpr uint32_t kTreeSlots = 4096, kTreeCands = 1024;
+
+struct TreeShared {
+  uint32_t n_alloc, finished, head, fail;
+  unsigned long long chunk_used;
+  uint64_t chunk_at, chunk_size;
+};
+
+// What threads hand each other between barriers goes through shared-memory atomics (loads as
+// atomic adds of 0), so the hand-off is ordered and compute-sanitizer's racecheck sees no plain
+// access racing another.
+__device__ inline uint32_t sh_load(uint32_t* p) { return atomicAdd(p, 0u); }
+__device__ inline uint64_t sh_load(uint64_t* p) {
+  return atomicAdd(reinterpret_cast<unsigned long long*>(p), 0ull);
+}
+__device__ inline void sh_store(uint32_t* p, uint32_t v) { atomicExch(p, v); }
+__device__ inline void sh_store(uint64_t* p, uint64_t v) {
+  atomicExch(reinterpret_cast<unsigned long long*>(p), static_cast<unsigned long long>(v));
+}
+
 template <class P>
-__global__ void __launch_bounds__(kLongBlockOf<P>) k_clip_long(ClipArgs<P> a, const uint64_t* count, uint64_t cap) {
-  __shared__ uint64_t stage[kLongStage];
+__device__ uint64_t tree_edges(const ClipArgs<P>& a, TreeShared& ts, uint32_t k) {
+  const uint64_t o = atomicAdd(&ts.chunk_used, static_cast<unsigned long long>(k));
+  if (o + k <= ts.chunk_size) return ts.chunk_at + o;
+  return bump(&a.counters[kEdgesUsed], k, a.pool_cap);  // past the block's chunk: its own bump
+}
+
+template <class P>
+__device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, uint8_t* smem, TreeShared& ts) {
+  uint64_t* const sp = reinterpret_cast<uint64_t*>(smem);                  // by piece id: polygon (pool << 32 | n)
+  uint32_t* const parent = reinterpret_cast<uint32_t*>(sp + kTreeSlots);  // by piece id
+  uint32_t* const born = parent + kTreeSlots;                             // candidate that cut it off
+  uint32_t* const slot_of = born + kTreeSlots;
+  uint32_t* const order = slot_of + kTreeSlots;
+  uint32_t* const hist = order + kTreeSlots;  // kTreeCands + 1
+  const uint32_t t = threadIdx.x;
+  const uint32_t c = a.cand_count[j], off = a.cand_offset[j];
+  const uint32_t tile = uint32_t(a.item_key[j]);
+  const TileTri<P>& tt = a.tris[a.item_tri[j]];
+  for (uint32_t k = t; k < c; k += blockDim.x) {
+    const uint32_t x = a.cand_edges[off + k];
+    uint32_t r = 0;
+    for (uint32_t m = 0; m < c; ++m) r += a.cand_edges[off + m] < x;
+    a.cand_sorted[off + r] = x;
+  }
+  for (uint32_t k = t; k < kTreeSlots; k += blockDim.x) sp[k] = ~uint64_t{0};
+  for (uint32_t k = t; k <= c; k += blockDim.x) hist[k] = 0;
+  __syncthreads();
+  if (t == 0) {
+    ts.n_alloc = 1;
+    ts.finished = ts.head = ts.fail = 0;
+    ts.chunk_used = 0;
+    ts.chunk_size = 0;
+    const uint64_t base = bump(&a.counters[kSlotsUsed], want, a.slot_cap);
+    const uint64_t chunk = tmin<uint64_t>(16 * want + kTileCap, 1 << 16);
+    const uint64_t at = base == ~uint64_t{0} ? base : bump(&a.counters[kEdgesUsed], chunk, a.pool_cap);
+    if (at == ~uint64_t{0}) {
+      atomic_add(&a.counters[kClipOverflow], 1);
+      ts.fail = 2;  // nothing reserved: the slots (if any) are marked unused below
+      ts.chunk_at = base;
+    } else {
+      ts.chunk_at = at + kTileCap;
+      ts.chunk_size = chunk - kTileCap;
+      bool overflow = false;
+      const uint32_t n = tile_polygon<P>(tt, a.grid.rect(tile), a.pool + at, overflow);
+      parent[0] = kNone;
+      born[0] = kNone;  // walks from candidate 0
+      sp[0] = (at << 32) | n;
+      a.item_slot[j] = uint32_t(base);
+      slot_of[0] = uint32_t(base);  // (the base, until the slots are assigned)
+    }
+  }
+  __syncthreads();
+  if (ts.fail == 2) {
+    const uint64_t base = ts.chunk_at;
+    if (base != ~uint64_t{0})
+      for (uint64_t k = t; k < want; k += blockDim.x) a.slot_item[base + k] = kNone;
+    __syncthreads();
+    return;
+  }
+  const uint64_t base = slot_of[0];
+  uint32_t splits = 0, anomalies = 0, regularized = 0;
+  for (;;) {
+    const uint32_t id = atomicAdd(&ts.head, 1u);
+    uint64_t cur = ~uint64_t{0};
+    for (;;) {  // wait for piece `id`, or for the end: every piece made has been walked
+      if (id < kTreeSlots && (cur = sh_load(&sp[id])) != ~uint64_t{0}) break;
+      const uint32_t fin = sh_load(&ts.finished);
+      if (fin == sh_load(&ts.n_alloc)) break;
+      __nanosleep(32);
+    }
+    if (cur == ~uint64_t{0}) break;
+    PEdge<P> copy[kCopyEdges];
+    const PEdge<P>* poly = nullptr;
+    auto load = [&] {
+      poly = a.pool + (cur >> 32);
+      if (uint32_t(cur) <= kCopyEdges) {
+        for (uint32_t i = 0; i < kCopyEdges; ++i)
+          if (i < uint32_t(cur)) copy[i] = poly[i];
+        poly = copy;
+      }
+    };
+    load();
+    for (uint32_t ci = sh_load(&born[id]) + 1; ci < c; ++ci) {
+      if (sh_load(&ts.fail)) break;
+      const SilEdge<P>& e = a.edges[a.cand_sorted[off + ci]];
+      const uint32_t m = uint32_t(cur);
+      if (!survives<P>(poly, m, tt, e)) continue;
+      const uint32_t child = atomicAdd(&ts.n_alloc, 1u);
+      if (child >= want || child >= kTreeSlots) {
+        atomic_add(&a.counters[kReserveOverflow], 1);
+        sh_store(&ts.fail, 1u);
+        atomicAdd(&ts.finished, 1u);  // the id taken stands for no piece
+        break;
+      }
+      const uint64_t at = tree_edges(a, ts, 2 * (m + 1));
+      if (at == ~uint64_t{0}) {
+        sh_store(&ts.fail, 1u);
+        atomicAdd(&ts.finished, 1u);
+        break;
+      }
+      PolyOut<P> in{a.pool + at, 0, m + 1, false}, out{a.pool + at + m + 1, 0, m + 1, false};
+      bool regular = false;
+      split<P>(poly, m, e.line, in, out, &regular);
+      regularized += regular ? 1 : 0;
+      if (in.overflow || out.overflow) {
+        ++anomalies;  // only float arithmetic can break convexity
+        in.n = tmin(in.n, m + 1);
+        out.n = tmin(out.n, m + 1);
+      }
+      ++splits;
+      sh_store(&parent[child], id);
+      sh_store(&born[child], ci);
+      __threadfence_block();  // the outside part's edges (global) and record before its polygon word
+      sh_store(&sp[child], ((at + m + 1) << 32) | out.n);
+      cur = (at << 32) | in.n;
+      load();
+    }
+    sh_store(&sp[id], cur);  // the piece's final polygon
+    __threadfence_block();
+    atomicAdd(&ts.finished, 1u);
+  }
+  __syncthreads();
+  const bool failed = ts.fail != 0;
+  const uint32_t count = failed ? 0 : ts.n_alloc;
+  if (!failed) {
+    // Slots: the pieces cut off at candidate ci follow all earlier pieces, in their parents'
+    // slot order (a parent was made before ci, so its slot is known when ci's turn comes).
+    for (uint32_t k = 1 + t; k < count; k += blockDim.x) atomicAdd(&hist[born[k]], 1u);
+    __syncthreads();
+    if (t == 0) {
+      uint32_t run = 0;
+      for (uint32_t k = 0; k <= c; ++k) {
+        const uint32_t h = hist[k];
+        hist[k] = run;
+        run += h;
+      }
+    }
+    __syncthreads();
+    for (uint32_t k = 1 + t; k < count; k += blockDim.x) order[atomicAdd(&hist[born[k]], 1u)] = k;
+    __syncthreads();
+    if (t == 0) {
+      slot_of[0] = 0;
+      uint32_t next = 1, g0 = 0;
+      for (uint32_t ci = 0; ci < c; ++ci) {
+        const uint32_t g1 = hist[ci];  // after the scatter: the end of ci's group
+        for (uint32_t x = g0 + 1; x < g1; ++x) {  // insertion sort by the parent's slot
+          const uint32_t v = order[x], key = slot_of[parent[v]];
+          uint32_t y = x;
+          while (y > g0 && slot_of[parent[order[y - 1]]] > key) {
+            order[y] = order[y - 1];
+            --y;
+          }
+          order[y] = v;
+        }
+        for (uint32_t x = g0; x < g1; ++x) slot_of[order[x]] = next++;
+        g0 = g1;
+      }
+    }
+    __syncthreads();
+    for (uint32_t k = t; k < count; k += blockDim.x) a.slot_poly[base + slot_of[k]] = sp[k];
+  }
+  for (uint64_t k = t; k < want; k += blockDim.x) a.slot_item[base + k] = k < count ? j : kNone;
+  count_add(&a.rows[uint64_t(tile) * kTileColumns + kColClips], splits);
+  count_add(&a.counters[kFloatAnomalies], anomalies);
+  count_add(&a.counters[kFloatRegularized], regularized);
+  if (t == 0) {
+    if (failed) atomic_add(&a.counters[kClipOverflow], 1);
+    a.piece_count[j] = count;
+    atomic_add(&a.rows[uint64_t(tile) * kTileColumns + kColPieces], int64_t(count));
+    atomic_max(&a.counters[kMaxTilePieces], uint64_t(count));
+  }
+  __syncthreads();  // the shared arrays are reused by the block's next item
+}
+
+inline constexpr size_t kTreeSmem = size_t(kTreeSlots) * (8 + 4 * 4) + (kTreeCands + 1) * 4;
+static_assert(kTreeSmem >= kLongStage * 8, "the rounds' stage lives in the same memory");
+
+template <class P>
+__global__ void __launch_bounds__(kLongBlockOf<P>, 1) k_clip_long(ClipArgs<P> a, const uint64_t* count, uint64_t cap) {
+  extern __shared__ __align__(16) uint8_t smem[];
   __shared__ LongShared sh;
+  __shared__ TreeShared ts;
   const uint64_t n = *count < cap ? *count : cap;
   for (uint64_t w = blockIdx.x; w < n; w += gridDim.x) {
     const uint32_t j = a.clip_items[w];
-    if (a.cand_count[j] >= kLongChain) clip_item_block<P>(a, j, stage, sh);
+    const uint32_t c = a.cand_count[j];
+    if (c < kLongChain) continue;
+    if (candidates_overflowed(a) || uint64_t(a.cand_offset[j]) + c > a.cand_cap) continue;
+    const uint64_t want = tmin<uint64_t>(piece_bound(c), uint64_t(a.slot_factor) * (c + 1));
+    if (want <= kTreeSlots && c <= kTreeCands) clip_item_tree<P>(a, j, want, smem, ts);
+    else clip_item_block<P>(a, j, reinterpret_cast<uint64_t*>(smem), sh);
   }
 }
 
@@ -431,7 +646,12 @@ bool stage_clip(Pipeline<P>& p) {
     // their blocks start at once; the others beside them.
     ex.branch(1);
     ++ex.queued;
-    k_clip_long<P><<<ex.grid_blocks / 2, kLongBlockOf<P>, 0, ex.stream>>>(a, p.counters.get() + kClipItems, ni);
+    static const bool smem_set = [] {
+      TV_CUDA(cudaFuncSetAttribute(k_clip_long<P>, cudaFuncAttributeMaxDynamicSharedMemorySize, int(kTreeSmem)));
+      return true;
+    }();
+    (void)smem_set;
+    k_clip_long<P><<<ex.grid_blocks / 2, kLongBlockOf<P>, kTreeSmem, ex.stream>>>(a, p.counters.get() + kClipItems, ni);
     TV_CUDA(cudaGetLastError());
     ex.on_main();
     ++ex.queued;
