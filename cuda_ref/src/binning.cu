@@ -29,6 +29,10 @@ struct BinArgs {
   uint32_t* tedge_id;
   int64_t* rows;
   uint32_t* occ_count;
+  uint32_t* big_tris;    // GPU: triangles / edges of wide spans, queued by the count pass
+  uint32_t* big_edges;
+  uint64_t* counters;    // kBigTris, kBigEdges: their numbers
+  uint64_t emit_gate;    // the emit pass's element count (tagged on the device: 0 past a bound)
 };
 
 TV_HD inline int64_t floor_div64(int64_t a, int64_t d) { return a >= 0 ? a / d : -((-a + d - 1) / d); }
@@ -226,14 +230,16 @@ __global__ void k_obin_gather(ObinGatherArgs a, uint64_t n) {
   TV_GRID_LOOP(i, n) obin_gather(a, i);
 }
 
-// On the GPU a primitive whose bounding box spans more than kBigSpan tiles is binned by the
+// On the GPU a primitive whose bounding box spans more than kBigSpan tiles is binned by a
 // whole block (its tiles over the threads) rather than by its own thread: a thread per
 // primitive left a full-screen triangle's thousands of tile tests to one thread (hot_tile's
-// ground at 4K: 8,160 tiles, 4.6 ms of binning). The block's threads test a chunk of the span
-// each, and an ordered prefix (ballots, then the warps' totals) gives each overlapped tile its
-// slot in the primitive's range, in the span's row-major order as the thread's loop leaves them
-// (the later stable sorts do not depend on it: a primitive meets a tile once). The host
-// emulation runs the thread-per-primitive bodies above.
+// ground at 4K: 8,160 tiles, 4.6 ms of binning). The count pass's threads queue such
+// primitives (device counter, kBigTris / kBigEdges) and a second kernel gives each a block, so
+// a scene of few wide triangles (decals: ~160, most of them wide) spreads them over the GPU.
+// The block's threads test a chunk of the span each, and an ordered prefix (ballots, then the
+// warps' totals) gives each overlapped tile its slot in the primitive's range, in the span's
+// row-major order as the thread's loop leaves them (the later stable sorts do not depend on it:
+// a primitive meets a tile once). The host emulation runs the thread-per-primitive bodies above.
 inline constexpr uint32_t kBinBlock = 256, kBigSpan = 32;
 
 template <class P, bool Edge, bool Emit>
@@ -307,34 +313,36 @@ __device__ void bin_block(const BinArgs<P>& a, uint32_t i, uint32_t* warp_tot) {
   }
 }
 
-// A thread per primitive; those of a wide span are queued in shared memory and binned by the
-// whole block after the others (every thread runs the same number of rounds: __syncthreads).
+// A thread per primitive; those of a wide span are queued (count pass) or left (emit pass) for
+// k_bin_big.
 template <class P, bool Edge, bool Emit>
-__global__ void __launch_bounds__(kBinBlock) k_bin(BinArgs<P> a, uint64_t n) {
-  __shared__ uint32_t big[kBinBlock];
-  __shared__ uint32_t n_big;
-  __shared__ uint32_t warp_tot[kBinBlock / 32];
-  const uint64_t end = count_of(n), stride = uint64_t(gridDim.x) * blockDim.x;
-  for (uint64_t first = uint64_t(blockIdx.x) * blockDim.x; first < end; first += stride) {
-    if (threadIdx.x == 0) n_big = 0;
-    __syncthreads();
-    const uint64_t i = first + threadIdx.x;
-    if (i < end) {
-      const Rect& box = Edge ? a.edges[i].bbox : a.tris[i].bbox;
-      if (tile_span(a, box).count() > kBigSpan) {
-        big[atomicAdd(&n_big, 1u)] = uint32_t(i);
-      } else if constexpr (Edge) {
-        bin_edge<P>(a, i, Emit);
-      } else {
-        bin_tri<P>(a, i, Emit);
+__global__ void k_bin(BinArgs<P> a, uint64_t n) {
+  TV_GRID_LOOP(i, n) {
+    const Rect& box = Edge ? a.edges[i].bbox : a.tris[i].bbox;
+    if (tile_span(a, box).count() > kBigSpan) {
+      if constexpr (!Emit) {
+        const uint64_t at = bump_one(&a.counters[Edge ? kBigEdges : kBigTris], ~uint64_t{0});
+        (Edge ? a.big_edges : a.big_tris)[at] = uint32_t(i);
       }
+    } else if constexpr (Edge) {
+      bin_edge<P>(a, i, Emit);
+    } else {
+      bin_tri<P>(a, i, Emit);
     }
-    __syncthreads();
-    const uint32_t nb = n_big;
-    for (uint32_t k = 0; k < nb; ++k) bin_block<P, Edge, Emit>(a, big[k], warp_tot);
-    __syncthreads();  // n_big and big are reset by the next round
   }
 }
+
+template <class P, bool Edge, bool Emit>
+__global__ void __launch_bounds__(kBinBlock) k_bin_big(BinArgs<P> a, const uint64_t* count, uint64_t cap) {
+  __shared__ uint32_t warp_tot[kBinBlock / 32];
+  if (Emit && count_of(a.emit_gate) == 0) return;  // a frame past its bounds emits nothing
+  const uint64_t n = *count < cap ? *count : cap;
+  const uint32_t* list = Edge ? a.big_edges : a.big_tris;
+  for (uint64_t w = blockIdx.x; w < n; w += gridDim.x) bin_block<P, Edge, Emit>(a, list[w], warp_tot);
+}
+template <class P>
+void bin_big_host(const BinArgs<P>&, uint64_t) {}  // the host's thread bodies bin every primitive
+
 __global__ void k_tile_begin(RangeArgs a, uint64_t n) {
   TV_GRID_LOOP(i, n) tile_begin(a, i);
 }
@@ -383,13 +391,20 @@ void stage_binning(Pipeline<P>& p) {
   a.edge_off = p.edge_tiles_off.need(p.n_edges + 1);
   a.rows = rows;
   a.occ_count = occ_count;
+  a.big_tris = p.big_tris.need(p.n_tris + 1);
+  a.big_edges = p.big_edges.need(p.n_edges + 1);
+  a.counters = p.counters.get();
+  uint64_t* const big_tris = p.counters.get() + kBigTris;
+  uint64_t* const big_edges = p.counters.get() + kBigEdges;
   // Triangles on the main stream, edges beside them (side stream 0) until cull; the occluder
   // lists (side 1) until occlusion; the visible-area order (side 2) until the fold.
   const uint64_t n_tris = p.N(kSzTris, p.n_tris), n_edges = p.N(kSzEdges, p.n_edges);
   ex.launch(k_bin<P, false, false>, bin_tri_count<P>, n_tris, a, kBinBlock);
+  ex.launch_dyn(k_bin_big<P, false, false>, bin_big_host<P>, big_tris, p.n_tris, a, kBinBlock);
   ex.exclusive_scan(a.tri_tiles, p.tri_tiles_off.get(), n_tris, p.n_tris);
   ex.branch(0);
   ex.launch(k_bin<P, true, false>, bin_edge_count<P>, n_edges, a, kBinBlock);
+  ex.launch_dyn(k_bin_big<P, true, false>, bin_big_host<P>, big_edges, p.n_edges, a, kBinBlock);
   ex.exclusive_scan(a.edge_tiles, p.edge_tiles_off.get(), n_edges, p.n_edges);
   ex.on_main();
   ex.merge(0);
@@ -424,6 +439,8 @@ void stage_binning(Pipeline<P>& p) {
   uint32_t* edge_begin = p.tile_edge_begin.need(tiles);
   ex.branch(0);
   ex.launch(k_bin<P, true, true>, bin_edge_emit<P>, p.N(kSzEdgeEmit, p.n_edges), a, kBinBlock);
+  a.emit_gate = p.N(kSzEdgeEmit, p.n_edges);
+  ex.launch_dyn(k_bin_big<P, true, true>, bin_big_host<P>, big_edges, p.n_edges, a, kBinBlock);
   ex.sort_pairs(a.tedge_key, p.tedge_key_sorted.need(ne + 1), a.tedge_id, p.tedge_id_sorted.need(ne + 1), n_tedges,
                 tile_bits + d, ne, true);
   ex.zero(edge_begin, tiles * 4ull);
@@ -432,6 +449,8 @@ void stage_binning(Pipeline<P>& p) {
   ex.on_main();
 
   ex.launch(k_bin<P, false, true>, bin_tri_emit<P>, p.N(kSzTriEmit, p.n_tris), a, kBinBlock);
+  a.emit_gate = p.N(kSzTriEmit, p.n_tris);
+  ex.launch_dyn(k_bin_big<P, false, true>, bin_big_host<P>, big_tris, p.n_tris, a, kBinBlock);
   ex.branch(1);
   ex.sort_pairs(a.occ_key, p.occ_key_sorted.need(ni + 1), a.occ_tri, p.occ_tri_sorted.need(ni + 1), n_items,
                 tile_bits + d + 1, ni, true);

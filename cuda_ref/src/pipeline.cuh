@@ -48,6 +48,7 @@ enum Counter : uint32_t {
   kFloatRegularized,  // float: splits whose vertex sides were made those of a convex polygon
   kFloatNegativeAreas,  // float: visible pieces whose area came out negative (none: poly.cuh)
   kFloatExactAreas,     // float: visible pieces whose area sign was not proven: the exact region's area
+  kBigTris, kBigEdges,  // binning: primitives of wide spans queued for a block each
   kCounterCount
 };
 
@@ -239,6 +240,7 @@ struct Pipeline {
   uint32_t tiles_x = 0, tiles_y = 0, n_tiles = 0;
   TileGrid grid{};
   Buf<uint32_t> tri_tiles, edge_tiles;        // tiles per triangle / edge
+  Buf<uint32_t> big_tris, big_edges;          // binning: the wide ones (a block each)
   Buf<uint64_t> tri_tiles_off, edge_tiles_off;
   Buf<uint64_t> item_key, item_key_sorted;    // (tile, triangle) pairs by tile
   Buf<uint32_t> item_tri, item_tri_sorted;
