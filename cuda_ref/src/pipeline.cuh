@@ -304,7 +304,8 @@ struct Pipeline {
                     &tedge_id_sorted, &tile_item_begin, &tile_edge_begin, &tile_occ_count, &area_item,
                     &area_item_sorted, &piece_count, &cand_count, &cand_cursor, &cand_offset,
                     &cand_edges, &cand_scratch, &clip_items, &item_slot, &indices, &tri_draw, &sample_xy,
-                    &obin_cnt, &obin_val, &obin_val_sorted, &obin_begin, &obin_count, &slot_item, &occ_units})
+                    &obin_cnt, &obin_val, &obin_val_sorted, &obin_begin, &obin_count, &slot_item, &occ_units, &big_tris,
+                    &big_edges})
       b->bind(&e);
     for (auto* b : {&sizes, &fan_offset, &use_key, &sil_offset, &sil_key, &sil_key_sorted,
                     &front_offset, &tri_tiles_off, &edge_tiles_off, &item_key, &item_key_sorted, &occ_key,
