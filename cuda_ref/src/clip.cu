@@ -7,6 +7,8 @@
 // No hand-sized buffers (SVGPU §4.3's failure): piece slots and polygon edges come from pools
 // with device-side bump counters. An item that finds its pool exhausted stops and is counted;
 // the host grows the pools from the counters and runs the frame again.
+#include <cstdlib>
+
 #include "pipeline.cuh"
 
 namespace tilevis::cuda {
@@ -39,6 +41,7 @@ struct ClipArgs {
   uint64_t* counters;
   uint32_t slot_factor;
   uint64_t n_items;
+  uint32_t long_chain;
 };
 
 // A run whose candidate list overflowed has per-item counts without all their records: it is
@@ -412,7 +415,7 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
     for (uint32_t m = 0; m < c; ++m) r += a.cand_edges[off + m] < x;
     a.cand_sorted[off + r] = x;
   }
-  for (uint32_t k = t; k < kTreeSlots; k += blockDim.x) sp[k] = ~uint64_t{0};
+  for (uint32_t k = t; k < want; k += blockDim.x) sp[k] = ~uint64_t{0};  // ids past want are never made
   for (uint32_t k = t; k <= c; k += blockDim.x) hist[k] = 0;
   __syncthreads();
   if (t == 0) {
@@ -453,7 +456,7 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
     const uint32_t id = atomicAdd(&ts.head, 1u);
     uint64_t cur = ~uint64_t{0};
     for (;;) {  // wait for piece `id`, or for the end: every piece made has been walked
-      if (id < kTreeSlots && (cur = sh_load(&sp[id])) != ~uint64_t{0}) break;
+      if (id < want && (cur = sh_load(&sp[id])) != ~uint64_t{0}) break;
       const uint32_t fin = sh_load(&ts.finished);
       if (fin == sh_load(&ts.n_alloc)) break;
       __nanosleep(32);
@@ -574,7 +577,7 @@ __global__ void __launch_bounds__(kLongBlockOf<P>, 1) k_clip_long(ClipArgs<P> a,
   for (uint64_t w = blockIdx.x; w < n; w += gridDim.x) {
     const uint32_t j = a.clip_items[w];
     const uint32_t c = a.cand_count[j];
-    if (c < kLongChain) continue;
+    if (c < a.long_chain) continue;
     if (candidates_overflowed(a) || uint64_t(a.cand_offset[j]) + c > a.cand_cap) continue;
     const uint64_t want = tmin<uint64_t>(piece_bound(c), uint64_t(a.slot_factor) * (c + 1));
     if (want <= kTreeSlots && c <= kTreeCands) clip_item_tree<P>(a, j, want, smem, ts);
@@ -601,7 +604,7 @@ __global__ void k_clip_items(ClipArgs<P> a, const uint64_t* count, uint64_t cap)
   const uint64_t warps = uint64_t(gridDim.x) * blockDim.x / 32;
   __shared__ uint64_t stage[kClipBlock / 32][kStageSlots];
   for (uint64_t w = warp; w < n; w += warps)
-    if (a.cand_count[a.clip_items[w]] < kLongChain) clip_item<P>(a, w, WarpTeam{}, stage[threadIdx.x / 32]);
+    if (a.cand_count[a.clip_items[w]] < a.long_chain) clip_item<P>(a, w, WarpTeam{}, stage[threadIdx.x / 32]);
 }
 
 }  // namespace
@@ -636,6 +639,8 @@ bool stage_clip(Pipeline<P>& p) {
   a.counters = p.counters.get();
   a.slot_factor = p.caps.slot_factor;
   a.n_items = ni;
+  static const uint32_t long_chain = std::getenv("TILEVIS_CLIP_LONG") ? uint32_t(std::atoi(std::getenv("TILEVIS_CLIP_LONG"))) : kLongChain;
+  a.long_chain = long_chain;
 
   ex.exclusive_scan(a.cand_count, p.cand_offset.get(), p.N(kSzItems, ni), ni);
   ex.launch_dyn(k_cand_scatter<P>, cand_scatter<P>, p.counters.get() + kCandidates, p.caps.candidates, a);
