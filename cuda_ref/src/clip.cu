@@ -2,13 +2,13 @@
 // is clipped by one warp. Candidates go in ascending silhouette id; for each, the warp's lanes
 // re-test the current pieces in parallel (32 at a time), and a ballot gives every split piece
 // its slot: the inside part replaces its parent, the outside part is appended in parent order,
-// exactly the order a sequential loop leaves (the canonical piece order).
+// exactly the order a sequential loop leaves (the canonical piece order). Items with long
+// candidate chains (kLongChain or more) go to a block each instead (k_clip_long): a tree of
+// per-piece walks whose slots are assigned afterwards in the same canonical order.
 //
 // No hand-sized buffers (SVGPU §4.3's failure): piece slots and polygon edges come from pools
 // with device-side bump counters. An item that finds its pool exhausted stops and is counted;
 // the host grows the pools from the counters and runs the frame again.
-#include <cstdlib>
-
 #include "pipeline.cuh"
 
 namespace tilevis::cuda {
@@ -41,7 +41,6 @@ struct ClipArgs {
   uint64_t* counters;
   uint32_t slot_factor;
   uint64_t n_items;
-  uint32_t long_chain;
 };
 
 // A run whose candidate list overflowed has per-item counts without all their records: it is
@@ -206,8 +205,10 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team, uint64_t* stag
 // block's threads take kLongBlock pieces a round; the ballots' counts, summed over the warps in
 // order, give each outside part the slot a sequential loop gives it (the same canonical order),
 // and one bump per round gives the round's polygon edges (from the block's chunk of the pool).
-// kLongChain from a sweep on the H200 (48, 96, 160, 320: 96 best or within noise of it on
-// hot_tile, slivers, armadillo_box, interpenetrating, teapot_stadium, million, both precisions).
+// kLongChain from sweeps on the H200: with these rounds (48, 96, 160, 320: 96 best or within
+// noise of it on hot_tile, slivers, armadillo_box, interpenetrating, teapot_stadium, million,
+// both precisions) and with the tree below (16, 32, 64, 96: 16 slower on most scenes, 32 to 96
+// within noise of each other).
 // Exact's block is half float's: its 255 registers a thread (wide arithmetic) fill the SM's
 // register file at 256 threads; 512 would spill.
 inline constexpr uint32_t kLongBlock = 512, kLongChain = 96, kLongStage = 4096;
@@ -577,7 +578,7 @@ __global__ void __launch_bounds__(kLongBlockOf<P>, 1) k_clip_long(ClipArgs<P> a,
   for (uint64_t w = blockIdx.x; w < n; w += gridDim.x) {
     const uint32_t j = a.clip_items[w];
     const uint32_t c = a.cand_count[j];
-    if (c < a.long_chain) continue;
+    if (c < kLongChain) continue;
     if (candidates_overflowed(a) || uint64_t(a.cand_offset[j]) + c > a.cand_cap) continue;
     const uint64_t want = tmin<uint64_t>(piece_bound(c), uint64_t(a.slot_factor) * (c + 1));
     if (want <= kTreeSlots && c <= kTreeCands) clip_item_tree<P>(a, j, want, smem, ts);
@@ -604,7 +605,7 @@ __global__ void k_clip_items(ClipArgs<P> a, const uint64_t* count, uint64_t cap)
   const uint64_t warps = uint64_t(gridDim.x) * blockDim.x / 32;
   __shared__ uint64_t stage[kClipBlock / 32][kStageSlots];
   for (uint64_t w = warp; w < n; w += warps)
-    if (a.cand_count[a.clip_items[w]] < a.long_chain) clip_item<P>(a, w, WarpTeam{}, stage[threadIdx.x / 32]);
+    if (a.cand_count[a.clip_items[w]] < kLongChain) clip_item<P>(a, w, WarpTeam{}, stage[threadIdx.x / 32]);
 }
 
 }  // namespace
@@ -639,8 +640,6 @@ bool stage_clip(Pipeline<P>& p) {
   a.counters = p.counters.get();
   a.slot_factor = p.caps.slot_factor;
   a.n_items = ni;
-  static const uint32_t long_chain = std::getenv("TILEVIS_CLIP_LONG") ? uint32_t(std::atoi(std::getenv("TILEVIS_CLIP_LONG"))) : kLongChain;
-  a.long_chain = long_chain;
 
   ex.exclusive_scan(a.cand_count, p.cand_offset.get(), p.N(kSzItems, ni), ni);
   ex.launch_dyn(k_cand_scatter<P>, cand_scatter<P>, p.counters.get() + kCandidates, p.caps.candidates, a);
