@@ -29,19 +29,34 @@ struct BinArgs {
   uint32_t* tedge_id;
   int64_t* rows;
   uint32_t* occ_count;
+  uint32_t* big_tris;    // GPU: triangles / edges of wide spans, queued by the count pass
+  uint32_t* big_edges;
+  uint64_t* counters;    // kBigTris, kBigEdges: their numbers
+  uint64_t emit_gate;    // the emit pass's element count (tagged on the device: 0 past a bound)
 };
 
 TV_HD inline int64_t floor_div64(int64_t a, int64_t d) { return a >= 0 ? a / d : -((-a + d - 1) / d); }
 
 // Calls fn(tile) for every tile whose closed rectangle the box touches (clamped to the screen)
 // and that the primitive overlaps.
+// The tiles [tx0, tx1] x [ty0, ty1] whose closed rectangle the box touches, clamped to the
+// screen (empty when tx1 < tx0 or ty1 < ty0).
+struct TileSpan {
+  int64_t tx0, tx1, ty0, ty1;
+  TV_HD uint64_t count() const { return tx1 < tx0 || ty1 < ty0 ? 0 : uint64_t(tx1 - tx0 + 1) * uint64_t(ty1 - ty0 + 1); }
+};
+template <class P>
+TV_HD inline TileSpan tile_span(const BinArgs<P>& a, const Rect& b) {
+  const int64_t tw = int64_t(a.tile_w) << a.sb, th = int64_t(a.tile_h) << a.sb;
+  return {tmax<int64_t>(0, floor_div64(b.x0, tw)), tmin<int64_t>(a.tiles_x - 1, floor_div64(b.x1, tw)),
+          tmax<int64_t>(0, floor_div64(b.y0, th)), tmin<int64_t>(a.tiles_y - 1, floor_div64(b.y1, th))};
+}
+
 template <class P, class Test, class Fn>
 TV_HD inline void for_tiles(const BinArgs<P>& a, const Rect& b, Test&& test, Fn&& fn) {
-  const int64_t tw = int64_t(a.tile_w) << a.sb, th = int64_t(a.tile_h) << a.sb;
-  const int64_t tx0 = tmax<int64_t>(0, floor_div64(b.x0, tw)), tx1 = tmin<int64_t>(a.tiles_x - 1, floor_div64(b.x1, tw));
-  const int64_t ty0 = tmax<int64_t>(0, floor_div64(b.y0, th)), ty1 = tmin<int64_t>(a.tiles_y - 1, floor_div64(b.y1, th));
-  for (int64_t ty = ty0; ty <= ty1; ++ty)
-    for (int64_t tx = tx0; tx <= tx1; ++tx)
+  const TileSpan s = tile_span(a, b);
+  for (int64_t ty = s.ty0; ty <= s.ty1; ++ty)
+    for (int64_t tx = s.tx0; tx <= s.tx1; ++tx)
       if (test(a.grid.rect(uint32_t(tx), uint32_t(ty)))) fn(uint32_t(ty * a.tiles_x + tx));
 }
 
@@ -215,22 +230,119 @@ __global__ void k_obin_gather(ObinGatherArgs a, uint64_t n) {
   TV_GRID_LOOP(i, n) obin_gather(a, i);
 }
 
-template <class P>
-__global__ void k_bin_tri_count(BinArgs<P> a, uint64_t n) {
-  TV_GRID_LOOP(i, n) bin_tri_count<P>(a, i);
+// On the GPU a primitive whose bounding box spans more than kBigSpan tiles is binned by a
+// whole block (its tiles over the threads) rather than by its own thread: a thread per
+// primitive left a full-screen triangle's thousands of tile tests to one thread (hot_tile's
+// ground at 4K: 8,160 tiles, 4.6 ms of binning). The count pass's threads queue such
+// primitives (device counter, kBigTris / kBigEdges) and a second kernel gives each a block, so
+// a scene of few wide triangles (decals: ~160, most of them wide) spreads them over the GPU.
+// The block's threads test a chunk of the span each, and an ordered prefix (ballots, then the
+// warps' totals) gives each overlapped tile its slot in the primitive's range, in the span's
+// row-major order as the thread's loop leaves them (the later stable sorts do not depend on it:
+// a primitive meets a tile once). The host emulation runs the thread-per-primitive bodies above.
+inline constexpr uint32_t kBinBlock = 256, kBigSpan = 32;
+
+template <class P, bool Edge, bool Emit>
+__device__ void bin_block(const BinArgs<P>& a, uint32_t i, uint32_t* warp_tot) {
+  const Rect& box = Edge ? a.edges[i].bbox : a.tris[i].bbox;
+  const TileSpan s = tile_span(a, box);
+  const uint32_t w = uint32_t(s.tx1 - s.tx0 + 1), total = uint32_t(s.count());
+  const uint32_t lane = threadIdx.x & 31u, warp = threadIdx.x / 32;
+  uint64_t at = 0;
+  uint64_t zkey = 0;
+  bool opaque = false;
+  if constexpr (Emit) {
+    at = Edge ? a.edge_off[i] : a.tri_off[i];
+    if constexpr (!Edge) {
+      const TileTri<P>& t = a.tris[i];
+      opaque = t.opaque != 0;
+      zkey = opaque ? t.z_min : (uint64_t{1} << a.depth_bits) | t.z_min;
+    } else {
+      zkey = a.edges[i].z_min;
+    }
+  }
+  uint32_t count = 0;
+  for (uint32_t base = 0; base < total; base += blockDim.x) {
+    const uint32_t q = base + threadIdx.x;
+    bool hit = false;
+    uint32_t tile = 0;
+    if (q < total) {
+      const uint32_t tx = uint32_t(s.tx0) + q % w, ty = uint32_t(s.ty0) + q / w;
+      const Rect r = a.grid.rect(tx, ty);
+      if constexpr (Edge) {
+        const SilEdge<P>& e = a.edges[i];
+        hit = segment_overlaps_rect(e.a.xy(), e.b.xy(), r);
+      } else {
+        const TileTri<P>& t = a.tris[i];
+        hit = triangle_overlaps_rect(t.v[0].xy(), t.v[1].xy(), t.v[2].xy(), r);
+      }
+      tile = ty * a.tiles_x + tx;
+    }
+    if constexpr (!Emit) {
+      count += uint32_t(__syncthreads_count(hit));
+      continue;
+    }
+    const uint32_t ballot = __ballot_sync(0xffffffffu, hit);
+    if (lane == 0) warp_tot[warp] = __popc(ballot);
+    __syncthreads();
+    uint32_t before = 0, chunk = 0;
+    for (uint32_t k = 0; k < blockDim.x / 32; ++k) {
+      before += k < warp ? warp_tot[k] : 0;
+      chunk += warp_tot[k];
+    }
+    if (hit) {
+      const uint64_t o = at + count + before + __popc(ballot & ((1u << lane) - 1u));
+      if constexpr (Edge) {
+        a.tedge_key[o] = (uint64_t(tile) << a.depth_bits) | zkey;
+        a.tedge_id[o] = i;
+        atomic_add(&a.rows[uint64_t(tile) * kTileColumns + kColEdges], int64_t{1});
+      } else {
+        a.item_key[o] = tile;
+        a.item_tri[o] = i;
+        a.occ_key[o] = (uint64_t(tile) << (a.depth_bits + 1)) | zkey;
+        a.occ_tri[o] = i;
+        atomic_add(&a.rows[uint64_t(tile) * kTileColumns + kColTriangles], int64_t{1});
+        if (opaque) atomic_add(&a.occ_count[tile], 1u);
+      }
+    }
+    count += chunk;
+    __syncthreads();  // warp_tot is rewritten by the next chunk
+  }
+  if constexpr (!Emit) {
+    if (threadIdx.x == 0) (Edge ? a.edge_tiles : a.tri_tiles)[i] = count;
+  }
+}
+
+// A thread per primitive; those of a wide span are queued (count pass) or left (emit pass) for
+// k_bin_big.
+template <class P, bool Edge, bool Emit>
+__global__ void k_bin(BinArgs<P> a, uint64_t n) {
+  TV_GRID_LOOP(i, n) {
+    const Rect& box = Edge ? a.edges[i].bbox : a.tris[i].bbox;
+    if (tile_span(a, box).count() > kBigSpan) {
+      if constexpr (!Emit) {
+        const uint64_t at = bump_one(&a.counters[Edge ? kBigEdges : kBigTris], ~uint64_t{0});
+        (Edge ? a.big_edges : a.big_tris)[at] = uint32_t(i);
+      }
+    } else if constexpr (Edge) {
+      bin_edge<P>(a, i, Emit);
+    } else {
+      bin_tri<P>(a, i, Emit);
+    }
+  }
+}
+
+template <class P, bool Edge, bool Emit>
+__global__ void __launch_bounds__(kBinBlock) k_bin_big(BinArgs<P> a, const uint64_t* count, uint64_t cap) {
+  __shared__ uint32_t warp_tot[kBinBlock / 32];
+  if (Emit && count_of(a.emit_gate) == 0) return;  // a frame past its bounds emits nothing
+  const uint64_t n = *count < cap ? *count : cap;
+  const uint32_t* list = Edge ? a.big_edges : a.big_tris;
+  for (uint64_t w = blockIdx.x; w < n; w += gridDim.x) bin_block<P, Edge, Emit>(a, list[w], warp_tot);
 }
 template <class P>
-__global__ void k_bin_tri_emit(BinArgs<P> a, uint64_t n) {
-  TV_GRID_LOOP(i, n) bin_tri_emit<P>(a, i);
-}
-template <class P>
-__global__ void k_bin_edge_count(BinArgs<P> a, uint64_t n) {
-  TV_GRID_LOOP(i, n) bin_edge_count<P>(a, i);
-}
-template <class P>
-__global__ void k_bin_edge_emit(BinArgs<P> a, uint64_t n) {
-  TV_GRID_LOOP(i, n) bin_edge_emit<P>(a, i);
-}
+void bin_big_host(const BinArgs<P>&, uint64_t) {}  // the host's thread bodies bin every primitive
+
 __global__ void k_tile_begin(RangeArgs a, uint64_t n) {
   TV_GRID_LOOP(i, n) tile_begin(a, i);
 }
@@ -279,13 +391,20 @@ void stage_binning(Pipeline<P>& p) {
   a.edge_off = p.edge_tiles_off.need(p.n_edges + 1);
   a.rows = rows;
   a.occ_count = occ_count;
+  a.big_tris = p.big_tris.need(p.n_tris + 1);
+  a.big_edges = p.big_edges.need(p.n_edges + 1);
+  a.counters = p.counters.get();
+  uint64_t* const big_tris = p.counters.get() + kBigTris;
+  uint64_t* const big_edges = p.counters.get() + kBigEdges;
   // Triangles on the main stream, edges beside them (side stream 0) until cull; the occluder
   // lists (side 1) until occlusion; the visible-area order (side 2) until the fold.
   const uint64_t n_tris = p.N(kSzTris, p.n_tris), n_edges = p.N(kSzEdges, p.n_edges);
-  ex.launch(k_bin_tri_count<P>, bin_tri_count<P>, n_tris, a);
+  ex.launch(k_bin<P, false, false>, bin_tri_count<P>, n_tris, a, kBinBlock);
+  ex.launch_dyn(k_bin_big<P, false, false>, bin_big_host<P>, big_tris, p.n_tris, a, kBinBlock);
   ex.exclusive_scan(a.tri_tiles, p.tri_tiles_off.get(), n_tris, p.n_tris);
   ex.branch(0);
-  ex.launch(k_bin_edge_count<P>, bin_edge_count<P>, n_edges, a);
+  ex.launch(k_bin<P, true, false>, bin_edge_count<P>, n_edges, a, kBinBlock);
+  ex.launch_dyn(k_bin_big<P, true, false>, bin_big_host<P>, big_edges, p.n_edges, a, kBinBlock);
   ex.exclusive_scan(a.edge_tiles, p.edge_tiles_off.get(), n_edges, p.n_edges);
   ex.on_main();
   ex.merge(0);
@@ -319,7 +438,9 @@ void stage_binning(Pipeline<P>& p) {
   uint32_t* item_begin = p.tile_item_begin.need(tiles);
   uint32_t* edge_begin = p.tile_edge_begin.need(tiles);
   ex.branch(0);
-  ex.launch(k_bin_edge_emit<P>, bin_edge_emit<P>, p.N(kSzEdgeEmit, p.n_edges), a);
+  ex.launch(k_bin<P, true, true>, bin_edge_emit<P>, p.N(kSzEdgeEmit, p.n_edges), a, kBinBlock);
+  a.emit_gate = p.N(kSzEdgeEmit, p.n_edges);
+  ex.launch_dyn(k_bin_big<P, true, true>, bin_big_host<P>, big_edges, p.n_edges, a, kBinBlock);
   ex.sort_pairs(a.tedge_key, p.tedge_key_sorted.need(ne + 1), a.tedge_id, p.tedge_id_sorted.need(ne + 1), n_tedges,
                 tile_bits + d, ne, true);
   ex.zero(edge_begin, tiles * 4ull);
@@ -327,7 +448,9 @@ void stage_binning(Pipeline<P>& p) {
   ex.launch(k_gather_box<P>, gather_box<P>, n_tedges, BoxArgs<P>{p.edges.get(), p.tedge_id_sorted.get(), p.tedge_box.need(ne + 1)});
   ex.on_main();
 
-  ex.launch(k_bin_tri_emit<P>, bin_tri_emit<P>, p.N(kSzTriEmit, p.n_tris), a);
+  ex.launch(k_bin<P, false, true>, bin_tri_emit<P>, p.N(kSzTriEmit, p.n_tris), a, kBinBlock);
+  a.emit_gate = p.N(kSzTriEmit, p.n_tris);
+  ex.launch_dyn(k_bin_big<P, false, true>, bin_big_host<P>, big_tris, p.n_tris, a, kBinBlock);
   ex.branch(1);
   ex.sort_pairs(a.occ_key, p.occ_key_sorted.need(ni + 1), a.occ_tri, p.occ_tri_sorted.need(ni + 1), n_items,
                 tile_bits + d + 1, ni, true);

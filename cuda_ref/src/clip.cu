@@ -2,7 +2,9 @@
 // is clipped by one warp. Candidates go in ascending silhouette id; for each, the warp's lanes
 // re-test the current pieces in parallel (32 at a time), and a ballot gives every split piece
 // its slot: the inside part replaces its parent, the outside part is appended in parent order,
-// exactly the order a sequential loop leaves (the canonical piece order).
+// exactly the order a sequential loop leaves (the canonical piece order). Items with long
+// candidate chains (kLongChain or more) go to a block each instead (k_clip_long): a tree of
+// per-piece walks whose slots are assigned afterwards in the same canonical order.
 //
 // No hand-sized buffers (SVGPU §4.3's failure): piece slots and polygon edges come from pools
 // with device-side bump counters. An item that finds its pool exhausted stops and is counted;
@@ -195,6 +197,395 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team, uint64_t* stag
   }
 }
 
+// Items with long candidate chains: a block per item. The chain is sequential by definition
+// (each candidate splits the pieces the earlier ones left), but within a step the pieces are
+// independent: a warp re-tested them 32 at a time, so an item with hundreds of pieces took
+// tens of rounds per step and the few such items were the frame (slivers, hot_tile,
+// teapot_stadium, armadillo_box, interpenetrating: `k_clip_items` at 2 % occupancy). Here the
+// block's threads take kLongBlock pieces a round; the ballots' counts, summed over the warps in
+// order, give each outside part the slot a sequential loop gives it (the same canonical order),
+// and one bump per round gives the round's polygon edges (from the block's chunk of the pool).
+// kLongChain from sweeps on the H200: with these rounds (48, 96, 160, 320: 96 best or within
+// noise of it on hot_tile, slivers, armadillo_box, interpenetrating, teapot_stadium, million,
+// both precisions) and with the tree below (16, 32, 64, 96: 16 slower on most scenes, 32 to 96
+// within noise of each other).
+// Exact's block is half float's: its 255 registers a thread (wide arithmetic) fill the SM's
+// register file at 256 threads; 512 would spill.
+inline constexpr uint32_t kLongBlock = 512, kLongChain = 96, kLongStage = 4096;
+template <class P>
+inline constexpr uint32_t kLongBlockOf = P::kExact ? kLongBlock / 2 : kLongBlock;
+
+struct LongShared {
+  uint32_t wcnt[kLongBlock / 32], wneed[kLongBlock / 32];
+  uint64_t base, poly_at, step_at, chunk_at, chunk_left, next_grab;
+};
+
+template <class P>
+__device__ uint64_t long_take(const ClipArgs<P>& a, LongShared& sh, uint64_t total) {  // thread 0 only
+  if (total > sh.chunk_left) {
+    const uint64_t grab = tmax(total, sh.next_grab);
+    sh.next_grab = tmin<uint64_t>(2 * sh.next_grab, 1024);
+    const uint64_t at = bump(&a.counters[kEdgesUsed], grab, a.pool_cap);
+    if (at == ~uint64_t{0}) return at;
+    sh.chunk_at = at;
+    sh.chunk_left = grab;
+  }
+  const uint64_t at = sh.chunk_at;
+  sh.chunk_at += total;
+  sh.chunk_left -= total;
+  return at;
+}
+
+template <class P>
+__device__ void clip_item_block(const ClipArgs<P>& a, uint32_t j, uint64_t* stage, LongShared& sh) {
+  const uint32_t t = threadIdx.x, lane = t & 31u, warp = t / 32, n_warps = blockDim.x / 32;
+  const uint32_t c = a.cand_count[j], off = a.cand_offset[j];
+  const uint32_t tile = uint32_t(a.item_key[j]);
+  const TileTri<P>& tt = a.tris[a.item_tri[j]];
+  if (candidates_overflowed(a) || uint64_t(off) + c > a.cand_cap) return;
+  for (uint32_t k = t; k < c; k += blockDim.x) {
+    const uint32_t x = a.cand_edges[off + k];
+    uint32_t r = 0;
+    for (uint32_t m = 0; m < c; ++m) r += a.cand_edges[off + m] < x;
+    a.cand_sorted[off + r] = x;
+  }
+  const uint64_t want = tmin<uint64_t>(piece_bound(c), uint64_t(a.slot_factor) * (c + 1));
+  if (t == 0) {
+    sh.chunk_at = sh.chunk_left = 0;
+    sh.next_grab = 2 * kTileCap;
+    sh.base = bump(&a.counters[kSlotsUsed], want, a.slot_cap);
+    sh.poly_at = sh.base == ~uint64_t{0} ? sh.base : long_take(a, sh, kTileCap);
+  }
+  __syncthreads();  // also: cand_sorted is written
+  const uint64_t base = sh.base, poly_at = sh.poly_at;
+  if (poly_at == ~uint64_t{0}) {
+    if (t == 0) atomic_add(&a.counters[kClipOverflow], 1);
+    if (base != ~uint64_t{0})
+      for (uint64_t k = t; k < want; k += blockDim.x) a.slot_item[base + k] = kNone;
+    return;
+  }
+  uint64_t* const slots = want <= kLongStage ? stage : a.slot_poly + base;
+  if (t == 0) {
+    bool overflow = false;
+    const uint32_t n = tile_polygon<P>(tt, a.grid.rect(tile), a.pool + poly_at, overflow);
+    slots[0] = (poly_at << 32) | n;
+    a.item_slot[j] = uint32_t(base);
+  }
+  __syncthreads();
+  uint32_t count = 1, splits = 0, anomalies = 0, regularized = 0;
+  bool failed = false;
+  SilEdge<P> next_e = a.edges[a.cand_sorted[off]];
+  for (uint32_t ci = 0; ci < c && !failed; ++ci) {
+    const SilEdge<P> e = next_e;
+    if (ci + 1 < c) next_e = a.edges[a.cand_sorted[off + ci + 1]];
+    const uint32_t n = count;
+    uint32_t appended = 0;
+    for (uint32_t k0 = 0; k0 < n; k0 += blockDim.x) {
+      const uint32_t k = k0 + t;
+      bool flag = false;
+      uint64_t sp = 0;
+      PEdge<P> copy[kCopyEdges];
+      const PEdge<P>* poly = nullptr;
+      if (k < n) {
+        sp = slots[k];
+        poly = a.pool + (sp >> 32);
+        if (uint32_t(sp) <= kCopyEdges) {
+          for (uint32_t i = 0; i < kCopyEdges; ++i)
+            if (i < uint32_t(sp)) copy[i] = poly[i];
+          poly = copy;
+        }
+        flag = survives<P>(poly, uint32_t(sp), tt, e);
+      }
+      const uint32_t mask = __ballot_sync(0xffffffffu, flag);
+      if (lane == 0) sh.wcnt[warp] = __popc(mask);
+      __syncthreads();
+      uint32_t before = 0, total = 0;
+      for (uint32_t w = 0; w < n_warps; ++w) {
+        const uint32_t v = sh.wcnt[w];
+        before += w < warp ? v : 0;
+        total += v;
+      }
+      const uint64_t dst = uint64_t(n) + appended + before + __popc(mask & ((1u << lane) - 1u));
+      const uint32_t m = uint32_t(sp);
+      const bool room = dst < want;
+      if (flag && !room) atomic_add(&a.counters[kReserveOverflow], 1);
+      const uint32_t need = flag && room ? 2 * (m + 1) : 0;
+      const uint32_t incl = WarpTeam{}.scan(need);
+      if (lane == 31) sh.wneed[warp] = incl;
+      __syncthreads();
+      uint64_t need_before = 0, need_total = 0;
+      for (uint32_t w = 0; w < n_warps; ++w) {
+        const uint32_t v = sh.wneed[w];
+        need_before += w < warp ? v : 0;
+        need_total += v;
+      }
+      if (t == 0 && total) sh.step_at = long_take(a, sh, need_total);
+      __syncthreads();
+      const uint64_t step_at = total ? sh.step_at : 0;
+      const bool fail = flag && (!room || step_at == ~uint64_t{0});
+      if (flag && !fail) {
+        const uint64_t at = step_at + need_before + incl - need;
+        PolyOut<P> in{a.pool + at, 0, m + 1, false}, out{a.pool + at + m + 1, 0, m + 1, false};
+        bool regular = false;
+        split<P>(poly, m, e.line, in, out, &regular);
+        regularized += regular ? 1 : 0;
+        if (in.overflow || out.overflow) {
+          ++anomalies;
+          in.n = tmin(in.n, m + 1);
+          out.n = tmin(out.n, m + 1);
+        }
+        slots[k] = (at << 32) | in.n;
+        slots[dst] = ((at + m + 1) << 32) | out.n;
+        ++splits;
+      }
+      appended += total;
+      // Every thread's slots are written before the next round reads them; sh is reused.
+      if (__syncthreads_or(fail)) failed = true;
+    }
+    count = n + appended;
+  }
+  for (uint64_t k = t; k < want; k += blockDim.x) {
+    if (k < count && slots != a.slot_poly + base) a.slot_poly[base + k] = slots[k];
+    a.slot_item[base + k] = k < count ? j : kNone;
+  }
+  count_add(&a.rows[uint64_t(tile) * kTileColumns + kColClips], splits);
+  count_add(&a.counters[kFloatAnomalies], anomalies);
+  count_add(&a.counters[kFloatRegularized], regularized);
+  if (t == 0) {
+    if (failed) atomic_add(&a.counters[kClipOverflow], 1);
+    a.piece_count[j] = count;
+    atomic_add(&a.rows[uint64_t(tile) * kTileColumns + kColPieces], int64_t(count));
+    atomic_max(&a.counters[kMaxTilePieces], uint64_t(count));
+  }
+  __syncthreads();  // the stage and sh are reused by the block's next item
+}
+
+// The same items as a tree of walks (the block's threads each walking one piece through the
+// remaining candidates). A piece's history is its own: at candidate ci it is tested and maybe
+// split, the inside part staying in its slot and the outside part starting at ci + 1; no piece's
+// steps read another's. So a thread takes a piece, walks it to the end of the chain, and queues
+// the outside parts it cuts off for any thread to take: the longest dependent chain is one
+// piece's walk (mostly cheap rejections), not every candidate's round over all pieces. Each
+// piece records its parent and the candidate that cut it off; the slots a sequential loop gives
+// (at candidate ci the new parts follow the existing pieces in their parents' slot order) are
+// then assigned in candidate order, so the canonical piece order, every polygon and every
+// counter are those of clip_item. Items whose reservation passes kTreeSlots use the rounds
+// above (clip_item_block).
+inline constexpr uint32_t kTreeSlots = 4096, kTreeCands = 1024;
+
+struct TreeShared {
+  uint32_t n_alloc, finished, head, fail;
+  unsigned long long chunk_used;
+  uint64_t chunk_at, chunk_size;
+};
+
+// What threads hand each other between barriers goes through shared-memory atomics (loads as
+// atomic adds of 0), so the hand-off is ordered and compute-sanitizer's racecheck sees no plain
+// access racing another.
+__device__ inline uint32_t sh_load(uint32_t* p) { return atomicAdd(p, 0u); }
+__device__ inline uint64_t sh_load(uint64_t* p) {
+  return atomicAdd(reinterpret_cast<unsigned long long*>(p), 0ull);
+}
+__device__ inline void sh_store(uint32_t* p, uint32_t v) { atomicExch(p, v); }
+__device__ inline void sh_store(uint64_t* p, uint64_t v) {
+  atomicExch(reinterpret_cast<unsigned long long*>(p), static_cast<unsigned long long>(v));
+}
+
+template <class P>
+__device__ uint64_t tree_edges(const ClipArgs<P>& a, TreeShared& ts, uint32_t k) {
+  const uint64_t o = atomicAdd(&ts.chunk_used, static_cast<unsigned long long>(k));
+  if (o + k <= ts.chunk_size) return ts.chunk_at + o;
+  return bump(&a.counters[kEdgesUsed], k, a.pool_cap);  // past the block's chunk: its own bump
+}
+
+template <class P>
+__device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, uint8_t* smem, TreeShared& ts) {
+  uint64_t* const sp = reinterpret_cast<uint64_t*>(smem);                  // by piece id: polygon (pool << 32 | n)
+  uint32_t* const parent = reinterpret_cast<uint32_t*>(sp + kTreeSlots);  // by piece id
+  uint32_t* const born = parent + kTreeSlots;                             // candidate that cut it off
+  uint32_t* const slot_of = born + kTreeSlots;
+  uint32_t* const order = slot_of + kTreeSlots;
+  uint32_t* const hist = order + kTreeSlots;  // kTreeCands + 1
+  const uint32_t t = threadIdx.x;
+  const uint32_t c = a.cand_count[j], off = a.cand_offset[j];
+  const uint32_t tile = uint32_t(a.item_key[j]);
+  const TileTri<P>& tt = a.tris[a.item_tri[j]];
+  for (uint32_t k = t; k < c; k += blockDim.x) {
+    const uint32_t x = a.cand_edges[off + k];
+    uint32_t r = 0;
+    for (uint32_t m = 0; m < c; ++m) r += a.cand_edges[off + m] < x;
+    a.cand_sorted[off + r] = x;
+  }
+  for (uint32_t k = t; k < want; k += blockDim.x) sp[k] = ~uint64_t{0};  // ids past want are never made
+  for (uint32_t k = t; k <= c; k += blockDim.x) hist[k] = 0;
+  __syncthreads();
+  if (t == 0) {
+    ts.n_alloc = 1;
+    ts.finished = ts.head = ts.fail = 0;
+    ts.chunk_used = 0;
+    ts.chunk_size = 0;
+    const uint64_t base = bump(&a.counters[kSlotsUsed], want, a.slot_cap);
+    const uint64_t chunk = tmin<uint64_t>(16 * want + kTileCap, 1 << 16);
+    const uint64_t at = base == ~uint64_t{0} ? base : bump(&a.counters[kEdgesUsed], chunk, a.pool_cap);
+    if (at == ~uint64_t{0}) {
+      atomic_add(&a.counters[kClipOverflow], 1);
+      ts.fail = 2;  // nothing reserved: the slots (if any) are marked unused below
+      ts.chunk_at = base;
+    } else {
+      ts.chunk_at = at + kTileCap;
+      ts.chunk_size = chunk - kTileCap;
+      bool overflow = false;
+      const uint32_t n = tile_polygon<P>(tt, a.grid.rect(tile), a.pool + at, overflow);
+      parent[0] = kNone;
+      born[0] = kNone;  // walks from candidate 0
+      sp[0] = (at << 32) | n;
+      a.item_slot[j] = uint32_t(base);
+      slot_of[0] = uint32_t(base);  // (the base, until the slots are assigned)
+    }
+  }
+  __syncthreads();
+  if (ts.fail == 2) {
+    const uint64_t base = ts.chunk_at;
+    if (base != ~uint64_t{0})
+      for (uint64_t k = t; k < want; k += blockDim.x) a.slot_item[base + k] = kNone;
+    __syncthreads();
+    return;
+  }
+  const uint64_t base = slot_of[0];
+  uint32_t splits = 0, anomalies = 0, regularized = 0;
+  for (;;) {
+    const uint32_t id = atomicAdd(&ts.head, 1u);
+    uint64_t cur = ~uint64_t{0};
+    for (;;) {  // wait for piece `id`, or for the end: every piece made has been walked
+      if (id < want && (cur = sh_load(&sp[id])) != ~uint64_t{0}) break;
+      const uint32_t fin = sh_load(&ts.finished);
+      if (fin == sh_load(&ts.n_alloc)) break;
+      __nanosleep(32);
+    }
+    if (cur == ~uint64_t{0}) break;
+    PEdge<P> copy[kCopyEdges];
+    const PEdge<P>* poly = nullptr;
+    auto load = [&] {
+      poly = a.pool + (cur >> 32);
+      if (uint32_t(cur) <= kCopyEdges) {
+        for (uint32_t i = 0; i < kCopyEdges; ++i)
+          if (i < uint32_t(cur)) copy[i] = poly[i];
+        poly = copy;
+      }
+    };
+    load();
+    for (uint32_t ci = sh_load(&born[id]) + 1; ci < c; ++ci) {
+      if (sh_load(&ts.fail)) break;
+      const SilEdge<P>& e = a.edges[a.cand_sorted[off + ci]];
+      const uint32_t m = uint32_t(cur);
+      if (!survives<P>(poly, m, tt, e)) continue;
+      const uint32_t child = atomicAdd(&ts.n_alloc, 1u);
+      if (child >= want || child >= kTreeSlots) {
+        atomic_add(&a.counters[kReserveOverflow], 1);
+        sh_store(&ts.fail, 1u);
+        atomicAdd(&ts.finished, 1u);  // the id taken stands for no piece
+        break;
+      }
+      const uint64_t at = tree_edges(a, ts, 2 * (m + 1));
+      if (at == ~uint64_t{0}) {
+        sh_store(&ts.fail, 1u);
+        atomicAdd(&ts.finished, 1u);
+        break;
+      }
+      PolyOut<P> in{a.pool + at, 0, m + 1, false}, out{a.pool + at + m + 1, 0, m + 1, false};
+      bool regular = false;
+      split<P>(poly, m, e.line, in, out, &regular);
+      regularized += regular ? 1 : 0;
+      if (in.overflow || out.overflow) {
+        ++anomalies;  // only float arithmetic can break convexity
+        in.n = tmin(in.n, m + 1);
+        out.n = tmin(out.n, m + 1);
+      }
+      ++splits;
+      sh_store(&parent[child], id);
+      sh_store(&born[child], ci);
+      __threadfence_block();  // the outside part's edges (global) and record before its polygon word
+      sh_store(&sp[child], ((at + m + 1) << 32) | out.n);
+      cur = (at << 32) | in.n;
+      load();
+    }
+    sh_store(&sp[id], cur);  // the piece's final polygon
+    __threadfence_block();
+    atomicAdd(&ts.finished, 1u);
+  }
+  __syncthreads();
+  const bool failed = ts.fail != 0;
+  const uint32_t count = failed ? 0 : ts.n_alloc;
+  if (!failed) {
+    // Slots: the pieces cut off at candidate ci follow all earlier pieces, in their parents'
+    // slot order (a parent was made before ci, so its slot is known when ci's turn comes).
+    for (uint32_t k = 1 + t; k < count; k += blockDim.x) atomicAdd(&hist[born[k]], 1u);
+    __syncthreads();
+    if (t == 0) {
+      uint32_t run = 0;
+      for (uint32_t k = 0; k <= c; ++k) {
+        const uint32_t h = hist[k];
+        hist[k] = run;
+        run += h;
+      }
+    }
+    __syncthreads();
+    for (uint32_t k = 1 + t; k < count; k += blockDim.x) order[atomicAdd(&hist[born[k]], 1u)] = k;
+    __syncthreads();
+    if (t == 0) {
+      slot_of[0] = 0;
+      uint32_t next = 1, g0 = 0;
+      for (uint32_t ci = 0; ci < c; ++ci) {
+        const uint32_t g1 = hist[ci];  // after the scatter: the end of ci's group
+        for (uint32_t x = g0 + 1; x < g1; ++x) {  // insertion sort by the parent's slot
+          const uint32_t v = order[x], key = slot_of[parent[v]];
+          uint32_t y = x;
+          while (y > g0 && slot_of[parent[order[y - 1]]] > key) {
+            order[y] = order[y - 1];
+            --y;
+          }
+          order[y] = v;
+        }
+        for (uint32_t x = g0; x < g1; ++x) slot_of[order[x]] = next++;
+        g0 = g1;
+      }
+    }
+    __syncthreads();
+    for (uint32_t k = t; k < count; k += blockDim.x) a.slot_poly[base + slot_of[k]] = sp[k];
+  }
+  for (uint64_t k = t; k < want; k += blockDim.x) a.slot_item[base + k] = k < count ? j : kNone;
+  count_add(&a.rows[uint64_t(tile) * kTileColumns + kColClips], splits);
+  count_add(&a.counters[kFloatAnomalies], anomalies);
+  count_add(&a.counters[kFloatRegularized], regularized);
+  if (t == 0) {
+    if (failed) atomic_add(&a.counters[kClipOverflow], 1);
+    a.piece_count[j] = count;
+    atomic_add(&a.rows[uint64_t(tile) * kTileColumns + kColPieces], int64_t(count));
+    atomic_max(&a.counters[kMaxTilePieces], uint64_t(count));
+  }
+  __syncthreads();  // the shared arrays are reused by the block's next item
+}
+
+inline constexpr size_t kTreeSmem = size_t(kTreeSlots) * (8 + 4 * 4) + (kTreeCands + 1) * 4;
+static_assert(kTreeSmem >= kLongStage * 8, "the rounds' stage lives in the same memory");
+
+template <class P>
+__global__ void __launch_bounds__(kLongBlockOf<P>, 1) k_clip_long(ClipArgs<P> a, const uint64_t* count, uint64_t cap) {
+  extern __shared__ __align__(16) uint8_t smem[];
+  __shared__ LongShared sh;
+  __shared__ TreeShared ts;
+  const uint64_t n = *count < cap ? *count : cap;
+  for (uint64_t w = blockIdx.x; w < n; w += gridDim.x) {
+    const uint32_t j = a.clip_items[w];
+    const uint32_t c = a.cand_count[j];
+    if (c < kLongChain) continue;
+    if (candidates_overflowed(a) || uint64_t(a.cand_offset[j]) + c > a.cand_cap) continue;
+    const uint64_t want = tmin<uint64_t>(piece_bound(c), uint64_t(a.slot_factor) * (c + 1));
+    if (want <= kTreeSlots && c <= kTreeCands) clip_item_tree<P>(a, j, want, smem, ts);
+    else clip_item_block<P>(a, j, reinterpret_cast<uint64_t*>(smem), sh);
+  }
+}
+
 template <class P>
 TV_HD void clip_item_host(const ClipArgs<P>& a, uint64_t w) {
   clip_item<P>(a, w, HostTeam{}, nullptr);
@@ -213,7 +604,8 @@ __global__ void k_clip_items(ClipArgs<P> a, const uint64_t* count, uint64_t cap)
   const uint64_t warp = (uint64_t(blockIdx.x) * blockDim.x + threadIdx.x) / 32;
   const uint64_t warps = uint64_t(gridDim.x) * blockDim.x / 32;
   __shared__ uint64_t stage[kClipBlock / 32][kStageSlots];
-  for (uint64_t w = warp; w < n; w += warps) clip_item<P>(a, w, WarpTeam{}, stage[threadIdx.x / 32]);
+  for (uint64_t w = warp; w < n; w += warps)
+    if (a.cand_count[a.clip_items[w]] < kLongChain) clip_item<P>(a, w, WarpTeam{}, stage[threadIdx.x / 32]);
 }
 
 }  // namespace
@@ -254,9 +646,22 @@ bool stage_clip(Pipeline<P>& p) {
   if (ex.where == Where::cpu) {
     ex.launch_dyn(k_clip_items<P>, clip_item_host<P>, p.counters.get() + kClipItems, ni, a);
   } else {
+    // The long chains on side stream 1 (idle from cull to the fold), launched first so that
+    // their blocks start at once; the others beside them.
+    ex.branch(1);
+    ++ex.queued;
+    static const bool smem_set = [] {
+      TV_CUDA(cudaFuncSetAttribute(k_clip_long<P>, cudaFuncAttributeMaxDynamicSharedMemorySize, int(kTreeSmem)));
+      return true;
+    }();
+    (void)smem_set;
+    k_clip_long<P><<<ex.grid_blocks / 2, kLongBlockOf<P>, kTreeSmem, ex.stream>>>(a, p.counters.get() + kClipItems, ni);
+    TV_CUDA(cudaGetLastError());
+    ex.on_main();
     ++ex.queued;
     k_clip_items<P><<<ex.grid_blocks * 2, kClipBlock, 0, ex.stream>>>(a, p.counters.get() + kClipItems, ni);
     TV_CUDA(cudaGetLastError());
+    ex.merge(1);
   }
 
   // Device-sized: the overflow counters are checked once the frame has ended (pools_fit).

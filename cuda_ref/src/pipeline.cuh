@@ -48,6 +48,8 @@ enum Counter : uint32_t {
   kFloatRegularized,  // float: splits whose vertex sides were made those of a convex polygon
   kFloatNegativeAreas,  // float: visible pieces whose area came out negative (none: poly.cuh)
   kFloatExactAreas,     // float: visible pieces whose area sign was not proven: the exact region's area
+  kBigTris, kBigEdges,  // binning: primitives of wide spans queued for a block each
+  kLongFolds,           // visible-area fold: runs of items queued for a warp each
   kCounterCount
 };
 
@@ -239,6 +241,8 @@ struct Pipeline {
   uint32_t tiles_x = 0, tiles_y = 0, n_tiles = 0;
   TileGrid grid{};
   Buf<uint32_t> tri_tiles, edge_tiles;        // tiles per triangle / edge
+  Buf<uint32_t> big_tris, big_edges;          // binning: the wide ones (a block each)
+  Buf<uint32_t> long_folds;                   // the fold's long runs (first entry of each)
   Buf<uint64_t> tri_tiles_off, edge_tiles_off;
   Buf<uint64_t> item_key, item_key_sorted;    // (tile, triangle) pairs by tile
   Buf<uint32_t> item_tri, item_tri_sorted;
@@ -302,7 +306,8 @@ struct Pipeline {
                     &tedge_id_sorted, &tile_item_begin, &tile_edge_begin, &tile_occ_count, &area_item,
                     &area_item_sorted, &piece_count, &cand_count, &cand_cursor, &cand_offset,
                     &cand_edges, &cand_scratch, &clip_items, &item_slot, &indices, &tri_draw, &sample_xy,
-                    &obin_cnt, &obin_val, &obin_val_sorted, &obin_begin, &obin_count, &slot_item, &occ_units})
+                    &obin_cnt, &obin_val, &obin_val_sorted, &obin_begin, &obin_count, &slot_item, &occ_units, &big_tris,
+                    &big_edges, &long_folds})
       b->bind(&e);
     for (auto* b : {&sizes, &fan_offset, &use_key, &sil_offset, &sil_key, &sil_key_sorted,
                     &front_offset, &tri_tiles_off, &edge_tiles_off, &item_key, &item_key_sorted, &occ_key,

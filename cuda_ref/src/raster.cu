@@ -81,6 +81,39 @@ TV_HD uint64_t raster_box(const RasterArgs<P>& a, const typename P::Line* lines,
     }
     return covered;
   }
+  if constexpr (!P::kExact && N > 0) {
+    // Float, a box at least a run wide: the same runs, each sample evaluated as covers() does
+    // (in_half: eval's rounded products, never fused, so a row's b (y - oy) term is computed
+    // once per run, bit for bit). Narrower boxes take a sample per lane (below): runs there
+    // leave lanes idle (bunny float raster 0.032 -> 0.049 ms with runs everywhere).
+    if (b.w >= kRun) {
+      bool owns_b[N];
+      for (int i = 0; i < N; ++i) owns_b[i] = l[i].owns_boundary();
+      const uint32_t runs = (b.w + kRun - 1) / kRun;
+      const uint32_t units = runs * b.h * S;  // <= 4096 * 4096 * 16
+      for (uint32_t u = team.lane(); u < units; u += Team::kSize) {
+        const uint32_t run = runs == 1 ? 0 : u % runs, rest = runs == 1 ? u : u / runs;
+        const uint32_t k = S == 1 ? 0 : rest % S, row = S == 1 ? rest : rest / S;
+        const int64_t px0 = b.px0 + int64_t(run) * kRun, py = b.py0 + row;
+        const int64_t px_end = tmin<int64_t>(px0 + kRun, b.px0 + b.w);
+        const uint32_t sxy = a.sample_xy[k];
+        const int32_t sx = int32_t(sxy & 0xffffu);
+        const float fy = float(int32_t((py << sb) + (sxy >> 16)));
+        float r[N];
+        for (int i = 0; i < N; ++i) r[i] = l[i].row(fy);
+        for (int64_t px = px0; px < px_end; ++px) {
+          const float fx = float(int32_t((px << sb) + sx));
+          bool in = true;
+          for (int i = 0; i < N; ++i) {
+            const float v = l[i].eval_row(fx, r[i]);
+            in &= v > 0 || (v == 0 && owns_b[i]);
+          }
+          if (in) hit(px, py, k);
+        }
+      }
+      return covered;
+    }
+  }
   const uint32_t cells = b.w * b.h * S;  // <= 4096 * 4096 * 16
   for (uint32_t c = team.lane(); c < cells; c += Team::kSize) {
     const uint32_t k = S == 1 ? 0 : c % S, pix = S == 1 ? c : c / S;
@@ -217,6 +250,8 @@ struct OutArgs {
   const uint8_t* visible;
   const double* piece_area;
   double* area;
+  uint32_t* long_runs;    // GPU: first entries of runs longer than kFoldLong items
+  uint64_t* long_count;
 };
 
 // One thread per original triangle's run of items: area += piece area, piece by piece, in
@@ -242,10 +277,94 @@ TV_HD void fold_area(const OutArgs<P>& a, uint64_t q) {
   if (any) a.area[id] = sum;
 }
 
+// On the GPU a run of more than kFoldLong items (a big triangle: hot_tile's ground has 8,160,
+// one per tile) is queued for a warp rather than folded by its thread, whose chain of dependent
+// loads was the end of those frames (hot_tile float: k_fold_area 1.95 ms beside a 0.16 ms
+// raster). The warp's lanes load 32 items' values at once; the additions stay one left fold in
+// canonical order (every lane adds the same values in the same order), so the area is the same
+// double.
+inline constexpr uint32_t kFoldLong = 64;
+
 template <class P>
 __global__ void k_fold_area(OutArgs<P> a, uint64_t n) {
-  TV_GRID_LOOP(i, n) fold_area<P>(a, i);
+  TV_GRID_LOOP(q, n) {
+    const uint64_t id = a.area_key[q];
+    if (q > 0 && a.area_key[q - 1] == id) continue;
+    if (q + kFoldLong < a.n_items && a.area_key[q + kFoldLong] == id) {
+      a.long_runs[bump_one(a.long_count, ~uint64_t{0})] = uint32_t(q);
+      continue;
+    }
+    fold_area<P>(a, q);
+  }
 }
+
+template <class P>
+__device__ void fold_run_warp(const OutArgs<P>& a, uint64_t q0) {
+  const uint32_t lane = threadIdx.x & 31u;
+  const unsigned full = 0xffffffffu;
+  const uint64_t id = a.area_key[q0];
+  double sum = 0;
+  bool any = false;
+  for (uint64_t r0 = q0;; r0 += 32) {
+    const uint64_t r = r0 + lane;
+    // The key list ends with a sentinel (binning): r <= n_items is inside it.
+    const bool in_run = r <= a.n_items && a.area_key[r] == id;
+    const unsigned run = __ballot_sync(full, in_run);
+    const uint32_t m = run == full ? 32u : uint32_t(__ffs(~run) - 1);  // the run's entries in this chunk
+    uint32_t j = 0, cnt = 0;
+    bool clipped = false, vis = false;
+    double x = 0;
+    if (lane < m) {
+      j = a.area_item[r];
+      cnt = a.piece_count[j];
+      clipped = a.cand_count[j] != 0;
+      if (!clipped && cnt) {
+        vis = a.visible[j] != 0;
+        if (vis) x = a.piece_area[j];
+      }
+    }
+    for (uint32_t l = 0; l < m; ++l) {
+      if (!__shfl_sync(full, clipped, l)) {
+        const bool v = __shfl_sync(full, vis, l);
+        const double xl = __shfl_sync(full, x, l);
+        if (v) {
+          sum = dadd(sum, xl);
+          any = true;
+        }
+        continue;
+      }
+      const uint32_t jl = __shfl_sync(full, j, l), nl = __shfl_sync(full, cnt, l);
+      const uint64_t base = a.n_items + a.item_slot[jl];
+      for (uint32_t k0 = 0; k0 < nl; k0 += 32) {
+        bool pv = false;
+        double px = 0;
+        if (k0 + lane < nl) {
+          pv = a.visible[base + k0 + lane] != 0;
+          if (pv) px = a.piece_area[base + k0 + lane];
+        }
+        const uint32_t mm = nl - k0 < 32 ? nl - k0 : 32;
+        for (uint32_t t = 0; t < mm; ++t) {
+          const bool v = __shfl_sync(full, pv, t);
+          const double xt = __shfl_sync(full, px, t);
+          if (v) {
+            sum = dadd(sum, xt);
+            any = true;
+          }
+        }
+      }
+    }
+    if (m < 32) break;
+  }
+  if (lane == 0 && any) a.area[id] = sum;
+}
+
+template <class P>
+__global__ void k_fold_long(OutArgs<P> a, const uint64_t* count, uint64_t cap) {
+  const uint64_t n = *count < cap ? *count : cap;
+  TV_WARP_LOOP(w, n) fold_run_warp<P>(a, a.long_runs[w]);
+}
+template <class P>
+void fold_long_host(const OutArgs<P>&, uint64_t) {}  // the host's fold_area folds every run
 
 }  // namespace
 
@@ -332,7 +451,11 @@ void stage_fold(Pipeline<P>& p) {
     e.area_scale = 2.0 * double(1u << p.f.subpixel_bits) * double(1u << p.f.subpixel_bits);
     p.ex.launch(k_exact_area<P>, exact_area<P>, p.n_items + p.caps.clip_slots, e);
   }
-  p.ex.launch(k_fold_area<P>, fold_area<P>, p.N(kSzItems, p.n_items), out_args(p));
+  OutArgs<P> o = out_args(p);
+  o.long_runs = p.long_folds.need(p.n_items + 1);
+  o.long_count = p.counters.get() + kLongFolds;
+  p.ex.launch(k_fold_area<P>, fold_area<P>, p.N(kSzItems, p.n_items), o);
+  p.ex.launch_dyn(k_fold_long<P>, fold_long_host<P>, o.long_count, p.n_items, o);
 }
 
 template void raster_begin<ExactP>(Pipeline<ExactP>&);
