@@ -64,6 +64,18 @@ TV_HD inline uint64_t piece_bound(uint64_t c) { return 1 + c + c * (c - 1) / 2; 
 
 inline constexpr uint32_t kCopyEdges = 12;
 
+// A piece's edges (slot: pool offset << 32 | edge count), copied into `copy` when at most
+// kCopyEdges, every load issued at once, so that the tests then walk registers, not the pool;
+// returns what to walk.
+template <class P>
+TV_HD inline const PEdge<P>* load_piece(const PEdge<P>* pool, uint64_t slot, PEdge<P> (&copy)[kCopyEdges]) {
+  const PEdge<P>* poly = pool + (slot >> 32);
+  if (uint32_t(slot) > kCopyEdges) return poly;
+  for (uint32_t i = 0; i < kCopyEdges; ++i)
+    if (i < uint32_t(slot)) copy[i] = poly[i];
+  return copy;
+}
+
 // A team's piece slots live in `stage` (the warp's shared memory) while it clips, if they fit,
 // and are copied to slot_poly at the end: each step reads and writes them.
 inline constexpr uint32_t kStageSlots = 256;
@@ -142,12 +154,7 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team, uint64_t* stag
       const PEdge<P>* poly = nullptr;
       if (k < n) {
         sp = slots[k];
-        poly = a.pool + (sp >> 32);
-        if (uint32_t(sp) <= kCopyEdges) {
-          for (uint32_t i = 0; i < kCopyEdges; ++i)
-            if (i < uint32_t(sp)) copy[i] = poly[i];
-          poly = copy;
-        }
+        poly = load_piece<P>(a.pool, sp, copy);
         flag = survives<P>(poly, uint32_t(sp), tt, e);
       }
       const uint32_t mask = team.ballot(flag);
@@ -288,12 +295,7 @@ __device__ void clip_item_block(const ClipArgs<P>& a, uint32_t j, uint64_t* stag
       const PEdge<P>* poly = nullptr;
       if (k < n) {
         sp = slots[k];
-        poly = a.pool + (sp >> 32);
-        if (uint32_t(sp) <= kCopyEdges) {
-          for (uint32_t i = 0; i < kCopyEdges; ++i)
-            if (i < uint32_t(sp)) copy[i] = poly[i];
-          poly = copy;
-        }
+        poly = load_piece<P>(a.pool, sp, copy);
         flag = survives<P>(poly, uint32_t(sp), tt, e);
       }
       const uint32_t mask = __ballot_sync(0xffffffffu, flag);
@@ -465,14 +467,7 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
     if (cur == ~uint64_t{0}) break;
     PEdge<P> copy[kCopyEdges];
     const PEdge<P>* poly = nullptr;
-    auto load = [&] {
-      poly = a.pool + (cur >> 32);
-      if (uint32_t(cur) <= kCopyEdges) {
-        for (uint32_t i = 0; i < kCopyEdges; ++i)
-          if (i < uint32_t(cur)) copy[i] = poly[i];
-        poly = copy;
-      }
-    };
+    auto load = [&] { poly = load_piece<P>(a.pool, cur, copy); };
     load();
     for (uint32_t ci = sh_load(&born[id]) + 1; ci < c; ++ci) {
       if (sh_load(&ts.fail)) break;

@@ -39,6 +39,22 @@ struct PixelBox {
 // Float: the lanes take samples, each evaluated as covers() does.
 inline constexpr uint32_t kRun = 8;
 
+// Unit u of a box's runs of up to kRun pixels (run, then sample position, then row): its
+// sample k, its row py and its pixels [px0, px_end).
+struct Run {
+  uint32_t k;
+  int64_t px0, px_end, py;
+};
+TV_HD inline Run run_of(uint32_t u, uint32_t runs, uint32_t S, const PixelBox& b) {
+  const uint32_t run = runs == 1 ? 0 : u % runs, rest = runs == 1 ? u : u / runs;
+  Run r;
+  r.k = S == 1 ? 0 : rest % S;
+  r.py = b.py0 + (S == 1 ? rest : rest / S);
+  r.px0 = b.px0 + int64_t(run) * kRun;
+  r.px_end = tmin<int64_t>(r.px0 + kRun, b.px0 + b.w);
+  return r;
+}
+
 template <int N, class P, class Team>
 TV_HD uint64_t raster_box(const RasterArgs<P>& a, const typename P::Line* lines, const PEdge<P>* poly, uint32_t n,
                           const PixelBox& b, uint32_t tri, bool owns, Team team) {
@@ -62,10 +78,9 @@ TV_HD uint64_t raster_box(const RasterArgs<P>& a, const typename P::Line* lines,
     const uint32_t runs = (b.w + kRun - 1) / kRun;
     const uint32_t units = runs * b.h * S;  // <= 4096 * 4096 * 16
     for (uint32_t u = team.lane(); u < units; u += Team::kSize) {
-      const uint32_t run = runs == 1 ? 0 : u % runs, rest = runs == 1 ? u : u / runs;
-      const uint32_t k = S == 1 ? 0 : rest % S, row = S == 1 ? rest : rest / S;
-      const int64_t px0 = b.px0 + int64_t(run) * kRun, py = b.py0 + row;
-      const int64_t px_end = tmin<int64_t>(px0 + kRun, b.px0 + b.w);
+      const Run ru = run_of(u, runs, S, b);
+      const uint32_t k = ru.k;
+      const int64_t px0 = ru.px0, px_end = ru.px_end, py = ru.py;
       const uint32_t sxy = a.sample_xy[k];
       const int64_t x0 = (px0 << sb) + (sxy & 0xffffu), y = (py << sb) + (sxy >> 16);
       int64_t e[N];
@@ -92,10 +107,9 @@ TV_HD uint64_t raster_box(const RasterArgs<P>& a, const typename P::Line* lines,
       const uint32_t runs = (b.w + kRun - 1) / kRun;
       const uint32_t units = runs * b.h * S;  // <= 4096 * 4096 * 16
       for (uint32_t u = team.lane(); u < units; u += Team::kSize) {
-        const uint32_t run = runs == 1 ? 0 : u % runs, rest = runs == 1 ? u : u / runs;
-        const uint32_t k = S == 1 ? 0 : rest % S, row = S == 1 ? rest : rest / S;
-        const int64_t px0 = b.px0 + int64_t(run) * kRun, py = b.py0 + row;
-        const int64_t px_end = tmin<int64_t>(px0 + kRun, b.px0 + b.w);
+        const Run ru = run_of(u, runs, S, b);
+        const uint32_t k = ru.k;
+        const int64_t px0 = ru.px0, px_end = ru.px_end, py = ru.py;
         const uint32_t sxy = a.sample_xy[k];
         const int32_t sx = int32_t(sxy & 0xffffu);
         const float fy = float(int32_t((py << sb) + (sxy >> 16)));

@@ -33,26 +33,23 @@ Dram::Dram(const DramConfig& config)
 }
 
 Dram::Location Dram::locate(uint64_t a) const {
+  // Channels interleaved every interleave_bytes; the byte address within the channel, its
+  // row index (rows of every bank in turn) and the row within the bank. Shifts and masks
+  // where every size is a power of two (the defaults), the same map.
+  Location l;
+  uint64_t row_index;
   if (m_shift_map) {
     const uint64_t block = a >> m_il_bits;
-    Location l;
     l.channel = uint32_t(block & (m_cfg.channels - 1));
-    const uint64_t local = ((block >> m_channel_bits) << m_il_bits) | (a & (m_cfg.interleave_bytes - 1));
-    const uint64_t row_index = local >> m_row_bits;
+    row_index = (((block >> m_channel_bits) << m_il_bits) | (a & (m_cfg.interleave_bytes - 1))) >> m_row_bits;
     l.row = row_index >> m_bank_bits;
-    const uint64_t mask = m_cfg.banks - 1;
-    uint64_t fold = 0;
-    for (uint64_t r = l.row; r; r >>= m_bank_bits) fold += r & mask;
-    l.bank = uint32_t((row_index + fold) & mask);
-    return l;
+  } else {
+    const uint64_t il = m_cfg.interleave_bytes;
+    const uint64_t block = a / il;
+    l.channel = uint32_t(block % m_cfg.channels);
+    row_index = ((block / m_cfg.channels) * il + a % il) / m_cfg.row_bytes;
+    l.row = row_index / m_cfg.banks;
   }
-  const uint64_t il = m_cfg.interleave_bytes;
-  const uint64_t block = a / il;
-  Location l;
-  l.channel = uint32_t(block % m_cfg.channels);
-  const uint64_t local = (block / m_cfg.channels) * il + a % il;  // byte address within the channel
-  const uint64_t row_index = local / m_cfg.row_bytes;
-  l.row = row_index / m_cfg.banks;
   // Permutation-based bank interleaving (Zhang, Zhu and Zhang, MICRO 2000): the row's
   // digits (base `banks`) are folded into the bank index, so that streams whose bases
   // are far apart (the regions of traffic.h) do not all start in the same bank.
