@@ -21,17 +21,17 @@ double student_quantile(double confidence, double dof) {
   return boost::math::quantile(boost::math::complement(boost::math::students_t(dof), (1.0 - confidence) / 2));
 }
 
-TileSampler::TileSampler(std::vector<double> triangles, const SamplingConfig& config, uint64_t stream)
-    : m_tiles(triangles.size()), m_cfg(config), m_z(normal_quantile(config.confidence)) {
+TileSampler::TileSampler(std::vector<double> aux, const SamplingConfig& config, uint64_t stream)
+    : m_tiles(aux.size()), m_cfg(config), m_z(normal_quantile(config.confidence)) {
   if (config.cluster_tiles == 0) throw std::invalid_argument("sampling: cluster_tiles must be at least 1");
-  for (double t : triangles) m_triangles += t;
+  for (double t : aux) m_aux_total += t;
   m_clusters = (m_tiles + config.cluster_tiles - 1) / config.cluster_tiles;
-  // Strata: the clusters sorted by their triangles (ties by position), cut where the running
-  // total of (triangles + tiles) passes each equal share, at least two clusters a stratum:
+  // Strata: the clusters sorted by their auxiliary (ties by position), cut where the running
+  // total of (auxiliary + tiles) passes each equal share, at least two clusters a stratum:
   // a few heavy clusters get strata of their own instead of hiding among light ones.
   std::vector<double> x(m_clusters, 0.0);
   for (uint64_t c = 0; c < m_clusters; ++c)
-    for (uint64_t p = cluster_begin(c); p < cluster_end(c); ++p) x[c] += triangles[p];
+    for (uint64_t p = cluster_begin(c); p < cluster_end(c); ++p) x[c] += aux[p];
   std::vector<uint64_t> by_x(m_clusters);
   for (uint64_t c = 0; c < m_clusters; ++c) by_x[c] = c;
   std::stable_sort(by_x.begin(), by_x.end(), [&](uint64_t a, uint64_t b) { return x[a] < x[b]; });
@@ -109,10 +109,10 @@ std::vector<uint64_t> TileSampler::next_round(uint64_t count) {
   return r;
 }
 
-void TileSampler::observe_cluster(uint64_t c, double occupancy_sum, uint64_t tiles_observed, double triangles) {
+void TileSampler::observe_cluster(uint64_t c, double occupancy_sum, uint64_t tiles_observed, double aux) {
   m_y.push_back(occupancy_sum);
   m_m.push_back(double(tiles_observed));
-  m_x.push_back(triangles);
+  m_x.push_back(aux);
   m_h.push_back(m_stratum_of.at(c));
 }
 
@@ -171,15 +171,15 @@ TileSampler::Fit TileSampler::fit(uint32_t cores) const {
     if (f.n[h] == 1 && pooled_dof > 0) f.s2[h] = pooled / double(pooled_dof);
     else f.variance_known = false;
   }
-  // The population's tiles and triangles less the cores' first tiles (their cost is the fill).
+  // The population's tiles and auxiliary less the cores' first tiles (their cost is the fill).
   const double c = std::min<double>(std::max<uint32_t>(cores, 1), double(m_tiles));
   const double tiles = double(m_tiles) - c;
-  const double triangles = m_tiles ? m_triangles * tiles / double(m_tiles) : 0.0;
+  const double aux = m_tiles ? m_aux_total * tiles / double(m_tiles) : 0.0;
   // The generalised regression estimator: the fit's prediction plus the residuals expanded
   // by their design weights (zero where the model holds; it corrects a misspecified model).
   double residual_total = 0;
   for (size_t j = 0; j < n; ++j) residual_total += d[m_h[j]] * (m_y[j] - f.a * m_m[j] - f.b * m_x[j]);
-  f.total = f.a * tiles + f.b * triangles + residual_total;
+  f.total = f.a * tiles + f.b * aux + residual_total;
   return f;
 }
 

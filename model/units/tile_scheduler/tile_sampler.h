@@ -91,8 +91,9 @@ struct RenderEstimate {
 
 class TileSampler {
  public:
-  // `triangles`: per tile in the scheduler's order, its binned triangles (the auxiliary).
-  TileSampler(std::vector<double> triangles, const SamplingConfig& config, uint64_t stream);
+  // `aux`: per unit (tile, or trace triangle) in order, the auxiliary known before any is
+  // simulated (tile_work; a geometry's bytes).
+  TileSampler(std::vector<double> aux, const SamplingConfig& config, uint64_t stream);
 
   uint64_t tiles() const { return m_tiles; }
   uint64_t clusters() const { return m_clusters; }
@@ -110,8 +111,8 @@ class TileSampler {
 
   // Observations: the occupancies of cluster c's tiles that were measured (not their core's
   // first in their round, not warm-up; their sum, and how many); each core's first tile of a
-  // round as a fill. `triangles`: the auxiliary summed over the same tiles.
-  void observe_cluster(uint64_t c, double occupancy_sum, uint64_t tiles_observed, double triangles);
+  // round as a fill. `aux`: the auxiliary summed over the same tiles.
+  void observe_cluster(uint64_t c, double occupancy_sum, uint64_t tiles_observed, double aux);
   void observe_fill(double cycles);
   // A take-all tile's occupancy (not its core's first): added as it is, not estimated.
   void observe_exact(double cycles);
@@ -123,7 +124,7 @@ class TileSampler {
 
  private:
   uint64_t m_tiles;
-  double m_triangles = 0;  // the population's auxiliary total
+  double m_aux_total = 0;  // the population's auxiliary total
   SamplingConfig m_cfg;
   double m_z;
   struct Stratum {
@@ -133,7 +134,7 @@ class TileSampler {
   std::vector<Stratum> m_strata;
   std::vector<uint32_t> m_stratum_of;  // per cluster
   uint64_t m_clusters = 0, m_taken = 0;
-  std::vector<double> m_y, m_m, m_x;  // per observed cluster: occupancy sum, tiles, triangles
+  std::vector<double> m_y, m_m, m_x;  // per observed cluster: occupancy sum, tiles, auxiliary
   std::vector<uint32_t> m_h;          // per observed cluster: its stratum
   double m_fill_sum = 0, m_exact_sum = 0;
   uint64_t m_fills = 0;

@@ -95,10 +95,10 @@ void TileScheduler::dispatch() {
 
 void TileScheduler::dispatch_sampled(uint32_t segment, const std::vector<uint32_t>& tiles) {
   // The take-all stratum: heavy tiles (tile_sampler.h); the others are sampled in clusters.
-  std::vector<double> triangles(tiles.size());
+  std::vector<double> work(tiles.size());
   double mean = 0;
   for (size_t i = 0; i < tiles.size(); ++i)
-    mean += triangles[i] = tile_work(m_work.tile_triangle_count(tiles[i]), m_work.tile_edge_count(tiles[i]),
+    mean += work[i] = tile_work(m_work.tile_triangle_count(tiles[i]), m_work.tile_edge_count(tiles[i]),
                                      m_cfg.sampling.reject_lanes);
   mean /= double(std::max<size_t>(tiles.size(), 1));
   // Whole clusters are taken: a heavy tile keeps the tiles before it in its cluster, whose
@@ -109,21 +109,21 @@ void TileScheduler::dispatch_sampled(uint32_t segment, const std::vector<uint32_
   const size_t ct = m_cfg.sampling.cluster_tiles;
   std::vector<bool> heavy_cluster((tiles.size() + ct - 1) / ct, false);
   for (size_t i = 0; i < tiles.size(); ++i)
-    if (triangles[i] > m_cfg.sampling.certainty_ratio * mean) heavy_cluster[i / ct] = true;
+    if (work[i] > m_cfg.sampling.certainty_ratio * mean) heavy_cluster[i / ct] = true;
   std::vector<bool> certain_cluster = heavy_cluster;
   for (size_t c = 1; c < heavy_cluster.size(); ++c)
     if (heavy_cluster[c] && !heavy_cluster[c - 1]) certain_cluster[c - 1] = true;
   std::vector<size_t> sampled_pos, certain_pos;
-  std::vector<double> sampled_tris;
+  std::vector<double> sampled_work;
   for (size_t i = 0; i < tiles.size(); ++i) {
     if (certain_cluster[i / ct]) {
       certain_pos.push_back(i);
     } else {
       sampled_pos.push_back(i);
-      sampled_tris.push_back(triangles[i]);
+      sampled_work.push_back(work[i]);
     }
   }
-  TileSampler sampler(sampled_tris, m_cfg.sampling, segment);
+  TileSampler sampler(sampled_work, m_cfg.sampling, segment);
   SegmentSample rec;
   rec.segment = segment;
   rec.certain_tiles = certain_pos.size();
@@ -193,7 +193,7 @@ void TileScheduler::dispatch_sampled(uint32_t segment, const std::vector<uint32_
         auto& [y, m, x] = clusters[s.cluster];
         y += occupancy;
         ++m;
-        x += triangles[s.pos];
+        x += work[s.pos];
       }
     }
     for (const auto& [c, v] : clusters) sampler.observe_cluster(c, std::get<0>(v), std::get<1>(v), std::get<2>(v));
