@@ -121,6 +121,8 @@ Registry::Registry() {
           "fidelity auto: triangles at the start of a geometry cluster that follows an unsimulated one, simulated but not measured");
   TV_REAL("sim.sample_certainty", scheduler.sampling.certainty_ratio, "ratio", 1.0, 1e9,
           "fidelity auto: tiles with more than this many times the mean binned work (triangles x the EVU's edge rows) are all simulated");
+  TV_REAL("sim.sample_tile_cost", scheduler.sampling.tile_triangle_cost, "ratio", 1e-3, 1e3,
+          "fidelity auto: host cost of a tile's binned triangle against a geometry triangle's, by which the budget is shared between a sampled geometry and the render (measured: 2.4 bunny, 3.0 million)");
   TV_UINT("sim.sample_seed", scheduler.sampling.seed, "", 0, std::numeric_limits<uint64_t>::max(),
           "fidelity auto: seed of the sample (the same seed, the same tiles)");
   add_enum<Mode>("sim.mode", "visibility: analytic (EVU), hybrid (EVU, and the HSR unit for tiles where the analytic answer can be wrong), hsr (per-pixel HSR unit), early_z, none",
@@ -306,6 +308,9 @@ void check(const TilerConfig& c, const std::string& where) {
   const ControllerConfig& q = c.memory.controller;
   if (q.write_high > q.write_buffer) fail("memory.write_high must not exceed memory.write_buffer");
   if (q.write_low >= q.write_high) fail("memory.write_low must be below memory.write_high");
+  const SamplingConfig& sc = c.scheduler.sampling;
+  if (sc.geometry_warm >= sc.geometry_cluster)
+    fail("sim.sample_geometry_warm must be below sim.sample_geometry_cluster (a cluster would measure nothing)");
   const CacheConfig& k = c.fetch.cache;
   if (k.bytes % (uint64_t(k.line_bytes) * k.ways))
     fail("fetch.cache_bytes must be a multiple of fetch.cache_line_bytes x fetch.cache_ways");

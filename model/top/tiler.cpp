@@ -135,7 +135,8 @@ void Tiler::prepare() {
       uint64_t(n) >= 4ull * sc.first_clusters * sc.geometry_cluster) {
     std::vector<double> aux(n);
     for (uint32_t id = 0; id < n; ++id) aux[id] = double(m_front_end->read_bytes(id, id + 1) + m_pb->bytes(id, id + 1));
-    m_front_end->sample(sc, std::move(aux), [this](const GeometryEstimate& g) { m_scheduler->add_geometry(g); });
+    m_front_end->sample(sc, std::move(aux));
+    m_scheduler->share_budget(m_front_end.get());
     m_pb->arrivals = &m_front_end->arrivals();
   }
 }

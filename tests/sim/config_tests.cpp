@@ -112,6 +112,9 @@ TEST(Config, RulesBetweenParametersAreCheckedWithTheirNames) {
   EXPECT_NE(error_of("", {"memory.row_bytes=100"}).find("memory.row_bytes must be a multiple of memory.burst_bytes"),
             std::string::npos);
   EXPECT_NE(error_of("", {"memory.rfc=9000"}).find("memory.rfc must be below memory.refi"), std::string::npos);
+  EXPECT_NE(error_of("", {"sim.sample_geometry_warm=256"}).find("sim.sample_geometry_warm must be below sim.sample_geometry_cluster"),
+            std::string::npos);
+  EXPECT_EQ(error_of("", {"sim.sample_geometry_warm=256", "sim.sample_geometry_cluster=512"}), "");
   EXPECT_EQ(error_of("", {"sim.cores=4", "sim.scheduler=dynamic", "memory.channels=8"}), "");
   EXPECT_NE(error_of("", {"sim.scheduler=zigzag"}).find("expected one of row_major, morton, dynamic"), std::string::npos);
 }

@@ -195,3 +195,81 @@ TEST(Sampler, StrataByTrianglesKeepTheHeavyClustersInEverySampleAndTheIntervalHo
   }
   EXPECT_GE(covered, int(0.88 * runs)) << covered << " of " << runs;
 }
+
+namespace {
+
+SampledPart part(double a, double b, double cost, uint64_t taken, uint64_t clusters) {
+  SampledPart p;
+  p.curve.a = a;
+  p.curve.b = b;
+  p.curve.known = true;
+  p.cost = cost;
+  p.taken = taken;
+  p.clusters = clusters;
+  return p;
+}
+
+double variance_at(const SampledPart& p, uint64_t n) {
+  return n >= p.clusters ? 0.0 : std::max(0.0, p.curve.a / double(n) - p.curve.b);
+}
+
+}  // namespace
+
+TEST(Allocate, TwoPartsFitTheTargetAtTheLeastCost) {
+  // Geometry: many cheap clusters with a wide spread; render: few dear ones.
+  const SampledPart g = part(4e10, 1e8, 300, 16, 273), r = part(4e9, 5e7, 1500, 16, 72);
+  const double target = 15800;
+  const std::vector<uint64_t> n = allocate({g, r}, target);
+  ASSERT_EQ(n.size(), 2u);
+  EXPECT_LE(variance_at(g, n[0]) + variance_at(r, n[1]), target * target);
+  const double cost = g.cost * double(n[0]) + r.cost * double(n[1]);
+  // Every other split that fits costs at least as much (up to the rounding of one cluster each).
+  double best = 1e300;
+  for (uint64_t i = g.taken; i <= g.clusters; ++i)
+    for (uint64_t j = r.taken; j <= r.clusters; ++j)
+      if (variance_at(g, i) + variance_at(r, j) <= target * target) best = std::min(best, g.cost * double(i) + r.cost * double(j));
+  EXPECT_LE(cost, best + g.cost + r.cost);
+  EXPECT_GE(cost, best);
+  // A dearer render shifts the sample towards the geometry.
+  SampledPart dear = r;
+  dear.cost *= 4;
+  const std::vector<uint64_t> m = allocate({g, dear}, target);
+  EXPECT_GT(m[0], n[0]);
+  EXPECT_LT(m[1], n[1]);
+}
+
+TEST(Allocate, APartPastItsShareStaysAndTheOtherTakesTheRest) {
+  const double target = 1000;
+  // The geometry already holds 200 of 273 clusters, far below its share of the variance.
+  const SampledPart g = part(1e7, 0, 1, 200, 273), r = part(1e9, 0, 1, 16, 5000);
+  const std::vector<uint64_t> n = allocate({g, r}, target);
+  EXPECT_EQ(n[0], 200u);  // its share alone: 110 clusters
+  // The render alone: a / n <= target^2 - the geometry's variance.
+  const double left = target * target - variance_at(g, 200);
+  EXPECT_EQ(n[1], uint64_t(std::ceil(r.curve.a / left)));
+}
+
+TEST(Allocate, ACompletePartLeavesTheWholeTargetToTheOther) {
+  const SampledPart g = part(1e10, 0, 1, 273, 273), r = part(1e9, 0, 1, 16, 2000);
+  const std::vector<uint64_t> n = allocate({g, r}, 1000);
+  EXPECT_EQ(n[0], 273u);
+  EXPECT_NEAR(double(n[1]), 1000.0, 1.0);  // 1e9 / 1e6
+}
+
+TEST(Allocate, NothingGrowsWhereTheTakenFitAndAnUnknownPartGrowsAnyway) {
+  const SampledPart g = part(1e6, 0, 1, 16, 273), r = part(1e6, 0, 1, 16, 72);
+  const std::vector<uint64_t> n = allocate({g, r}, 1000);  // 62,500 x 2 <= 1e6
+  EXPECT_EQ(n[0], 16u);
+  EXPECT_EQ(n[1], 16u);
+  SampledPart unknown = r;
+  unknown.curve.known = false;
+  EXPECT_EQ(allocate({g, unknown}, 1000)[1], 32u);  // twice its taken
+}
+
+TEST(Allocate, ATargetBeyondReachTakesEverything) {
+  // b > 0: even a complete sample of neither part reaches a zero target.
+  const SampledPart g = part(1e8, 1e5, 1, 16, 273), r = part(1e8, 1e5, 3, 16, 72);
+  const std::vector<uint64_t> n = allocate({g, r}, 0.0);
+  EXPECT_EQ(n[0], 273u);
+  EXPECT_EQ(n[1], 72u);
+}

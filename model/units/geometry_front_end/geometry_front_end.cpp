@@ -96,13 +96,11 @@ void GeometryFrontEnd::send(const Item& it) {
   push(out, it);
 }
 
-void GeometryFrontEnd::sample(const SamplingConfig& config, std::vector<double> aux,
-                              std::function<void(const GeometryEstimate&)> done) {
+void GeometryFrontEnd::sample(const SamplingConfig& config, std::vector<double> aux) {
   m_sampling_on = true;
   m_sampling = config;
   m_sampling.cluster_tiles = config.geometry_cluster;
   m_aux = std::move(aux);
-  m_done = std::move(done);
 }
 
 void GeometryFrontEnd::run() {
@@ -113,69 +111,90 @@ void GeometryFrontEnd::run() {
   for (const Item& it : batches()) send(it);
 }
 
+SampledPart GeometryFrontEnd::sampled_part() const {
+  SampledPart p;
+  p.curve = m_sampler->variance_curve(1);
+  p.taken = m_sampler->clusters_taken();
+  p.clusters = m_sampler->clusters();
+  const RenderEstimate& e = m_estimate.estimate;
+  p.cost = e.clusters_observed ? double(e.tiles_observed) / double(e.clusters_observed) : double(m_sampling.geometry_cluster);
+  return p;
+}
+
+void GeometryFrontEnd::grow(uint64_t clusters) {
+  m_grow = clusters;
+  m_grow_asked.notify(sc_core::SC_ZERO_TIME);
+}
+
 void GeometryFrontEnd::run_sampled() {
-  // Rounds of randomly drawn clusters of consecutive triangles, one triangle an item, each
-  // round measured where the triangles reach the parameter buffer: a cluster's span from its
-  // last warm-up triangle's arrival (or the triangle before it in the round) to its last.
-  const uint32_t n = m_work.trace_triangles();
-  TileSampler sampler(m_aux, m_sampling, ~uint64_t{0});
-  GeometryEstimate g;
-  uint64_t want = std::min<uint64_t>(sampler.clusters(), std::max<uint32_t>(1, m_sampling.first_clusters));
-  while (want > 0) {
-    const std::vector<uint64_t> round = sampler.next_round(want);
-    const uint64_t round_start = cycles(sc_core::sc_time_stamp());
-    m_arrivals.log.clear();
-    std::vector<bool> in_round(sampler.clusters(), false);
-    for (uint64_t c : round) in_round[c] = true;
-    size_t sent = 0;
-    for (uint64_t c : round)
-      for (uint64_t id = sampler.cluster_begin(c); id < sampler.cluster_end(c); ++id, ++sent) {
-        Item it;
-        it.first = uint32_t(id);
-        it.count = 1;
-        send(it);
-      }
-    while (m_arrivals.log.size() < sent) sc_core::wait(m_arrivals.arrived);
-    const uint64_t round_end = cycles(sc_core::sc_time_stamp());
-    g.simulated += round_end - round_start;
-    ++g.rounds;
-    // Items arrive in the order sent (the units are in-order queues).
-    size_t k = 0;
-    uint64_t prev = round_start;
-    bool first = true;
-    for (uint64_t c : round) {
-      const bool cold = c == 0 || !in_round[c - 1];
-      const uint64_t b = sampler.cluster_begin(c), e = sampler.cluster_end(c);
-      double y = 0, x = 0;
-      uint64_t m = 0;
-      for (uint64_t id = b; id < e; ++id, ++k) {
-        const uint64_t at = m_arrivals.log[k].second;
-        const uint64_t span = at - prev;
-        prev = at;
-        if (first) {
-          sampler.observe_fill(double(span));
-          first = false;
-        } else if (cold && id - b < m_sampling.geometry_warm) {
-          ++g.warmup;
-        } else {
-          y += double(span);
-          x += m_aux[id];
-          ++m;
-        }
-      }
-      sampler.observe_cluster(c, y, m, x);
-    }
-    g.estimate = sampler.estimate(1);
-    if (g.estimate.complete || g.estimate.half_width <= m_sampling.error_budget * g.estimate.cycles) break;
-    want = sampler.clusters_needed(m_sampling.error_budget * g.estimate.cycles, 1) - sampler.clusters_taken();
-  }
-  m_done(g);
+  m_sampler = std::make_unique<TileSampler>(m_aux, m_sampling, ~uint64_t{0});
+  sample_round(std::min<uint64_t>(m_sampler->clusters(), std::max<uint32_t>(1, m_sampling.first_clusters)));
+  while (!m_estimate.estimate.complete && !m_sampler->variance_curve(1).known)
+    sample_round(m_sampler->clusters_needed(0.0, 1) - m_sampler->clusters_taken());
+  m_estimate.rounds_before_render = m_estimate.rounds;
   // The segment's end: every triangle is in the parameter buffer (functionally, all along).
   Item last;
-  last.first = n;
+  last.first = m_work.trace_triangles();
   last.count = 0;
   last.last = true;
   send(last);
+  for (;;) {
+    sc_core::wait(m_grow_asked);
+    sample_round(m_grow);
+    m_grown.notify(sc_core::SC_ZERO_TIME);
+  }
+}
+
+void GeometryFrontEnd::sample_round(uint64_t want) {
+  // A round of randomly drawn clusters of consecutive triangles, one triangle an item,
+  // measured where the triangles reach the parameter buffer: a cluster's span from its last
+  // warm-up triangle's arrival (or the triangle before it in the round) to its last.
+  TileSampler& sampler = *m_sampler;
+  GeometryEstimate& g = m_estimate;
+  const std::vector<uint64_t> round = sampler.next_round(want);
+  const uint64_t round_start = cycles(sc_core::sc_time_stamp());
+  m_arrivals.log.clear();
+  std::vector<bool> in_round(sampler.clusters(), false);
+  for (uint64_t c : round) in_round[c] = true;
+  size_t sent = 0;
+  for (uint64_t c : round)
+    for (uint64_t id = sampler.cluster_begin(c); id < sampler.cluster_end(c); ++id, ++sent) {
+      Item it;
+      it.first = uint32_t(id);
+      it.count = 1;
+      send(it);
+    }
+  while (m_arrivals.log.size() < sent) sc_core::wait(m_arrivals.arrived);
+  const uint64_t round_end = cycles(sc_core::sc_time_stamp());
+  g.simulated += round_end - round_start;
+  ++g.rounds;
+  // Items arrive in the order sent (the units are in-order queues).
+  size_t k = 0;
+  uint64_t prev = round_start;
+  bool first = true;
+  for (uint64_t c : round) {
+    const bool cold = c == 0 || !in_round[c - 1];
+    const uint64_t b = sampler.cluster_begin(c), e = sampler.cluster_end(c);
+    double y = 0, x = 0;
+    uint64_t m = 0;
+    for (uint64_t id = b; id < e; ++id, ++k) {
+      const uint64_t at = m_arrivals.log[k].second;
+      const uint64_t span = at - prev;
+      prev = at;
+      if (first) {
+        sampler.observe_fill(double(span));
+        first = false;
+      } else if (cold && id - b < m_sampling.geometry_warm) {
+        ++g.warmup;
+      } else {
+        y += double(span);
+        x += m_aux[id];
+        ++m;
+      }
+    }
+    sampler.observe_cluster(c, y, m, x);
+  }
+  g.estimate = sampler.estimate(1);
 }
 
 }  // namespace tilevis::sim

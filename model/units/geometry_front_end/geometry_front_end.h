@@ -3,7 +3,7 @@
 // models the fetch and a post-transform vertex cache, not vertex shading.
 #pragma once
 
-#include <functional>
+#include <memory>
 #include <vector>
 
 #include "units/common/stage.h"
@@ -33,6 +33,7 @@ struct GeometryArrivals {
 struct GeometryEstimate {
   RenderEstimate estimate;  // tiles = trace triangles, clusters of sampling.geometry_cluster
   uint64_t rounds = 0, simulated = 0, warmup = 0;
+  uint64_t rounds_before_render = 0;  // the rest were asked for between the render's rounds
 };
 
 class GeometryFrontEnd : public UnitBase {
@@ -57,20 +58,32 @@ class GeometryFrontEnd : public UnitBase {
 
   // Fidelity auto: sample the geometry of a one-segment frame (tile_sampler.h) instead of
   // sending every triangle; `aux` per trace triangle is the regression's auxiliary (its DRAM
-  // bytes). `done` gets the estimate when the last round is measured, before the segment's
-  // last item leaves.
-  void sample(const SamplingConfig& config, std::vector<double> aux, std::function<void(const GeometryEstimate&)> done);
+  // bytes). A first round goes before the segment's last item (more rounds while its variance
+  // is unknown); the tile scheduler, which shares the frame's budget between the geometry and
+  // the render, asks for more rounds between the render's (grow()).
+  void sample(const SamplingConfig& config, std::vector<double> aux);
   bool sampled() const { return m_sampling_on; }
+  const GeometryEstimate& geometry_estimate() const { return m_estimate; }
+  // The sample for allocate(): its curve, its cost per cluster in triangles sent (warm-up
+  // included), its clusters taken and in all.
+  SampledPart sampled_part() const;
+  // One more round of `clusters` clusters; grown() fires when it is measured.
+  void grow(uint64_t clusters);
+  sc_core::sc_event& grown() { return m_grown; }
   GeometryArrivals& arrivals() { return m_arrivals; }
 
  private:
   void run();
   void run_sampled();
   void send(const Item& it);
+  void sample_round(uint64_t clusters);
   bool m_sampling_on = false;
   SamplingConfig m_sampling;
   std::vector<double> m_aux;
-  std::function<void(const GeometryEstimate&)> m_done;
+  std::unique_ptr<TileSampler> m_sampler;
+  GeometryEstimate m_estimate;
+  uint64_t m_grow = 0;
+  sc_core::sc_event m_grow_asked, m_grown;
   GeometryArrivals m_arrivals;
   GeometryFrontEndConfig m_cfg;
   uint32_t m_batch;

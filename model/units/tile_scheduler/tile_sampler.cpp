@@ -215,25 +215,102 @@ RenderEstimate TileSampler::estimate(uint32_t cores) const {
   return e;
 }
 
-uint64_t TileSampler::clusters_needed(double target, uint32_t cores) const {
-  const uint64_t k = m_clusters;
-  if (m_taken >= k) return k;
+VarianceCurve TileSampler::variance_curve(uint32_t cores) const {
+  VarianceCurve v;
   const Fit f = fit(cores);
-  if (m_y.size() < 3 || !f.variance_known)
-    return std::min<uint64_t>(k, std::max<uint64_t>(m_taken + 3, 2 * m_taken));
-  // Neyman allocation: V(n) = (sum K_h s_h)^2 / n - sum K_h s_h^2, on the estimate's scale.
+  v.known = m_y.size() >= 3 && f.variance_known;
+  if (!v.known) return v;
+  // Neyman allocation: V(n) = (sum K_h s_h)^2 / n - sum K_h s_h^2, on the estimate's scale
+  // (the normal quantile: Student's t at today's few degrees of freedom would ask for far
+  // more than the next round needs; the rounds grow until the t interval fits).
   const double scale = m_z / double(std::max<uint32_t>(cores, 1));
-  double a = 0, b = 0;
   for (size_t h = 0; h < m_strata.size(); ++h) {
     const double kh = double(m_strata[h].order.size()), sh = std::sqrt(f.s2[h]);
-    a += kh * sh;
-    b += kh * sh * sh;
+    v.a += kh * sh;
+    v.b += kh * sh * sh;
   }
-  if (a <= 0) return std::min<uint64_t>(k, m_taken + 1);
-  const double v_target = target > 0 ? (target / scale) * (target / scale) : 0.0;
-  const double need = v_target + b > 0 ? a * a / (v_target + b) : double(k);
-  const uint64_t n_need = uint64_t(std::ceil(need));
-  return std::min<uint64_t>(k, std::max<uint64_t>(n_need, m_taken + 1));
+  v.a *= v.a * scale * scale;
+  v.b *= scale * scale;
+  return v;
+}
+
+uint64_t TileSampler::clusters_needed(double target, uint32_t cores) const {
+  SampledPart p;
+  p.curve = variance_curve(cores);
+  p.taken = m_taken;
+  p.clusters = m_clusters;
+  if (m_taken >= m_clusters) return m_clusters;
+  return std::max<uint64_t>(allocate({p}, target).front(), m_taken + 1);
+}
+
+std::vector<uint64_t> allocate(const std::vector<SampledPart>& parts, double target) {
+  const size_t n = parts.size();
+  std::vector<double> at(n);
+  std::vector<bool> held(n, false);
+  for (size_t i = 0; i < n; ++i) {
+    const SampledPart& p = parts[i];
+    at[i] = double(p.taken);
+    if (p.taken >= p.clusters) {
+      held[i] = true;
+    } else if (!p.curve.known) {
+      at[i] = double(std::min<uint64_t>(p.clusters, std::max<uint64_t>(p.taken + 3, 2 * p.taken)));
+      held[i] = true;
+    } else if (p.curve.a <= 0) {
+      held[i] = true;  // no variance left to remove
+    }
+  }
+  // The variance of a held part at its clusters (none once it is complete or unbounded).
+  auto var = [&](size_t i, double k) {
+    const SampledPart& p = parts[i];
+    return k >= double(p.clusters) || !p.curve.known ? 0.0 : std::max(0.0, p.curve.a / k - p.curve.b);
+  };
+  const double v = target > 0 ? target * target : 0.0;
+  for (bool again = true; again;) {
+    again = false;
+    double budget = v, sum = 0;
+    for (size_t i = 0; i < n; ++i) {
+      if (held[i]) {
+        budget -= var(i, at[i]);
+      } else {
+        budget += parts[i].curve.b;
+        sum += std::sqrt(parts[i].curve.a * std::max(parts[i].cost, 1e-12));
+      }
+    }
+    for (size_t i = 0; i < n; ++i) {
+      if (held[i]) continue;
+      const SampledPart& p = parts[i];
+      const double want = budget > 0 ? std::sqrt(p.curve.a / std::max(p.cost, 1e-12)) * sum / budget : double(p.clusters);
+      if (want <= double(p.taken) || want >= double(p.clusters)) {
+        at[i] = want <= double(p.taken) ? double(p.taken) : double(p.clusters);
+        held[i] = again = true;
+        break;  // solve the others again without it
+      }
+      at[i] = want;
+    }
+  }
+  std::vector<uint64_t> r(n);
+  double total = 0;
+  bool grows = false;
+  for (size_t i = 0; i < n; ++i) {
+    r[i] = std::min<uint64_t>(parts[i].clusters, uint64_t(std::ceil(at[i] - 1e-9)));
+    grows = grows || r[i] > parts[i].taken;
+    total += var(i, double(parts[i].taken));
+  }
+  if (!grows && total > v) {
+    // Rounding left the parts where they are: one more cluster where it removes the most
+    // variance for its cost.
+    size_t best = n;
+    double best_gain = -1;
+    for (size_t i = 0; i < n; ++i) {
+      const SampledPart& p = parts[i];
+      if (p.taken >= p.clusters) continue;
+      const double k = double(p.taken);
+      const double gain = (k > 0 && p.curve.known ? var(i, k) - var(i, k + 1) : 1e300) / std::max(p.cost, 1e-12);
+      if (gain > best_gain) best = i, best_gain = gain;
+    }
+    if (best < n) ++r[best];
+  }
+  return r;
 }
 
 }  // namespace tilevis::sim

@@ -68,6 +68,11 @@ struct SamplingConfig {
   // triangles x max(1, edges / reject_lanes) (0: triangles alone, as in the per-pixel modes).
   // Where a tile's edges are many, the EVU's all-pairs work, not its triangles, sets its time.
   uint32_t reject_lanes = 0;
+  // The host time of simulating one of a tile's binned triangles at fidelity primitive, in
+  // units of a geometry triangle's, by which a frame's budget is shared between its sampled
+  // geometry and its render (allocate()). Measured on a 2-core host: 2.4 on the bunny
+  // (3.25 against 1.37 us), 3.0 on million (4.2 against 1.42 us, its tiles' all-pairs work).
+  double tile_triangle_cost = 2.5;
 };
 
 // A tile's auxiliary (SamplingConfig::reject_lanes).
@@ -88,6 +93,30 @@ struct RenderEstimate {
   uint64_t clusters = 0, clusters_observed = 0;
   bool complete = false;   // every tile was simulated (no estimate: zero width)
 };
+
+// A sample's half-width squared at n clusters (taken in Neyman allocation within its
+// strata), on its estimate's scale: hw(n)^2 = a / n - b.
+struct VarianceCurve {
+  double a = 0, b = 0;
+  bool known = false;  // every open stratum has a variance (else nothing bounds the sample)
+};
+
+// One sampled part of a frame (its geometry, its render) for allocate(): its curve, the host
+// cost of one more cluster (any unit, the same for every part), the clusters taken and in all.
+struct SampledPart {
+  VarianceCurve curve;
+  double cost = 1;
+  uint64_t taken = 0, clusters = 0;
+};
+
+// The cheapest sample that fits parts whose half-widths add in quadrature into a half-width
+// `target`: per part, the clusters in all that minimise sum cost n subject to
+// sum (a / n - b) <= target^2, each between its taken and its population. Lagrange gives
+// n_i = sqrt(a_i / cost_i) (sum_j sqrt(a_j cost_j)) / (target^2 + sum_j b_j); a part that
+// would fall below its taken, or above its population, is held there and the others solved
+// again. A part whose variance is unknown grows as clusters_needed() grows it (at least three
+// more, or twice its taken). While the parts taken do not fit, at least one part grows.
+std::vector<uint64_t> allocate(const std::vector<SampledPart>& parts, double target);
 
 class TileSampler {
  public:
@@ -121,6 +150,8 @@ class TileSampler {
   // Clusters needed in all (taken included) for a half-width of `target` cycles, from the
   // observed variance; at least one more than taken while any remain.
   uint64_t clusters_needed(double target, uint32_t cores) const;
+  // The half-width's curve over the clusters taken, from the observed variance.
+  VarianceCurve variance_curve(uint32_t cores) const;
 
  private:
   uint64_t m_tiles;

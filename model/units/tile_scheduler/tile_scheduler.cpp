@@ -135,94 +135,144 @@ void TileScheduler::dispatch_sampled(uint32_t segment, const std::vector<uint32_
   const uint64_t first = std::max<uint32_t>(1, m_cfg.sampling.first_clusters);
   uint64_t want = sampler.clusters() <= 2 * first ? sampler.clusters() : first;
   bool first_round = true;
-  while (want > 0 || first_round) {
-    const std::vector<uint64_t> round = sampler.next_round(want);
-    const uint64_t round_start = cycles(sc_core::sc_time_stamp());
-    struct Sent {
-      size_t pos;        // in the scheduler's order
-      uint64_t cluster;  // kCertain: a take-all tile
-      bool warmup;       // simulated, not measured (detailed warming)
-      uint32_t tile = 0, core = 0;
-      bool operator<(const Sent& o) const { return pos < o.pos; }
-    };
-    constexpr uint64_t kCertain = ~uint64_t{0};
-    // This round's tiles in the scheduler's order: its clusters, and in the first round every take-all tile.
-    std::vector<Sent> sent;
-    std::vector<bool> in_round(tiles.size(), false);
-    for (uint64_t c : round)
-      for (uint64_t q = sampler.cluster_begin(c); q < sampler.cluster_end(c); ++q) in_round[sampled_pos[q]] = true;
-    if (first_round)
-      for (size_t p : certain_pos) {
-        in_round[p] = true;
-        sent.push_back({p, kCertain, false});
+  const uint64_t geometry_before = m_geometry ? m_geometry->geometry_estimate().simulated : 0;
+  for (;;) {
+    if (want > 0 || first_round) {
+      const std::vector<uint64_t> round = sampler.next_round(want);
+      const uint64_t round_start = cycles(sc_core::sc_time_stamp());
+      struct Sent {
+        size_t pos;        // in the scheduler's order
+        uint64_t cluster;  // kCertain: a take-all tile
+        bool warmup;       // simulated, not measured (detailed warming)
+        uint32_t tile = 0, core = 0;
+        bool operator<(const Sent& o) const { return pos < o.pos; }
+      };
+      constexpr uint64_t kCertain = ~uint64_t{0};
+      // This round's tiles in the scheduler's order: its clusters, and in the first round every take-all tile.
+      std::vector<Sent> sent;
+      std::vector<bool> in_round(tiles.size(), false);
+      for (uint64_t c : round)
+        for (uint64_t q = sampler.cluster_begin(c); q < sampler.cluster_end(c); ++q) in_round[sampled_pos[q]] = true;
+      if (first_round)
+        for (size_t p : certain_pos) {
+          in_round[p] = true;
+          sent.push_back({p, kCertain, false});
+        }
+      for (uint64_t c : round) {
+        // A cluster that does not follow a tile of the round begins with its warm-up tiles.
+        const uint64_t b = sampler.cluster_begin(c);
+        const bool cold = sampled_pos[b] == 0 || !in_round[sampled_pos[b] - 1];
+        for (uint64_t q = b; q < sampler.cluster_end(c); ++q) sent.push_back({sampled_pos[q], c, cold && q - b < warm});
       }
-    for (uint64_t c : round) {
-      // A cluster that does not follow a tile of the round begins with its warm-up tiles.
-      const uint64_t b = sampler.cluster_begin(c);
-      const bool cold = sampled_pos[b] == 0 || !in_round[sampled_pos[b] - 1];
-      for (uint64_t q = b; q < sampler.cluster_end(c); ++q) sent.push_back({sampled_pos[q], c, cold && q - b < warm});
-    }
-    std::sort(sent.begin(), sent.end());
-    first_round = false;
-    for (size_t i = 0; i < sent.size(); ++i) {
-      sent[i].tile = tiles[sent[i].pos];
-      sent[i].core = send(segment, sent[i].tile, i);
-    }
-    // The round ends when its last tile is written: every core empty again.
-    for (const Sent& s : sent)
-      while (!m_work.tile_closed(s.tile)) sc_core::wait(m_tile_closed);
-    rec.simulated_render += cycles(sc_core::sc_time_stamp()) - round_start;
-    ++rec.rounds;
-    // Occupancies: a core's tiles end in the order it got them.
-    std::vector<uint64_t> last(m_cfg.cores, round_start);
-    std::vector<bool> started(m_cfg.cores, false);
-    std::map<uint64_t, std::tuple<double, uint64_t, double>> clusters;  // y, m, x per sampled cluster
-    for (uint64_t c : round) clusters[c] = {0.0, 0, 0.0};
-    for (const Sent& s : sent) {
-      const uint64_t end = m_work.tile_end_cycle(s.tile);
-      const double occupancy = double(end - last[s.core]);
-      last[s.core] = end;
-      if (!started[s.core]) {
-        sampler.observe_fill(occupancy);
-        started[s.core] = true;
-      } else if (s.warmup) {
-        ++rec.warmup_tiles;
-      } else if (s.cluster == kCertain) {
-        sampler.observe_exact(occupancy);
-      } else {
-        auto& [y, m, x] = clusters[s.cluster];
-        y += occupancy;
-        ++m;
-        x += work[s.pos];
+      std::sort(sent.begin(), sent.end());
+      first_round = false;
+      for (size_t i = 0; i < sent.size(); ++i) {
+        sent[i].tile = tiles[sent[i].pos];
+        sent[i].core = send(segment, sent[i].tile, i);
+        if (sent[i].cluster != kCertain)
+          rec.cost += m_cfg.sampling.tile_triangle_cost * double(m_work.tile_triangle_count(sent[i].tile));
       }
+      // The round ends when its last tile is written: every core empty again.
+      for (const Sent& s : sent)
+        while (!m_work.tile_closed(s.tile)) sc_core::wait(m_tile_closed);
+      rec.simulated_render += cycles(sc_core::sc_time_stamp()) - round_start;
+      ++rec.rounds;
+      // Occupancies: a core's tiles end in the order it got them.
+      std::vector<uint64_t> last(m_cfg.cores, round_start);
+      std::vector<bool> started(m_cfg.cores, false);
+      std::map<uint64_t, std::tuple<double, uint64_t, double>> clusters;  // y, m, x per sampled cluster
+      for (uint64_t c : round) clusters[c] = {0.0, 0, 0.0};
+      for (const Sent& s : sent) {
+        const uint64_t end = m_work.tile_end_cycle(s.tile);
+        const double occupancy = double(end - last[s.core]);
+        last[s.core] = end;
+        if (!started[s.core]) {
+          sampler.observe_fill(occupancy);
+          started[s.core] = true;
+        } else if (s.warmup) {
+          ++rec.warmup_tiles;
+        } else if (s.cluster == kCertain) {
+          sampler.observe_exact(occupancy);
+        } else {
+          auto& [y, m, x] = clusters[s.cluster];
+          y += occupancy;
+          ++m;
+          x += work[s.pos];
+        }
+      }
+      for (const auto& [c, v] : clusters) sampler.observe_cluster(c, std::get<0>(v), std::get<1>(v), std::get<2>(v));
+      rec.estimate = sampler.estimate(m_cfg.cores);
+      rec.estimate.tiles += certain_pos.size();
+      rec.estimate.tiles_observed += certain_pos.size();
     }
-    for (const auto& [c, v] : clusters) sampler.observe_cluster(c, std::get<0>(v), std::get<1>(v), std::get<2>(v));
-    rec.estimate = sampler.estimate(m_cfg.cores);
-    rec.estimate.tiles += certain_pos.size();
-    rec.estimate.tiles_observed += certain_pos.size();
-    if (rec.estimate.complete && rec.rounds == 1) break;  // the whole segment in one round: simulated, not estimated
+    // The whole segment in one round: simulated, not estimated.
+    const bool whole = rec.estimate.complete && rec.rounds == 1;
+    if (whole && !m_geometry) break;
     // The budget is a share of the frame: what is simulated before this segment, earlier
     // segments' corrections, this segment's render as estimated; the intervals already spent
-    // (a sampled geometry, earlier segments) take their part of it, in quadrature.
-    const double frame_target = m_cfg.sampling.error_budget * (double(rec.start_cycle) + m_correction + rec.estimate.cycles);
-    const double spent = frame_half_width();
-    const double target = std::sqrt(std::max(frame_target * frame_target - spent * spent, 0.01 * frame_target * frame_target));
-    if (rec.estimate.complete || rec.estimate.half_width <= target) break;
-    want = sampler.clusters_needed(target, m_cfg.cores) - sampler.clusters_taken();
+    // (earlier segments) take their part of it, in quadrature.
+    const double render = whole ? double(rec.simulated_render) : rec.estimate.cycles;
+    const double frame_target = m_cfg.sampling.error_budget * frame_so_far(rec, geometry_before, render);
+    double spent2 = 0;
+    for (const SegmentSample& s : m_samples) spent2 += s.estimate.half_width * s.estimate.half_width;
+    const double target = std::sqrt(std::max(frame_target * frame_target - spent2, 0.01 * frame_target * frame_target));
+    const double render_half = whole ? 0.0 : rec.estimate.half_width;
+    if (!m_geometry) {
+      if (rec.estimate.complete || render_half <= target) break;
+      want = sampler.clusters_needed(target, m_cfg.cores) - sampler.clusters_taken();
+      continue;
+    }
+    // A sampled geometry shares the target with the render: the cheaper split of what remains.
+    const double geometry_half = m_geometry->geometry_estimate().estimate.half_width;
+    if (std::hypot(geometry_half, render_half) <= target) break;
+    SampledPart r;
+    r.curve = sampler.variance_curve(m_cfg.cores);
+    r.taken = whole ? sampler.clusters() : sampler.clusters_taken();
+    r.clusters = sampler.clusters();
+    r.cost = r.taken ? rec.cost / double(r.taken) : 1.0;
+    const SampledPart g = m_geometry->sampled_part();
+    const std::vector<uint64_t> n = allocate({g, r}, target);
+    want = n[1] - r.taken;
+    if (n[0] > g.taken) {
+      m_geometry->grow(n[0] - g.taken);
+      sc_core::wait(m_geometry->grown());
+    } else if (want == 0) {
+      // Rounding kept both where they are: an eighth more of the wider one that can grow;
+      // both complete: done.
+      const bool geometry_first = g.taken < g.clusters && (geometry_half >= render_half || r.taken >= r.clusters);
+      if (geometry_first) {
+        m_geometry->grow(std::max<uint64_t>(1, g.taken / 8));
+        sc_core::wait(m_geometry->grown());
+      } else if (r.taken < r.clusters) {
+        want = std::max<uint64_t>(1, r.taken / 8);
+      } else {
+        break;
+      }
+    }
   }
   if (!(rec.estimate.complete && rec.rounds == 1)) m_correction += rec.estimate.cycles - double(rec.simulated_render);
   else rec.estimate.cycles = double(rec.simulated_render);
   m_samples.push_back(rec);
 }
 
-void TileScheduler::add_geometry(const GeometryEstimate& g) {
-  m_geometry_sampled = true;
-  m_geometry = g;
-  m_correction += g.estimate.cycles - double(g.simulated);
+double TileScheduler::frame_so_far(const SegmentSample& rec, uint64_t geometry_simulated_before, double render) const {
+  double before = double(rec.start_cycle) + m_correction;
+  if (m_geometry) {
+    const GeometryEstimate& g = m_geometry->geometry_estimate();
+    before += g.estimate.cycles - double(geometry_simulated_before);
+  }
+  return before + render;
+}
+
+double TileScheduler::frame_estimate() const {
+  double f = double(m_frame_end) + m_correction;
+  if (m_geometry) f += m_geometry->geometry_estimate().estimate.cycles - double(m_geometry->geometry_estimate().simulated);
+  return f;
 }
 
 double TileScheduler::frame_half_width() const {
-  double v = m_geometry_sampled ? m_geometry.estimate.half_width * m_geometry.estimate.half_width : 0.0;
+  double v = 0;
+  if (m_geometry) v += std::pow(m_geometry->geometry_estimate().estimate.half_width, 2);
   for (const SegmentSample& s : m_samples) v += s.estimate.half_width * s.estimate.half_width;
   return std::sqrt(v);
 }
@@ -249,23 +299,27 @@ nlohmann::json TileScheduler::sampling_json() const {
   }
   const double frame = frame_estimate(), half = frame_half_width();
   nlohmann::json geometry = nullptr;
-  if (m_geometry_sampled) {
-    const RenderEstimate& e = m_geometry.estimate;
+  if (m_geometry) {
+    const GeometryEstimate& g = m_geometry->geometry_estimate();
+    const RenderEstimate& e = g.estimate;
     geometry = {{"triangles", e.tiles},
                 {"triangles_simulated", e.tiles_observed},
-                {"triangles_warmup", m_geometry.warmup},
+                {"triangles_warmup", g.warmup},
                 {"clusters", e.clusters},
                 {"clusters_simulated", e.clusters_observed},
-                {"rounds", m_geometry.rounds},
-                {"simulated_cycles", m_geometry.simulated},
+                {"rounds", g.rounds},
+                {"rounds_before_render", g.rounds_before_render},
+                {"simulated_cycles", g.simulated},
                 {"estimated_cycles", e.cycles},
                 {"half_width_cycles", e.half_width},
                 {"complete", e.complete}};
   }
   return {{"help", "fidelity auto: each segment's render simulated on a random sample of clusters of consecutive tiles "
                    "(rounds grown until the interval fits the budget) and estimated; the geometry of a one-segment frame "
-                   "likewise on clusters of consecutive trace triangles (\"geometry\"; null: simulated in full)"},
+                   "likewise on clusters of consecutive trace triangles (\"geometry\"; null: simulated in full), the frame's "
+                   "budget shared between the two where each cluster removes the most variance for its host cost"},
           {"geometry", geometry},
+          {"tile_triangle_cost", m_cfg.sampling.tile_triangle_cost},
           {"error_budget", m_cfg.sampling.error_budget},
           {"confidence", m_cfg.sampling.confidence},
           {"cluster_tiles", m_cfg.sampling.cluster_tiles},

@@ -50,11 +50,13 @@ class TileScheduler : public UnitBase {
   // Sampled: the frame's cycles as estimated (the simulated end, each segment's sampled
   // render replaced by its estimate) and the interval's half-width; per segment, stats.json's
   // "sampling". Not sampled: the simulated end, width 0.
-  double frame_estimate() const { return double(m_frame_end) + m_correction; }
+  double frame_estimate() const;
   double frame_half_width() const;
   nlohmann::json sampling_json() const;
-  // Fidelity auto, sampled geometry: its estimate replaces its simulated span in the frame.
-  void add_geometry(const GeometryEstimate& g);
+  // Fidelity auto, a one-segment frame whose geometry is sampled too: its estimate replaces
+  // its simulated rounds in the frame, and the frame's budget is shared between it and the
+  // render at the least host cost (allocate(); the geometry grows between render rounds).
+  void share_budget(GeometryFrontEnd* geometry) { m_geometry = geometry; }
   // TileWriter's tile ends wake a sampled round's wait.
   sc_core::sc_event& tile_closed() { return m_tile_closed; }
 
@@ -77,10 +79,14 @@ class TileScheduler : public UnitBase {
     RenderEstimate estimate;
     uint64_t rounds = 0, simulated_render = 0, start_cycle = 0, certain_tiles = 0;
     uint64_t warmup_tiles = 0;  // simulated for detailed warming, not measured
+    double cost = 0;            // host cost of the clusters simulated (SamplingConfig::tile_triangle_cost)
   };
   std::vector<SegmentSample> m_samples;
-  bool m_geometry_sampled = false;
-  GeometryEstimate m_geometry;
+  GeometryFrontEnd* m_geometry = nullptr;
+  // The frame's cycles as estimated while a segment renders: `before` (what precedes its
+  // render, the sampled geometry as simulated until then) with the geometry's estimate in
+  // place of its simulated rounds, and `render`.
+  double frame_so_far(const SegmentSample& rec, uint64_t geometry_simulated_before, double render) const;
 };
 
 }  // namespace tilevis::sim
