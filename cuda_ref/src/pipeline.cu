@@ -258,7 +258,9 @@ __global__ void k_pad_keys(uint64_t* keys, uint64_t n, uint64_t bound) {
 // sort): one launch where CUB's device sort takes a histogram, a scan and a pass per digit once
 // the pairs outgrow its single tile (a device-sized run's bound can, where the count would not:
 // the bunny's silhouette edges, 6 launches and about 30 us more, measured with Nsight Compute).
-constexpr uint32_t kSmallSortThreads = 256, kSmallSortItems = 16, kSmallSort = kSmallSortThreads * kSmallSortItems;
+// 1,024 threads of 4 pairs rather than 256 of 16: each radix pass's ranking and exchange is a
+// chain of a thread's items, so a quarter of them per thread shortens every pass.
+constexpr uint32_t kSmallSortThreads = 1024, kSmallSortItems = 4, kSmallSort = kSmallSortThreads * kSmallSortItems;
 __global__ void __launch_bounds__(kSmallSortThreads)
     k_sort_small(const uint64_t* keys_in, uint64_t* keys_out, const uint32_t* vals_in, uint32_t* vals_out, uint32_t n,
                  int end_bit) {
@@ -278,6 +280,34 @@ __global__ void __launch_bounds__(kSmallSortThreads)
       keys_out[i] = k[j];
       vals_out[i] = v[j];
     }
+  }
+}
+
+// A scan of at most kSmallScan elements in one block, chunk after chunk (cub::BlockScan): one
+// launch where CUB's device scan takes two (its tile states' initialisation, then the scan),
+// each a node of the frame's chain (the scans of broken_mesh, decals and dragon are all this
+// small). Integer sums: the same values as the device scan.
+constexpr uint32_t kSmallScanThreads = 1024, kSmallScanItems = 4, kSmallScanChunk = kSmallScanThreads * kSmallScanItems,
+                   kSmallScan = 8 * kSmallScanChunk;
+template <class T>
+__global__ void __launch_bounds__(kSmallScanThreads) k_scan_small(ZeroPadded in, T* out, uint64_t n) {
+  using Scan = cub::BlockScan<T, kSmallScanThreads>;
+  __shared__ typename Scan::TempStorage tmp;
+  T carry = 0;
+  for (uint64_t base = 0; base < n; base += kSmallScanChunk) {
+    T v[kSmallScanItems];
+    for (uint32_t j = 0; j < kSmallScanItems; ++j) {  // blocked: thread t holds base + t * items + j
+      const uint64_t i = base + threadIdx.x * kSmallScanItems + j;
+      v[j] = i < n ? T(in[std::ptrdiff_t(i)]) : T{0};
+    }
+    T chunk = 0;
+    Scan(tmp).ExclusiveSum(v, v, chunk);
+    for (uint32_t j = 0; j < kSmallScanItems; ++j) {
+      const uint64_t i = base + threadIdx.x * kSmallScanItems + j;
+      if (i < n) out[i] = carry + v[j];
+    }
+    carry += chunk;
+    __syncthreads();  // tmp is used again by the next chunk
   }
 }
 
@@ -321,6 +351,11 @@ void Exec::scan_into(const uint32_t* in, T* out, uint64_t n_in, uint64_t bound) 
     return;
   }
   const ZeroPadded padded{in, n_in};
+  if (n + 1 <= kSmallScan) {
+    k_scan_small<T><<<1, kSmallScanThreads, 0, stream>>>(padded, out, n + 1);
+    TV_CUDA(cudaGetLastError());
+    return;
+  }
   size_t bytes = 0;
   TV_CUDA(cub::DeviceScan::ExclusiveScan(nullptr, bytes, padded, out, ::cuda::std::plus<T>{}, T{0}, n + 1, stream));
   void* t = temp(bytes);
@@ -460,6 +495,7 @@ bool run_once(Pipeline<P>& p, Timer& t) {
   p.ex.branch(0);
   t.mark(kStageCount + 1);
   stage_occlusion(p, Pass::unclipped);
+  const cudaEvent_t unclipped_visible = p.ex.record();  // the fold needs this pass's verdicts, not its raster
   p.ex.wait(cleared);
   stage_raster(p, Pass::unclipped);
   t.mark(kStageCount + 2);
@@ -472,10 +508,10 @@ bool run_once(Pipeline<P>& p, Timer& t) {
   t.mark(5);
   stage_occlusion(p, Pass::clipped);
   t.mark(6);
-  // The visible areas beside the clipped pieces' raster, once the unclipped pass and the
-  // area order (binning, side 2) are done.
+  // The visible areas beside the clipped pieces' raster, once the unclipped pieces' occlusion
+  // and the area order (binning, side 2) are done (beside the unclipped pieces' raster too).
   p.ex.branch(1);
-  p.ex.wait_for(0);
+  p.ex.wait(unclipped_visible);
   p.ex.wait_for(2);
   stage_fold(p);
   p.ex.on_main();
