@@ -323,14 +323,14 @@ class Exec {
   // memory (no host round trip); on the host the count is read first.
   template <class Args>
   void launch_dyn(void (*kernel)(Args, const uint64_t*, uint64_t), void (*body)(const Args&, uint64_t),
-                  const uint64_t* count, uint64_t cap, const Args& args, uint32_t block = 256) {
+                  const uint64_t* count, uint64_t cap, const Args& args, uint32_t block = 256, uint32_t blocks = 0) {
     ++queued;
     if (where == Where::cpu) {
       uint64_t n = *count < cap ? *count : cap;
       for (uint64_t k = 0; k < n; ++k) body(args, host_index(k, n));
       return;
     }
-    kernel<<<grid_blocks * 4, block, 0, stream>>>(args, count, cap);
+    kernel<<<blocks ? blocks : grid_blocks * 4, block, 0, stream>>>(args, count, cap);
     TV_CUDA(cudaGetLastError());
   }
 

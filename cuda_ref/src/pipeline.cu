@@ -258,24 +258,28 @@ __global__ void k_pad_keys(uint64_t* keys, uint64_t n, uint64_t bound) {
 // sort): one launch where CUB's device sort takes a histogram, a scan and a pass per digit once
 // the pairs outgrow its single tile (a device-sized run's bound can, where the count would not:
 // the bunny's silhouette edges, 6 launches and about 30 us more, measured with Nsight Compute).
-// 1,024 threads of 4 pairs rather than 256 of 16: each radix pass's ranking and exchange is a
-// chain of a thread's items, so a quarter of them per thread shortens every pass.
-constexpr uint32_t kSmallSortThreads = 1024, kSmallSortItems = 4, kSmallSort = kSmallSortThreads * kSmallSortItems;
-__global__ void __launch_bounds__(kSmallSortThreads)
+// EXPERIMENT knobs (env), removed once measured.
+inline uint64_t knob(const char* name, uint64_t dflt) {
+  const char* v = std::getenv(name);
+  return v && *v ? std::strtoull(v, nullptr, 10) : dflt;
+}
+constexpr uint32_t kSmallSort = 4096;
+template <uint32_t kThreads, uint32_t kItems>
+__global__ void __launch_bounds__(kThreads)
     k_sort_small(const uint64_t* keys_in, uint64_t* keys_out, const uint32_t* vals_in, uint32_t* vals_out, uint32_t n,
                  int end_bit) {
-  using Sort = cub::BlockRadixSort<uint64_t, kSmallSortThreads, kSmallSortItems, uint32_t>;
+  using Sort = cub::BlockRadixSort<uint64_t, kThreads, kItems, uint32_t>;
   __shared__ typename Sort::TempStorage tmp;
-  uint64_t k[kSmallSortItems];
-  uint32_t v[kSmallSortItems];
-  for (uint32_t j = 0; j < kSmallSortItems; ++j) {  // blocked: thread t holds items t * kSmallSortItems + j
-    const uint32_t i = threadIdx.x * kSmallSortItems + j;
+  uint64_t k[kItems];
+  uint32_t v[kItems];
+  for (uint32_t j = 0; j < kItems; ++j) {  // blocked: thread t holds items t * kItems + j
+    const uint32_t i = threadIdx.x * kItems + j;
     k[j] = i < n ? keys_in[i] : ~uint64_t{0};  // past n: after every pair (stable, and last in input)
     v[j] = i < n ? vals_in[i] : 0u;
   }
   Sort(tmp).Sort(k, v, 0, end_bit);
-  for (uint32_t j = 0; j < kSmallSortItems; ++j) {
-    const uint32_t i = threadIdx.x * kSmallSortItems + j;
+  for (uint32_t j = 0; j < kItems; ++j) {
+    const uint32_t i = threadIdx.x * kItems + j;
     if (i < n) {
       keys_out[i] = k[j];
       vals_out[i] = v[j];
@@ -283,31 +287,24 @@ __global__ void __launch_bounds__(kSmallSortThreads)
   }
 }
 
-// A scan of at most kSmallScan elements in one block, chunk after chunk (cub::BlockScan): one
-// launch where CUB's device scan takes two (its tile states' initialisation, then the scan),
-// each a node of the frame's chain (the scans of broken_mesh, decals and dragon are all this
-// small). Integer sums: the same values as the device scan.
-constexpr uint32_t kSmallScanThreads = 1024, kSmallScanItems = 4, kSmallScanChunk = kSmallScanThreads * kSmallScanItems,
-                   kSmallScan = 8 * kSmallScanChunk;
+// A scan of at most kSmallScan elements in one block and one pass (cub::BlockScan): one
+// launch where CUB's device scan takes two (its tile states' initialisation, then the scan).
+// Integer sums: the same values as the device scan.
+constexpr uint32_t kSmallScanThreads = 1024, kSmallScanItems = 8, kSmallScan = kSmallScanThreads * kSmallScanItems;
 template <class T>
-__global__ void __launch_bounds__(kSmallScanThreads) k_scan_small(ZeroPadded in, T* out, uint64_t n) {
+__global__ void __launch_bounds__(kSmallScanThreads) k_scan_small(const uint32_t* in, uint64_t n_in, T* out, uint64_t n) {
   using Scan = cub::BlockScan<T, kSmallScanThreads>;
   __shared__ typename Scan::TempStorage tmp;
-  T carry = 0;
-  for (uint64_t base = 0; base < n; base += kSmallScanChunk) {
-    T v[kSmallScanItems];
-    for (uint32_t j = 0; j < kSmallScanItems; ++j) {  // blocked: thread t holds base + t * items + j
-      const uint64_t i = base + threadIdx.x * kSmallScanItems + j;
-      v[j] = i < n ? T(in[std::ptrdiff_t(i)]) : T{0};
-    }
-    T chunk = 0;
-    Scan(tmp).ExclusiveSum(v, v, chunk);
-    for (uint32_t j = 0; j < kSmallScanItems; ++j) {
-      const uint64_t i = base + threadIdx.x * kSmallScanItems + j;
-      if (i < n) out[i] = carry + v[j];
-    }
-    carry += chunk;
-    __syncthreads();  // tmp is used again by the next chunk
+  const uint64_t m = count_of(n_in);  // elements past the count read as zeros
+  T v[kSmallScanItems];
+  for (uint32_t j = 0; j < kSmallScanItems; ++j) {  // blocked: thread t holds t * items + j
+    const uint64_t i = uint64_t(threadIdx.x) * kSmallScanItems + j;
+    v[j] = i < m && i < n ? T(in[i]) : T{0};
+  }
+  Scan(tmp).ExclusiveSum(v, v);
+  for (uint32_t j = 0; j < kSmallScanItems; ++j) {
+    const uint64_t i = uint64_t(threadIdx.x) * kSmallScanItems + j;
+    if (i < n) out[i] = v[j];
   }
 }
 
@@ -351,8 +348,8 @@ void Exec::scan_into(const uint32_t* in, T* out, uint64_t n_in, uint64_t bound) 
     return;
   }
   const ZeroPadded padded{in, n_in};
-  if (n + 1 <= kSmallScan) {
-    k_scan_small<T><<<1, kSmallScanThreads, 0, stream>>>(padded, out, n + 1);
+  if (n + 1 <= tmin<uint64_t>(kSmallScan, knob("TV_X_SCAN", kSmallScan))) {
+    k_scan_small<T><<<1, kSmallScanThreads, 0, stream>>>(in, n_in, out, n + 1);
     TV_CUDA(cudaGetLastError());
     return;
   }
@@ -399,7 +396,12 @@ void Exec::sort_pairs(const uint64_t* keys_in, uint64_t* keys_out, const uint32_
     return;
   }
   if (n <= kSmallSort) {
-    k_sort_small<<<1, kSmallSortThreads, 0, stream>>>(keys_in, keys_out, vals_in, vals_out, uint32_t(n), end_bit);
+    if (knob("TV_X_SORT", 1024) == 1024)
+      k_sort_small<1024, 4><<<1, 1024, 0, stream>>>(keys_in, keys_out, vals_in, vals_out, uint32_t(n), end_bit);
+    else if (knob("TV_X_SORT", 1024) == 512)
+      k_sort_small<512, 8><<<1, 512, 0, stream>>>(keys_in, keys_out, vals_in, vals_out, uint32_t(n), end_bit);
+    else
+      k_sort_small<256, 16><<<1, 256, 0, stream>>>(keys_in, keys_out, vals_in, vals_out, uint32_t(n), end_bit);
     TV_CUDA(cudaGetLastError());
     return;
   }

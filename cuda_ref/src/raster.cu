@@ -409,7 +409,9 @@ void stage_raster(Pipeline<P>& p, Pass pass) {
   a.ids = p.ids.get();
   const PassRange r = pass_range(p, pass);
   a.base = r.base;
-  p.ex.launch_dyn(k_raster<P>, raster_piece_host<P>, r.count, r.cap, a, kRasterBlock);
+  const char* x = std::getenv("TV_X_RGRID");  // EXPERIMENT: raster blocks per grid_blocks/2 (0: default 4x)
+  const uint32_t mult = x && *x ? uint32_t(std::atoi(x)) : 0;
+  p.ex.launch_dyn(k_raster<P>, raster_piece_host<P>, r.count, r.cap, a, kRasterBlock, mult ? p.ex.grid_blocks * mult / 2 : 0);
 }
 
 template <class P>
