@@ -320,17 +320,18 @@ class Exec {
     launch_kernel(reinterpret_cast<const void*>(kernel), blocks, block, &args, n);
   }
   // A kernel whose grid-stride (or warp-stride) loop reads its element count from device
-  // memory (no host round trip); on the host the count is read first.
+  // memory (no host round trip); on the host the count is read first. `blocks`: the grid
+  // (0: 4 x grid_blocks).
   template <class Args>
   void launch_dyn(void (*kernel)(Args, const uint64_t*, uint64_t), void (*body)(const Args&, uint64_t),
-                  const uint64_t* count, uint64_t cap, const Args& args, uint32_t block = 256) {
+                  const uint64_t* count, uint64_t cap, const Args& args, uint32_t block = 256, uint32_t blocks = 0) {
     ++queued;
     if (where == Where::cpu) {
       uint64_t n = *count < cap ? *count : cap;
       for (uint64_t k = 0; k < n; ++k) body(args, host_index(k, n));
       return;
     }
-    kernel<<<grid_blocks * 4, block, 0, stream>>>(args, count, cap);
+    kernel<<<blocks ? blocks : grid_blocks * 4, block, 0, stream>>>(args, count, cap);
     TV_CUDA(cudaGetLastError());
   }
 

@@ -281,6 +281,29 @@ __global__ void __launch_bounds__(kSmallSortThreads)
   }
 }
 
+// A scan of at most kSmallScan elements in one block and one pass (cub::BlockScan): one
+// launch where CUB's device scan takes two (its tile states' initialisation, then the scan),
+// each a node of the frame's chain (every scan of broken_mesh and decals, some of the
+// bunny's). Integer sums: the same values as the device scan. Measured on the H200 against
+// CUB's (new frame, 10 runs): decals float 0.309 -> 0.297 ms, bunny exact 1.093 -> 1.070.
+constexpr uint32_t kSmallScanThreads = 1024, kSmallScanItems = 8, kSmallScan = kSmallScanThreads * kSmallScanItems;
+template <class T>
+__global__ void __launch_bounds__(kSmallScanThreads) k_scan_small(const uint32_t* in, uint64_t n_in, T* out, uint64_t n) {
+  using Scan = cub::BlockScan<T, kSmallScanThreads>;
+  __shared__ typename Scan::TempStorage tmp;
+  const uint64_t m = count_of(n_in);  // elements past the count read as zeros
+  T v[kSmallScanItems];
+  for (uint32_t j = 0; j < kSmallScanItems; ++j) {  // blocked: thread t holds t * items + j
+    const uint64_t i = uint64_t(threadIdx.x) * kSmallScanItems + j;
+    v[j] = i < m && i < n ? T(in[i]) : T{0};
+  }
+  Scan(tmp).ExclusiveSum(v, v);
+  for (uint32_t j = 0; j < kSmallScanItems; ++j) {
+    const uint64_t i = uint64_t(threadIdx.x) * kSmallScanItems + j;
+    if (i < n) out[i] = v[j];
+  }
+}
+
 __global__ void k_take_sizes(SizeArgs a, uint64_t pads) {
   const bool over = sizes_over(a);  // before element 0 writes the sizes
   const uint64_t i0 = uint64_t(blockIdx.x) * blockDim.x + threadIdx.x;
@@ -321,6 +344,11 @@ void Exec::scan_into(const uint32_t* in, T* out, uint64_t n_in, uint64_t bound) 
     return;
   }
   const ZeroPadded padded{in, n_in};
+  if (n + 1 <= kSmallScan) {
+    k_scan_small<T><<<1, kSmallScanThreads, 0, stream>>>(in, n_in, out, n + 1);
+    TV_CUDA(cudaGetLastError());
+    return;
+  }
   size_t bytes = 0;
   TV_CUDA(cub::DeviceScan::ExclusiveScan(nullptr, bytes, padded, out, ::cuda::std::plus<T>{}, T{0}, n + 1, stream));
   void* t = temp(bytes);
@@ -460,6 +488,7 @@ bool run_once(Pipeline<P>& p, Timer& t) {
   p.ex.branch(0);
   t.mark(kStageCount + 1);
   stage_occlusion(p, Pass::unclipped);
+  const cudaEvent_t unclipped_visible = p.ex.record();  // the fold needs this pass's verdicts, not its raster
   p.ex.wait(cleared);
   stage_raster(p, Pass::unclipped);
   t.mark(kStageCount + 2);
@@ -472,10 +501,10 @@ bool run_once(Pipeline<P>& p, Timer& t) {
   t.mark(5);
   stage_occlusion(p, Pass::clipped);
   t.mark(6);
-  // The visible areas beside the clipped pieces' raster, once the unclipped pass and the
-  // area order (binning, side 2) are done.
+  // The visible areas beside the clipped pieces' raster, once the unclipped pieces' occlusion
+  // and the area order (binning, side 2) are done (beside the unclipped pieces' raster too).
   p.ex.branch(1);
-  p.ex.wait_for(0);
+  p.ex.wait(unclipped_visible);
   p.ex.wait_for(2);
   stage_fold(p);
   p.ex.on_main();

@@ -175,17 +175,17 @@ struct RasterMeta {
   bool owns;  // visible and opaque: it writes the id buffer
 };
 
-// A team's group of kSize consecutive pieces of the pass, [first, first + kSize) cut at
-// `count`: each lane finds its piece and stages it; then the team rasters the pieces one at a
-// time, its lanes over each piece's samples, so no piece's size holds up another's lane. The
-// tile counters are added once per run of pieces of one tile.
+// A team's group of `size` (<= kSize) consecutive pieces of the pass, [first, first + size)
+// cut at `count`: each of the first `size` lanes finds its piece and stages it; then the team
+// rasters the pieces one at a time, its lanes over each piece's samples, so no piece's size
+// holds up another's lane. The tile counters are added once per run of pieces of one tile.
 template <class P, class Team>
-TV_HD void raster_group(const RasterArgs<P>& a, uint64_t first, uint64_t count,
+TV_HD void raster_group(const RasterArgs<P>& a, uint64_t first, uint64_t count, uint32_t size,
                         typename P::Line (*lines)[kStageEdges], RasterMeta<P>* meta, Team team) {
   const uint32_t lane = team.lane();
   RasterMeta<P>& mine = meta[lane];
   mine.n = 0;
-  if (first + lane < count) {
+  if (lane < size && first + lane < count) {
     const uint64_t p = a.base + first + lane;
     PEdge<P> local[kTileCap];
     const PieceView<P> v = piece_at<P>(a.src, p, local);
@@ -212,7 +212,7 @@ TV_HD void raster_group(const RasterArgs<P>& a, uint64_t first, uint64_t count,
     }
     frags = vis_frags = 0;
   };
-  for (uint32_t q = 0; q < Team::kSize; ++q) {
+  for (uint32_t q = 0; q < size; ++q) {
     const RasterMeta<P> m = meta[q];
     if (m.n == 0) continue;
     if (m.tile != tile) {
@@ -236,21 +236,28 @@ TV_HD void raster_group(const RasterArgs<P>& a, uint64_t first, uint64_t count,
   team.sync();  // the stage is refilled by the next group
 }
 
+// A warp's group holds as many pieces as spread the pass over every warp of the grid, 32 at
+// most: with 32 always, a pass of few pieces (broken_mesh's unclipped ones, mostly whole
+// tiles) kept under 100 of the grid's 4,224 warps busy, each rastering its 32 pieces one after
+// the other (Nsight Compute: k_raster 159 us at 6 % achieved occupancy), and that pass was the
+// end of float's frame (its `raster` stage is the wait for it: 0.199 ms against exact's 0.072).
 template <class P>
 __global__ void __launch_bounds__(kRasterBlock) k_raster(RasterArgs<P> a, const uint64_t* count, uint64_t cap) {
   __shared__ typename P::Line lines[kRasterBlock / 32][32][kStageEdges];
   __shared__ RasterMeta<P> meta[kRasterBlock / 32][32];
   const uint64_t n = *count < cap ? *count : cap;
+  const uint64_t warps = uint64_t(gridDim.x) * (kRasterBlock / 32);
+  const uint32_t size = uint32_t(tmin<uint64_t>(32, tmax<uint64_t>(1, (n + warps - 1) / warps)));
   const uint32_t w = threadIdx.x / 32;
-  for (uint64_t g = (uint64_t(blockIdx.x) * (kRasterBlock / 32) + w) * 32; g < n; g += uint64_t(gridDim.x) * kRasterBlock)
-    raster_group<P>(a, g, n, lines[w], meta[w], WarpTeam{});
+  for (uint64_t g = (uint64_t(blockIdx.x) * (kRasterBlock / 32) + w) * size; g < n; g += warps * size)
+    raster_group<P>(a, g, n, size, lines[w], meta[w], WarpTeam{});
 }
 
 template <class P>
 void raster_piece_host(const RasterArgs<P>& a, uint64_t i) {
   typename P::Line lines[1][kStageEdges];
   RasterMeta<P> meta[1];
-  raster_group<P>(a, i, i + 1, lines, meta, HostTeam{});
+  raster_group<P>(a, i, i + 1, 1, lines, meta, HostTeam{});
 }
 
 template <class P>
@@ -294,10 +301,10 @@ TV_HD void fold_area(const OutArgs<P>& a, uint64_t q) {
 // On the GPU a run of more than kFoldLong items (a big triangle: hot_tile's ground has 8,160,
 // one per tile) is queued for a warp rather than folded by its thread, whose chain of dependent
 // loads was the end of those frames (hot_tile float: k_fold_area 1.95 ms beside a 0.16 ms
-// raster). The warp's lanes load 32 items' values at once; the additions stay one left fold in
+// raster; at 64, broken_mesh's runs of up to 64 items still took k_fold_area 28 us). The warp's lanes load 32 items' values at once; the additions stay one left fold in
 // canonical order (every lane adds the same values in the same order), so the area is the same
 // double.
-inline constexpr uint32_t kFoldLong = 64;
+inline constexpr uint32_t kFoldLong = 16;
 
 template <class P>
 __global__ void k_fold_area(OutArgs<P> a, uint64_t n) {
@@ -402,7 +409,12 @@ void stage_raster(Pipeline<P>& p, Pass pass) {
   a.ids = p.ids.get();
   const PassRange r = pass_range(p, pass);
   a.base = r.base;
-  p.ex.launch_dyn(k_raster<P>, raster_piece_host<P>, r.count, r.cap, a, kRasterBlock);
+  // The unclipped pieces' pass runs beside the clipping; in exact, whose clipping is the longer
+  // branch, it takes half the grid (2 blocks of 4 warps per SM), leaving the clipping kernels
+  // room (new frame, H200: dragon exact 0.782 -> 0.692 ms, bunny 1.070 -> 0.995; float
+  // glass, whose unclipped pass is its critical one, 0.552 -> 0.648 with half the grid).
+  const uint32_t blocks = P::kExact && pass == Pass::unclipped ? p.ex.grid_blocks : 0;
+  p.ex.launch_dyn(k_raster<P>, raster_piece_host<P>, r.count, r.cap, a, kRasterBlock, blocks);
 }
 
 template <class P>
