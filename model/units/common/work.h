@@ -76,6 +76,10 @@ struct TileWork {
                                       // (list loads, start and end of each pass, pipeline drain)
   uint64_t cycles[size_t(TileUnit::count)] = {};
   uint64_t start_cycle = 0, end_cycle = 0;  // first fetch to last write (event-driven levels)
+  // The fragment unit's texture footprint, per binned triangle after resolve: the fragments
+  // shaded and texture bytes asked by the triangles of its draw before it in the list (filled
+  // on the unit's first item of the tile).
+  std::vector<std::pair<uint64_t, double>> texture_before;
 
   uint32_t triangles() const { return uint32_t(draws.size()); }
 };

@@ -52,40 +52,59 @@ FragmentUnit::FragmentUnit(const sc_core::sc_module_name& name, const UnitEnv& e
   });
 }
 
+uint64_t FragmentUnit::texture_footprint(const TileWork& w, uint64_t fragments, double asked) const {
+  if (asked <= 0) return 0;
+  const uint64_t line = m_cfg.texture_line_bytes;
+  const double texels = std::min(double(fragments), double(w.pixels)) * m_cfg.texels_per_pixel;
+  const uint64_t footprint = ceil_div(uint64_t(std::ceil(texels * m_cfg.texel_bytes)), line) * line;
+  return std::min<uint64_t>(footprint, ceil_div(uint64_t(std::ceil(asked)), line) * line);
+}
+
 Cost FragmentUnit::cost(const Item& it) const {
-  const TileWork& w = *it.tile;
+  TileWork& w = *it.tile;
   const Mode mode = m_work.mode();
   uint64_t raster = 0, tests = 0;
   double shade = 0;
   Cost c;
-  // Per draw (in list order, as the shader switches): fragments shaded, texture asked for.
-  std::vector<std::pair<uint32_t, std::pair<uint64_t, double>>> per_draw;
+  // The draws' texture asked for so far in the tile, per triangle (list order keeps each
+  // draw's triangles together): whether the tile goes as one item or a triangle at a time,
+  // the texture cache holds what the tile read, so an item reads only the lines its
+  // triangles add to their draw's footprint, and a tile reads the same bytes at every level.
+  if (w.texture_before.size() != w.tris.size()) {
+    w.texture_before.assign(w.tris.size(), {0, 0.0});
+    for (size_t i = 1; i < w.tris.size(); ++i) {
+      const TriangleWork& p = w.tris[i - 1];
+      if (p.draw != w.tris[i].draw) continue;
+      const double asked = double(p.fragments_shaded) * double(m_work.frame().draws[p.draw].texture_bytes_per_fragment);
+      w.texture_before[i] = {w.texture_before[i - 1].first + p.fragments_shaded, w.texture_before[i - 1].second + asked};
+    }
+  }
+  const uint64_t line = m_cfg.texture_line_bytes;
+  const uint64_t tile_texels = uint64_t(std::ceil(double(m_work.config().tile_w) * m_work.config().tile_h *
+                                                  m_cfg.texels_per_pixel));
+  const uint64_t tile_stride = ceil_div(tile_texels * m_cfg.texel_bytes, line) * line;
   for (uint32_t i = it.first; i < it.first + it.count; ++i) {
     const TriangleWork& t = w.tris[i];
     const trace::Draw& d = m_work.frame().draws[t.draw];
     raster += rasterised(t, mode);
     tests += fragment_depth_tests(t, mode, w);
     shade += double(t.fragments_shaded) * double(d.shader_cycles_per_fragment);
-    if (!t.fragments_shaded) continue;
-    const uint32_t id = w.ids.empty() ? 0 : w.ids[i];
-    c.pb_reads.add(m_buffer.address(w.segment, id) + m_buffer.position_record_bytes(), m_buffer.varying_bytes(t.draw));
-    if (per_draw.empty() || per_draw.back().first != t.draw) per_draw.push_back({t.draw, {0, 0.0}});
-    per_draw.back().second.first += t.fragments_shaded;
-    per_draw.back().second.second += double(t.fragments_shaded) * double(d.texture_bytes_per_fragment);
-  }
-  // Texture footprint: the draw's texels under the tile, whole lines, at most what was asked.
-  const uint64_t line = m_cfg.texture_line_bytes;
-  const uint64_t tile_texels = uint64_t(std::ceil(double(m_work.config().tile_w) * m_work.config().tile_h *
-                                                  m_cfg.texels_per_pixel));
-  for (const auto& [draw, work] : per_draw) {
-    const auto [fragments, asked] = work;
-    if (asked <= 0) continue;
-    const double texels = std::min(double(fragments), double(w.pixels)) * m_cfg.texels_per_pixel;
-    const uint64_t footprint = ceil_div(uint64_t(std::ceil(texels * m_cfg.texel_bytes)), line) * line;
-    const uint64_t bytes = std::min<uint64_t>(footprint, ceil_div(uint64_t(std::ceil(asked)), line) * line);
-    c.reads.add(region::textures + uint64_t(draw) * region::texture_stride +
-                    uint64_t(w.tile) * ceil_div(tile_texels * m_cfg.texel_bytes, line) * line,
-                bytes);
+    if (t.fragments_shaded) {
+      const uint32_t id = w.ids.empty() ? 0 : w.ids[i];
+      c.pb_reads.add(m_buffer.address(w.segment, id) + m_buffer.position_record_bytes(), m_buffer.varying_bytes(t.draw));
+    }
+    // The end of a run of one draw inside the item: its texture lines beyond those read.
+    const bool run_ends = i + 1 == it.first + it.count || w.tris[i + 1].draw != t.draw;
+    if (!run_ends) continue;
+    uint32_t a = i;
+    while (a > it.first && w.tris[a - 1].draw == t.draw) --a;
+    const auto [frag0, asked0] = w.texture_before[a];
+    const uint64_t frag1 = w.texture_before[i].first + t.fragments_shaded;
+    const double asked1 = w.texture_before[i].second + double(t.fragments_shaded) * double(d.texture_bytes_per_fragment);
+    const uint64_t from = texture_footprint(w, frag0, asked0), to = texture_footprint(w, frag1, asked1);
+    if (to > from)
+      c.reads.add(region::textures + uint64_t(t.draw) * region::texture_stride + uint64_t(w.tile) * tile_stride + from,
+                  to - from);
   }
   // Raster, depth test and shading overlap; the slowest sets the pace.
   c.cycles = std::max({ceil_div(raster, m_cfg.raster_samples_per_clock), ceil_div(tests, m_cfg.depth_tests_per_clock),

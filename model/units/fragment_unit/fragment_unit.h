@@ -4,7 +4,8 @@
 // Texture traffic follows a footprint model per draw: a draw's shaded pixels in a tile
 // touch texels_per_pixel texels each, contiguous in its texture, and the texture cache
 // holds them for the tile: DRAM reads the footprint's lines, at most what the shader asks
-// for (the trace's texture bytes per fragment); reuse across tiles is not modelled.
+// for (the trace's texture bytes per fragment), once per tile whether the tile's triangles
+// come as one transaction or one at a time; reuse across tiles is not modelled.
 //   analytic: the visible pieces' samples (plus, after a partial render, a depth test of
 //             each against the stored depth); hsr: the visible samples the ISP passes on;
 //   early_z:  every covered sample, depth-tested on arrival, the passing ones shaded;
@@ -39,6 +40,9 @@ class FragmentUnit : public Stage {
   FragmentUnit(const sc_core::sc_module_name& name, const UnitEnv& env, const FragmentUnitConfig& config,
                const ParameterBuffer& buffer);
   Cost cost(const Item& item) const override;
+  // DRAM bytes of a draw's texture footprint in tile `w` once `fragments` are shaded and
+  // `asked` bytes asked for: the footprint's whole lines, at most what was asked.
+  uint64_t texture_footprint(const TileWork& w, uint64_t fragments, double asked) const;
 
  private:
   FragmentUnitConfig m_cfg;
