@@ -117,6 +117,8 @@ Registry::Registry() {
           "fidelity auto: tiles per core at the start of a cluster that follows an unsimulated tile, simulated but not measured (detailed warming)");
   TV_UINT("sim.sample_geometry_cluster", scheduler.sampling.geometry_cluster, "triangles", 16, 1u << 24,
           "fidelity auto: consecutive trace triangles per sampling unit of a one-segment frame's geometry");
+  TV_UINT("sim.sample_geometry_first", scheduler.sampling.geometry_first, "clusters", 2, 1u << 20,
+          "fidelity auto: clusters in the first round of a one-segment frame's geometry, before the render");
   TV_UINT("sim.sample_geometry_warm", scheduler.sampling.geometry_warm, "triangles", 0, 1u << 24,
           "fidelity auto: triangles at the start of a geometry cluster that follows an unsimulated one, simulated but not measured");
   TV_REAL("sim.sample_certainty", scheduler.sampling.certainty_ratio, "ratio", 1.0, 1e9,
