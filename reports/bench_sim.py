@@ -7,7 +7,8 @@ timed test). Prints a table and writes OUT/sim_bench.{md,json}.
 Beside each level's host time it gives the frame cycles and their deviation from the
 reference level, rtl (the EVU's clocks from its Verilated RTL; primitive where the build has
 no Verilator, and the table says so), so that speed is never quoted without its accuracy;
-auto's rows add its confidence interval and the share of tiles it simulated. A chart of
+auto's rows add its confidence interval and the share of tiles it simulated, and auto runs
+again on seeds 2..N (--auto-seeds, default 8) to say how often its interval holds. A chart of
 host time against error per scene goes to OUT/sim_bench.png. Targets (issue 4): bunny
 1920x1080 at fidelity tile <= 5 s wall, million <= 60 s, on a 2-core machine.
 """
@@ -15,6 +16,7 @@ import argparse
 import json
 import os
 import platform
+import shutil
 import subprocess
 import sys
 import time
@@ -81,6 +83,8 @@ def main():
     ap.add_argument("--only", default="", help="comma-separated scene names")
     ap.add_argument("--mode", default="analytic", help="visibility mode (sim.mode)")
     ap.add_argument("--tile", default="32")
+    ap.add_argument("--auto-seeds", type=int, default=8,
+                    help="fidelity auto on seeds 1..N (the tables show seed 1): how often its interval holds")
     a = ap.parse_args()
     out = Path(a.out)
     work = out / "work"
@@ -89,6 +93,7 @@ def main():
     if a.only:
         scenes = [s for s in scenes if s.stem in a.only.split(",")]
     rows = []
+    seeds = []
     failures = {}
     for scene in scenes:
         trace = work / "traces" / f"{scene.stem}.tvt"
@@ -115,6 +120,22 @@ def main():
                     per[level].update({"geometry_triangles_simulated": m["geometry"]["triangles_simulated"]})
         reference = "rtl" if "rtl" in per else "primitive"
         ref = per[reference]["cycles"]
+        # auto's other seeds: its error and whether its interval holds the reference, per seed.
+        for seed in range(1, a.auto_seeds + 1):
+            if seed == 1:
+                s = per["auto"]
+                wall, host, cycles, interval = s["wall_seconds"], s["host_seconds"], s["cycles"], s["interval"]
+            else:
+                d = work / f"{scene.stem}_auto_seed{seed}"
+                wall = run_measured([a.bin, "sim", trace, "--tile", a.tile, "-p", "sim.fidelity=auto", "-p",
+                                     f"sim.sample_seed={seed}", "-p", f"sim.mode={a.mode}", "-o", d])
+                st = json.loads((d / "stats.json").read_text())
+                host, cycles, interval = st["host_seconds"], st["totals"]["cycles"], st["sampling"]["interval_cycles"]
+                shutil.rmtree(d)
+            seeds.append({"scene": scene.stem, "seed": seed, "wall_seconds": wall, "host_seconds": host,
+                          "cycles": cycles, "interval": interval, "reference": reference,
+                          "error": (cycles - ref) / ref if ref else 0.0,
+                          "holds": interval[0] <= ref <= interval[1]})
         for level in LEVELS:
             if level not in per:
                 continue
@@ -135,7 +156,7 @@ def main():
     machine = f"{platform.node()}, {os.cpu_count()} cores, {cpu_name()}"
     lines = ["# SystemC tiler model: host time per fidelity level", "",
              f"Machine: {machine}. Commit: {commit}. Command: `python3 reports/bench_sim.py --bin {a.bin} --out {a.out}"
-             f" --mode {a.mode} --tile {a.tile}`. Wall = the whole `tilevis sim` process (trace read, setup, "
+             f" --mode {a.mode} --tile {a.tile} --auto-seeds {a.auto_seeds}`. Wall = the whole `tilevis sim` process (trace read, setup, "
              "functional work, simulation, outputs); model = elaboration to results, of which prepare = elaboration "
              "and the functional prepare that every level shares (setup, binning, the units' tables). Cycles are the frame's; "
              "'error' is their deviation from the reference level's (rtl; primitive where a build has no "
@@ -179,13 +200,29 @@ def main():
         lines += ["", "auto against tile (tile's seconds / auto's), model and wall:", "",
                   "| scene | model | wall |", "|---|---|---|"]
         lines += [f"| {sc} | {m:.2f}x | {w:.2f}x |" for sc, m, w in pairs]
+    if seeds:
+        n = a.auto_seeds
+        lines += ["", f"auto on seeds 1 to {n}: signed error against the reference (mean, and the largest in "
+                  "size), how often its 95 % interval holds the reference, and its model seconds (median):", "",
+                  "| scene | mean error | largest error | interval holds | model s |", "|---|---|---|---|---|"]
+        total = 0
+        for sc in dict.fromkeys(x["scene"] for x in seeds):
+            xs = [x for x in seeds if x["scene"] == sc]
+            errs = [100 * x["error"] for x in xs]
+            held = sum(x["holds"] for x in xs)
+            total += held
+            hosts = sorted(x["host_seconds"] for x in xs)
+            lines.append(f"| {sc} | {sum(errs) / len(errs):+.2f} % | {max(errs, key=abs):+.2f} % | {held} of {len(xs)} | "
+                         f"{hosts[len(hosts) // 2]:.3f} |")
+        lines += ["", f"The interval held the reference in {total} of {len(seeds)} runs "
+                  f"({100 * total / len(seeds):.0f} % at 95 % nominal)."]
     if failures:
         lines += ["", "Fidelity rtl failed on (the reference is primitive there):", ""]
         lines += [f"- {k}: `{v}`" for k, v in sorted(failures.items())]
     chart(rows, "rtl", out / "sim_bench.png")
     (out / "sim_bench.md").write_text("\n".join(lines) + "\n")
     (out / "sim_bench.json").write_text(json.dumps({"machine": machine, "commit": commit, "rows": rows,
-                                                    "rtl_failures": failures}, indent=2))
+                                                    "auto_seeds": seeds, "rtl_failures": failures}, indent=2))
     print(f"wrote {out / 'sim_bench.md'}")
 
 
