@@ -111,13 +111,15 @@ def main():
             s = json.loads((d / "stats.json").read_text())
             per[level] = {"wall_seconds": wall, "host_seconds": s["host_seconds"],
                           "prepare_seconds": s.get("host_prepare_seconds"), "cycles": s["totals"]["cycles"],
-                          "triangles": s["totals"]["triangles_in"], "tiles": s["totals"]["tiles_rendered"]}
+                          "triangles": s["totals"]["triangles_in"], "tiles": s["totals"]["tiles_rendered"],
+                          "geometry_end_cycles": s["totals"].get("geometry_end_cycles")}
             if s.get("sampling"):
                 m = s["sampling"]
                 per[level].update({"interval": m["interval_cycles"], "tiles_total": m["tiles"],
                                    "tiles_simulated": m["tiles_simulated"], "within_budget": m["within_budget"]})
                 if m.get("geometry"):
-                    per[level].update({"geometry_triangles_simulated": m["geometry"]["triangles_simulated"]})
+                    per[level].update({"geometry_triangles_simulated": m["geometry"]["triangles_simulated"],
+                                       "geometry_estimate": m["geometry"]["estimated_cycles"]})
         reference = "rtl" if "rtl" in per else "primitive"
         ref = per[reference]["cycles"]
         # auto's other seeds: its error and whether its interval holds the reference, per seed.
@@ -125,16 +127,23 @@ def main():
             if seed == 1:
                 s = per["auto"]
                 wall, host, cycles, interval = s["wall_seconds"], s["host_seconds"], s["cycles"], s["interval"]
+                geometry = s.get("geometry_estimate")
             else:
                 d = work / f"{scene.stem}_auto_seed{seed}"
                 wall = run_measured([a.bin, "sim", trace, "--tile", a.tile, "-p", "sim.fidelity=auto", "-p",
                                      f"sim.sample_seed={seed}", "-p", f"sim.mode={a.mode}", "-o", d])
                 st = json.loads((d / "stats.json").read_text())
                 host, cycles, interval = st["host_seconds"], st["totals"]["cycles"], st["sampling"]["interval_cycles"]
+                geometry = (st["sampling"].get("geometry") or {}).get("estimated_cycles")
                 shutil.rmtree(d)
+            # The sampled geometry against the reference's (where its one segment reached the
+            # parameter buffer).
+            ref_geometry = (per[reference].get("geometry_end_cycles") or [None])[0]
             seeds.append({"scene": scene.stem, "seed": seed, "wall_seconds": wall, "host_seconds": host,
                           "cycles": cycles, "interval": interval, "reference": reference,
                           "error": (cycles - ref) / ref if ref else 0.0,
+                          "geometry_error": (geometry - ref_geometry) / ref_geometry
+                          if geometry is not None and ref_geometry else None,
                           "holds": interval[0] <= ref <= interval[1]})
         for level in LEVELS:
             if level not in per:
@@ -203,8 +212,11 @@ def main():
     if seeds:
         n = a.auto_seeds
         lines += ["", f"auto on seeds 1 to {n}: signed error against the reference (mean, and the largest in "
-                  "size), how often its 95 % interval holds the reference, and its model seconds (median):", "",
-                  "| scene | mean error | largest error | interval holds | model s |", "|---|---|---|---|---|"]
+                  "size), how often its 95 % interval holds the reference, its model seconds (median), and, where "
+                  "the geometry is sampled, the geometry estimate's signed error against the reference's geometry "
+                  "(mean, largest):", "",
+                  "| scene | mean error | largest error | interval holds | model s | geometry error |",
+                  "|---|---|---|---|---|---|"]
         total = 0
         for sc in dict.fromkeys(x["scene"] for x in seeds):
             xs = [x for x in seeds if x["scene"] == sc]
@@ -212,8 +224,10 @@ def main():
             held = sum(x["holds"] for x in xs)
             total += held
             hosts = sorted(x["host_seconds"] for x in xs)
+            geo = [100 * x["geometry_error"] for x in xs if x["geometry_error"] is not None]
+            geo_text = f"{sum(geo) / len(geo):+.2f} %, {max(geo, key=abs):+.2f} %" if geo else ""
             lines.append(f"| {sc} | {sum(errs) / len(errs):+.2f} % | {max(errs, key=abs):+.2f} % | {held} of {len(xs)} | "
-                         f"{hosts[len(hosts) // 2]:.3f} |")
+                         f"{hosts[len(hosts) // 2]:.3f} | {geo_text} |")
         lines += ["", f"The interval held the reference in {total} of {len(seeds)} runs "
                   f"({100 * total / len(seeds):.0f} % at 95 % nominal)."]
     if failures:

@@ -116,6 +116,9 @@ SimOutput simulate(const trace::Frame& frame, const TilerConfig& config, const S
   totals["cycles"] = out.cycles;
   totals["param_buffer_bytes"] = tiler.param_buffer_bytes();
   totals["param_buffer_peak_bytes"] = tiler.param_buffer_peak();
+  // Where each segment's geometry ended: measured at the event-driven levels but auto (whose
+  // geometry estimate is in "sampling"); null at the closed form and at auto.
+  totals["geometry_end_cycles"] = event_driven && !fc.sampled ? nlohmann::json(tiler.geometry_end_cycles()) : nlohmann::json(nullptr);
   totals["dram_bytes"] = tiler.dram_bytes();
   totals["evu_busy_cycles"] = tiler.evu_busy_cycles();
   totals["memory_bound_share"] = tiler.memory_bound_share(out.cycles);

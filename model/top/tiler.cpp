@@ -321,6 +321,7 @@ uint64_t Tiler::param_buffer_bytes() const {
   return m_front_end->sampled() ? m_pb->total_bytes() : uint64_t(m_pb->stats().value("bytes_written"));
 }
 uint64_t Tiler::param_buffer_peak() const { return uint64_t(m_pb->stats().value("peak_bytes")); }
+const std::vector<uint64_t>& Tiler::geometry_end_cycles() const { return m_pb->ready_cycles(); }
 uint64_t Tiler::evu_busy_cycles() const {
   uint64_t n = 0;
   for (const Core& c : m_cores)

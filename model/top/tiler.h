@@ -38,6 +38,8 @@ class Tiler : public sc_core::sc_module {
   uint64_t dram_bytes() const;
   uint64_t param_buffer_bytes() const;  // written over the frame
   uint64_t param_buffer_peak() const;
+  // Event-driven levels: per segment, the cycle its geometry ended (ParameterBuffer::ready_cycles).
+  const std::vector<uint64_t>& geometry_end_cycles() const;
   uint64_t evu_busy_cycles() const;
   // After the frame: per core, tiles and work (its busiest unit's busy cycles); the share
   // of frame cycles some unit waited on DRAM (event-driven levels; the closed form's

@@ -99,6 +99,7 @@ void ParameterBuffer::collect() {
       arrivals->arrived.notify(sc_core::SC_ZERO_TIME);
     }
     if (!it.last) continue;
+    m_ready_cycles.push_back(cycles(sc_core::sc_time_stamp()));
     if (it.segment + 1 < m_work.segment_count()) m_partial.value += 1;
     ready.write(it.segment);
   }

@@ -60,6 +60,9 @@ class ParameterBuffer : public UnitBase {
   // Fidelity auto's sampled geometry: arrivals logged here (not owned; null: none).
   GeometryArrivals* arrivals = nullptr;
   uint64_t total_bytes() const;  // every segment's bytes (what the frame writes)
+  // Event-driven levels: per segment, the cycle its last triangle reached the buffer (the
+  // end of its geometry; fidelity auto: of the simulated rounds, not the estimate).
+  const std::vector<uint64_t>& ready_cycles() const { return m_ready_cycles; }
 
  private:
   void b_transport(int id, tlm::tlm_generic_payload& p, sc_core::sc_time& delay);
@@ -70,6 +73,7 @@ class ParameterBuffer : public UnitBase {
   std::vector<uint64_t> m_prefix;
   std::vector<uint64_t> m_segment_bytes;
   uint64_t m_used = 0;
+  std::vector<uint64_t> m_ready_cycles;
   sc_core::sc_event m_freed;
   Stat& m_written;
   Stat& m_read;
