@@ -8,27 +8,6 @@
 
 namespace tilevis::cuda::approx {
 
-// Products and sums each rounded to float, never fused: a fused a x + b y keeps the rounding
-// error of one product, so a point exactly on a line (a x = -b y, whose rounded products cancel
-// exactly) got a tiny nonzero side. On the device that made slivers' fan of needles, whose
-// edges share vertices, split pieces along lines through their own vertices (GPU float: 11,659
-// candidate pairs and 17,307 clips against the host emulation's 10,618 and 11,021) and its
-// longest clip chains 3x exact's. Also the host emulation's arithmetic (no FMA there).
-TV_HD inline float fmul(float a, float b) {
-#if defined(__CUDA_ARCH__)
-  return __fmul_rn(a, b);
-#else
-  return a * b;
-#endif
-}
-TV_HD inline float fadd(float a, float b) {
-#if defined(__CUDA_ARCH__)
-  return __fadd_rn(a, b);
-#else
-  return a + b;
-#endif
-}
-
 // a (x - ox) + b (y - oy): a, b and the anchor are exact in float (|values| <= 2^24);
 // anchoring keeps the products small, as window-relative edge functions do in hardware.
 struct Line {

@@ -80,7 +80,7 @@ struct FloatP {
   TV_HD static double rx(const R& r) { return r.x; }
   TV_HD static double ry(const R& r) { return r.y; }
   TV_HD static int along(const V& c, const Vtx& a, int64_t dx, int64_t dy) {
-    return approx::signf(approx::fadd(approx::fmul(c.x - float(a.x), float(dx)), approx::fmul(c.y - float(a.y), float(dy))));
+    return approx::signf(fadd(fmul(c.x - float(a.x), float(dx)), fmul(c.y - float(a.y), float(dy))));
   }
   TV_HD static Plane plane(const Vtx& a, const Vtx& b, const Vtx& c) { return approx::plane_of(a, b, c); }
   TV_HD static int depth(const Plane& p, const Plane& q, const R& s) { return approx::depth_order(p, q, s); }

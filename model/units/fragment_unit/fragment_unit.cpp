@@ -83,9 +83,11 @@ Cost FragmentUnit::cost(const Item& it) const {
   const uint64_t tile_texels = uint64_t(std::ceil(double(m_work.config().tile_w) * m_work.config().tile_h *
                                                   m_cfg.texels_per_pixel));
   const uint64_t tile_stride = ceil_div(tile_texels * m_cfg.texel_bytes, line) * line;
+  uint32_t run_first = it.first;  // the first triangle of the item's current run of one draw
   for (uint32_t i = it.first; i < it.first + it.count; ++i) {
     const TriangleWork& t = w.tris[i];
     const trace::Draw& d = m_work.frame().draws[t.draw];
+    if (t.draw != w.tris[run_first].draw) run_first = i;
     raster += rasterised(t, mode);
     tests += fragment_depth_tests(t, mode, w);
     shade += double(t.fragments_shaded) * double(d.shader_cycles_per_fragment);
@@ -96,9 +98,7 @@ Cost FragmentUnit::cost(const Item& it) const {
     // The end of a run of one draw inside the item: its texture lines beyond those read.
     const bool run_ends = i + 1 == it.first + it.count || w.tris[i + 1].draw != t.draw;
     if (!run_ends) continue;
-    uint32_t a = i;
-    while (a > it.first && w.tris[a - 1].draw == t.draw) --a;
-    const auto [frag0, asked0] = w.texture_before[a];
+    const auto [frag0, asked0] = w.texture_before[run_first];
     const uint64_t frag1 = w.texture_before[i].first + t.fragments_shaded;
     const double asked1 = w.texture_before[i].second + double(t.fragments_shaded) * double(d.texture_bytes_per_fragment);
     const uint64_t from = texture_footprint(w, frag0, asked0), to = texture_footprint(w, frag1, asked1);

@@ -233,16 +233,19 @@ void TileScheduler::dispatch_sampled(uint32_t segment, const std::vector<uint32_
     const SampledPart g = m_geometry->sampled_part();
     const std::vector<uint64_t> n = allocate({g, r}, target);
     want = n[1] - r.taken;
-    if (n[0] > g.taken) {
-      m_geometry->grow(n[0] - g.taken);
+    // A geometry round between the render's, measured before the render goes on.
+    auto grow_geometry = [&](uint64_t clusters) {
+      m_geometry->grow(clusters);
       sc_core::wait(m_geometry->grown());
+    };
+    if (n[0] > g.taken) {
+      grow_geometry(n[0] - g.taken);
     } else if (want == 0) {
       // Rounding kept both where they are: an eighth more of the wider one that can grow;
       // both complete: done.
       const bool geometry_first = g.taken < g.clusters && (geometry_half >= render_half || r.taken >= r.clusters);
       if (geometry_first) {
-        m_geometry->grow(std::max<uint64_t>(1, g.taken / 8));
-        sc_core::wait(m_geometry->grown());
+        grow_geometry(std::max<uint64_t>(1, g.taken / 8));
       } else if (r.taken < r.clusters) {
         want = std::max<uint64_t>(1, r.taken / 8);
       } else {
