@@ -220,6 +220,7 @@ uint64_t Tiler::run_analytic() {
     // its slowest unit (or its DRAM time); a core's last tile drains through the rest.
     m_work.prepare_segment(k);
     const std::vector<uint32_t> tiles = m_scheduler->order(m_work.segment_tiles());
+    m_work.resolve_ahead(tiles);
     std::vector<uint64_t> busy(ncores, 0), drain(ncores, 0), bound(ncores, 0);
     for (size_t i = 0; i < tiles.size(); ++i) {
       uint32_t c = m_scheduler->static_core(i);

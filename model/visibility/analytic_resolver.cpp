@@ -20,7 +20,7 @@ class AnalyticResolver final : public TileResolver {
  public:
   explicit AnalyticResolver(const ResolverOptions& o) : m_opt(o) {}
 
-  TileVerdict resolve(const TileFrame& f, uint32_t tile, FrameOutput& out, TileCounters& c,
+  TileVerdict resolve(const TileFrame& f, uint32_t tile, TileOutput& out, TileCounters& c,
                       std::vector<TileTriangleWork>* per_triangle) override {
     const auto& tris = f.tile_triangles(tile);
     if (tris.empty()) return {};
@@ -53,7 +53,7 @@ class AnalyticResolver final : public TileResolver {
   // Returns the triangle's shader invocations in the tile: pixels where a visible piece covers
   // a sample (pieces of one triangle may share a pixel: counted once, by a stamp per pixel).
   uint64_t process_triangle(const TileFrame& f, const FrontTriangle& tt, uint32_t tile, const Rect& rect,
-                            FrameOutput& out, TileCounters& c) {
+                            TileOutput& out, TileCounters& c) {
     ConvexPolygon poly = geom::clip_to_rect(ConvexPolygon::from_triangle(tt.tri), rect);
     if (poly.empty()) return 0;
     ++m_serial;
@@ -134,7 +134,7 @@ class AnalyticResolver final : public TileResolver {
       ++c.visible_pieces;
       c.samples_covered += covered;
       out.visible_triangles += piece.size() - 2;
-      out.visible_area[tt.t->id] += geom::doubled_area(piece) / (2.0 * double(1 << sb) * double(1 << sb));
+      out.areas.emplace_back(tt.t->id, geom::doubled_area(piece) / (2.0 * double(1 << sb) * double(1 << sb)));
       if (m_opt.keep_pieces) keep(s, piece, tt, out);
     }
     return shaded;
@@ -215,7 +215,7 @@ class AnalyticResolver final : public TileResolver {
                      bin_index(qx, m_bin_x0, m_bin_step_x, m_bins_x)];
   }
 
-  void keep(const Setup& s, const ConvexPolygon& piece, const FrontTriangle& tt, FrameOutput& out) const {
+  void keep(const Setup& s, const ConvexPolygon& piece, const FrontTriangle& tt, TileOutput& out) const {
     PlanarPiece pp;
     pp.id = tt.t->id;
     pp.draw = tt.t->draw;

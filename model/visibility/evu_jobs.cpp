@@ -45,20 +45,18 @@ EvuJob make_evu_job(const TileFrame& f, uint32_t tile, const TileCounters* golde
   return j;
 }
 
-EvuJobSource::EvuJobSource(const TileFrame& f) : m_f(f), m_resolver(make_tile_resolver("analytic", {})) {
-  const Setup& s = f.setup();
-  m_out = std::make_unique<FrameOutput>();
-  m_out->ids.assign(size_t(s.width) * s.height * s.samples.size(), -1);
-  uint32_t max_id = 0;
-  for (const auto& t : s.triangles) max_id = std::max(max_id, t.id);
-  m_out->visible_area.assign(size_t(max_id) + 1, 0.0);
-}
+EvuJobSource::EvuJobSource(const TileFrame& f)
+    : m_f(f),
+      m_resolver(make_tile_resolver("analytic", {})),
+      m_ids(size_t(f.setup().width) * f.setup().height * f.setup().samples.size(), -1) {}
 
 EvuJobSource::~EvuJobSource() = default;
 
 EvuJob EvuJobSource::job(uint32_t tile) {
   TileCounters c;
-  if (!m_f.tile_triangles(tile).empty()) m_resolver->resolve(m_f, tile, *m_out, c, nullptr);
+  TileOutput out;
+  out.ids = m_ids.data();
+  if (!m_f.tile_triangles(tile).empty()) m_resolver->resolve(m_f, tile, out, c, nullptr);
   return make_evu_job(m_f, tile, &c);
 }
 

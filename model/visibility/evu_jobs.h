@@ -34,7 +34,6 @@ struct EvuJob {
 
 class TileFrame;
 class TileResolver;
-struct FrameOutput;
 
 // The job of `tile` in a binned frame (TileFrame::bin): its rectangle, its front-facing
 // triangles and silhouette edges in binning order. `golden`: the analytic resolver's counters
@@ -43,8 +42,8 @@ struct FrameOutput;
 EvuJob make_evu_job(const TileFrame& f, uint32_t tile, const TileCounters* golden = nullptr);
 
 // The jobs of one binned frame with their golden counters from the analytic resolver: one
-// resolver and one frame output for every tile asked for (the frame output is the size of the
-// frame's samples, so make one source per frame, not one per tile). `f` must outlive it.
+// resolver and one id buffer for every tile asked for (the buffer is the size of the frame's
+// samples, so make one source per frame, not one per tile). `f` must outlive it.
 class EvuJobSource {
  public:
   explicit EvuJobSource(const TileFrame& f);
@@ -54,7 +53,7 @@ class EvuJobSource {
  private:
   const TileFrame& m_f;
   std::unique_ptr<TileResolver> m_resolver;
-  std::unique_ptr<FrameOutput> m_out;
+  std::vector<int32_t> m_ids;  // what the resolver writes and nothing reads
 };
 
 struct EvuJobsHeader {

@@ -1,5 +1,8 @@
 #include "visibility/golden.h"
 
+#include <algorithm>
+#include <stdexcept>
+
 namespace tilevis::vis {
 
 GoldenTiler::GoldenTiler(const Setup& s, const GoldenConfig& cfg, GoldenResult& r)
@@ -37,15 +40,56 @@ std::vector<uint32_t> GoldenTiler::tile_triangles(uint32_t tile) const {
   return out;
 }
 
+struct GoldenTiler::Resolved {
+  TileOutput out;
+  TileCounters counters;
+  TileVerdict verdict;
+  std::vector<TileTriangleWork> per_triangle;
+};
+
+GoldenTiler::~GoldenTiler() = default;
+
+void GoldenTiler::resolve(uint32_t tile, Resolved& r, TileResolver& resolver, bool per_triangle) {
+  r.out = m_r.tile_output();
+  r.counters.triangles = int64_t(m_frame.tile_triangles(tile).size());
+  r.counters.edges = int64_t(m_frame.tile_edges(tile).size());
+  if (r.counters.triangles > 0)
+    r.verdict = resolver.resolve(m_frame, tile, r.out, r.counters, per_triangle ? &r.per_triangle : nullptr);
+}
+
+void GoldenTiler::resolve_ahead(const std::vector<uint32_t>& tiles, bool per_triangle) {
+  if (!m_ahead) {
+    const unsigned threads = host_threads() - 1;
+    if (threads == 0) return;
+    ResolverOptions o = m_cfg.options;
+    o.work_done = nullptr;  // progress is the caller's, as tiles are taken
+    // One per thread, and one for a tile the caller takes before any thread started it.
+    for (unsigned t = 0; t <= threads; ++t) m_thread_resolvers.push_back(make_tile_resolver(m_cfg.mode, o));
+    m_ahead_per_triangle = per_triangle;
+    // A few tiles per thread waiting: enough to ride out uneven tiles, little memory.
+    m_ahead = std::make_unique<Ahead<Resolved>>(threads, 8 * size_t(threads),
+                                                [this](uint32_t tile, Resolved& r, unsigned worker) {
+                                                  resolve(tile, r, *m_thread_resolvers[worker], m_ahead_per_triangle);
+                                                });
+  }
+  if (per_triangle != m_ahead_per_triangle)
+    throw std::logic_error("resolve_ahead: per-triangle records asked for and not, in one tiler");
+  m_ahead->submit(tiles);
+}
+
 TileVerdict GoldenTiler::process_tile(uint32_t tile, std::vector<TileTriangleWork>* per_triangle) {
-  TileCounters c;
-  c.triangles = int64_t(m_frame.tile_triangles(tile).size());
-  c.edges = int64_t(m_frame.tile_edges(tile).size());
+  Resolved r;
+  m_report_progress = m_cfg.progress && !per_triangle;
+  const bool ahead = m_ahead && m_ahead->take(tile, r);
+  if (ahead && m_ahead_per_triangle != (per_triangle != nullptr))
+    throw std::logic_error("process_tile: per-triangle records not as resolve_ahead() was told");
+  if (!ahead) resolve(tile, r, *m_resolver, per_triangle != nullptr);
+  TileCounters& c = r.counters;
+  const TileVerdict& v = r.verdict;
+  m_r.add(std::move(r.out));
+  if (per_triangle) per_triangle->insert(per_triangle->end(), r.per_triangle.begin(), r.per_triangle.end());
   m_r.max_tile_triangles = std::max<uint64_t>(m_r.max_tile_triangles, uint64_t(c.triangles));
   m_r.max_tile_edges = std::max<uint64_t>(m_r.max_tile_edges, uint64_t(c.edges));
-  TileVerdict v;
-  m_report_progress = m_cfg.progress && !per_triangle;
-  if (c.triangles > 0) v = m_resolver->resolve(m_frame, tile, m_r, c, per_triangle);
   auto& row = m_r.tiles.rows[tile];
   c.write(row.data());
   if (m_falls_back) {
@@ -62,6 +106,9 @@ TileVerdict GoldenTiler::process_tile(uint32_t tile, std::vector<TileTriangleWor
       m_r.fallback_crossing_triangles += v.crossing_triangles;
     }
   }
+  // A tile resolved ahead reports its work here, as its resolve would have (golden.h: a tile
+  // weighs 1 + triangles x (edges + triangles)).
+  if (m_report_progress && ahead) m_work_done += uint64_t(c.triangles) * uint64_t(c.edges + c.triangles);
   if (m_report_progress) m_cfg.progress(m_work_done += 1, m_work_total);
   return v;
 }
@@ -73,6 +120,9 @@ GoldenResult golden_visibility(const Setup& s, const GoldenConfig& cfg) {
   r.samples = uint32_t(s.samples.size());
   GoldenTiler tiler(s, cfg, r);
   tiler.bin();
+  std::vector<uint32_t> tiles(tiler.tile_count());
+  for (uint32_t tile = 0; tile < tiler.tile_count(); ++tile) tiles[tile] = tile;
+  tiler.resolve_ahead(tiles, false);
   for (uint32_t tile = 0; tile < tiler.tile_count(); ++tile) tiler.process_tile(tile);
   sum_golden_totals(r);
   return r;

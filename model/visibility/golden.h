@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "tilevis/outputs.h"
+#include "visibility/parallel.h"
 #include "visibility/setup.h"
 #include "visibility/svg.h"
 #include "visibility/tile_resolver.h"
@@ -63,6 +64,7 @@ class GoldenTiler {
   // Sizes result.ids, result.visible_area and result.tiles; `setup`, `config` and
   // `result` must outlive the tiler. Throws std::invalid_argument for an unknown mode.
   GoldenTiler(const Setup& setup, const GoldenConfig& config, GoldenResult& result);
+  ~GoldenTiler();
   GoldenTiler(const GoldenTiler&) = delete;
   GoldenTiler& operator=(const GoldenTiler&) = delete;
 
@@ -81,7 +83,16 @@ class GoldenTiler {
   // not); per-pixel tiles' records count covered and owned samples only.
   TileVerdict process_tile(uint32_t tile, std::vector<TileTriangleWork>* per_triangle = nullptr);
 
+  // Tiles process_tile() will be asked for, in about that order: resolved meanwhile on
+  // host_threads() - 1 other threads (none: nothing happens), with per-triangle records or
+  // without (as process_tile() will be asked). The result is the same bits: process_tile()
+  // adds each tile's areas, pieces and counters to the result in the order it is called.
+  void resolve_ahead(const std::vector<uint32_t>& tiles, bool per_triangle);
+
  private:
+  struct Resolved;  // one tile's resolve, waiting for process_tile()
+  void resolve(uint32_t tile, Resolved& r, TileResolver& resolver, bool per_triangle);
+
   GoldenConfig m_cfg;
   GoldenResult& m_r;
   TileFrame m_frame;
@@ -89,6 +100,11 @@ class GoldenTiler {
   bool m_falls_back = false;  // the resolver adds per-pixel columns (hybrid)
   uint64_t m_work_done = 0, m_work_total = 0;
   bool m_report_progress = false;  // GoldenConfig::progress, not with per-triangle records
+  // resolve_ahead(): a resolver per thread and one for the caller, and the threads (last:
+  // stopped first).
+  std::vector<std::unique_ptr<TileResolver>> m_thread_resolvers;
+  bool m_ahead_per_triangle = false;
+  std::unique_ptr<Ahead<Resolved>> m_ahead;
 };
 
 // Frame totals of `result` (pair_tests .. fragments_generated) from its tile rows.

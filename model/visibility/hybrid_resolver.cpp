@@ -22,7 +22,7 @@ class HybridResolver final : public TileResolver {
   explicit HybridResolver(const ResolverOptions& o)
       : m_opt(o), m_analytic(make_analytic_resolver(o)), m_per_pixel(make_per_pixel_resolver(o)) {}
 
-  TileVerdict resolve(const TileFrame& f, uint32_t tile, FrameOutput& out, TileCounters& c,
+  TileVerdict resolve(const TileFrame& f, uint32_t tile, TileOutput& out, TileCounters& c,
                       std::vector<TileTriangleWork>* per_triangle) override {
     m_screens = m_tests = 0;
     TileVerdict v{fallback_cause(f, tile)};

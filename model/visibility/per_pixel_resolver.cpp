@@ -14,7 +14,7 @@ class PerPixelResolver final : public TileResolver {
  public:
   explicit PerPixelResolver(const ResolverOptions& o) : m_opt(o) {}
 
-  TileVerdict resolve(const TileFrame& f, uint32_t tile, FrameOutput& out, TileCounters& c,
+  TileVerdict resolve(const TileFrame& f, uint32_t tile, TileOutput& out, TileCounters& c,
                       std::vector<TileTriangleWork>* per_triangle) override {
     const auto& tris = f.tile_triangles(tile);
     if (tris.empty()) return {kPerPixelMode};
@@ -56,7 +56,7 @@ class PerPixelResolver final : public TileResolver {
           if (o < 0) continue;
           const uint32_t id = f.triangles()[tris[size_t(o)]].t->id;
           out.ids[zbuffer::sample_index(s, px, py, k)] = int32_t(id);
-          out.visible_area[id] += sample_area;
+          out.areas.emplace_back(id, sample_area);
           ++covered;
           if (per_triangle) ++(*per_triangle)[first_record + size_t(o)].counters.samples_covered;
         }

@@ -1,11 +1,20 @@
 #include "visibility/tile_resolver.h"
 
 #include <algorithm>
+#include <iterator>
 #include <stdexcept>
 
 #include "geom/overlap.h"
 
 namespace tilevis::vis {
+
+void FrameOutput::add(TileOutput&& tile) {
+  for (const auto& [id, area] : tile.areas) visible_area[id] += area;
+  pieces.insert(pieces.end(), std::make_move_iterator(tile.pieces.begin()), std::make_move_iterator(tile.pieces.end()));
+  visible_triangles += tile.visible_triangles;
+  shader_invocations += tile.shader_invocations;
+  max_tile_pieces = std::max(max_tile_pieces, tile.max_tile_pieces);
+}
 
 TileFrame::TileFrame(const Setup& s, const geom::TileGrid& grid) : m_s(s), m_grid(grid) {
   m_tris.reserve(s.triangles.size());

@@ -18,6 +18,7 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "geom/tile_grid.h"
@@ -69,7 +70,18 @@ struct TileTriangleWork {
   EvuShape shape;
 };
 
-// Where a resolver writes: frame-sized outputs shared by all tiles.
+// What one tile's resolve produces besides its counters. The tile's samples go straight into
+// the frame's ids (no two tiles share a sample, so tiles may be resolved on several threads at
+// once); the rest waits here, in the order it was produced, until FrameOutput::add() takes it
+// in the frame's tile order: a visible area is a sum of doubles, whose bits depend on its order.
+struct TileOutput {
+  int32_t* ids = nullptr;                          // the frame's ids (FrameOutput::ids)
+  std::vector<std::pair<uint32_t, double>> areas;  // (original triangle id, pixels²) as produced
+  std::vector<PlanarPiece> pieces;                 // visible pieces (ResolverOptions::keep_pieces)
+  uint64_t visible_triangles = 0, shader_invocations = 0, max_tile_pieces = 0;
+};
+
+// Where resolvers' tiles end up: frame-sized outputs shared by all tiles.
 struct FrameOutput {
   std::vector<int32_t> ids;            // per sample, original triangle id; -1 background
   std::vector<double> visible_area;    // per original triangle id, pixels²
@@ -77,6 +89,15 @@ struct FrameOutput {
   uint64_t visible_triangles = 0;      // visible pieces fan-triangulated (per-pixel tiles: none)
   uint64_t shader_invocations = 0;     // summed over triangles: the pixels where each shades some sample (MSAA)
   uint64_t max_tile_pieces = 0;        // most pieces of one triangle in one tile
+
+  // An empty TileOutput writing into these ids.
+  TileOutput tile_output() {
+    TileOutput t;
+    t.ids = ids.data();
+    return t;
+  }
+  // Adds a resolved tile's areas, pieces and sums (its ids are already in place).
+  void add(TileOutput&& tile);
 };
 
 // What a resolver reports about a tile besides its counters.
@@ -117,10 +138,11 @@ class TileResolver {
  public:
   virtual ~TileResolver() = default;
   // Decides tile `tile` of `frame` (after bin()): writes the tile's samples of out.ids and
-  // its triangles' visible areas, adds the tile's work to `counters` (triangles and edges
+  // appends its triangles' visible areas to out.areas, adds the tile's work to `counters` (triangles and edges
   // are the caller's), and with `per_triangle` appends one record per binned triangle, in
   // processing order, whose counters sum to what was added.
-  virtual TileVerdict resolve(const TileFrame& frame, uint32_t tile, FrameOutput& out, TileCounters& counters,
+  // A resolver holds scratch: one per thread.
+  virtual TileVerdict resolve(const TileFrame& frame, uint32_t tile, TileOutput& out, TileCounters& counters,
                               std::vector<TileTriangleWork>* per_triangle) = 0;
   // tiles.csv columns the mode adds after TileCounters::columns() (hybrid: per_pixel, per_pixel_cause).
   virtual std::vector<std::string> extra_columns() const { return {}; }

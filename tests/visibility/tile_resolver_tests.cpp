@@ -2,6 +2,7 @@
 // mode against the z-buffer truth (two producers of the one z-buffer rule), per-triangle
 // records that sum to their tile, tiles resolved in any order, and TileCounters' columns.
 #include <algorithm>
+#include <cstdlib>
 #include <numeric>
 #include <stdexcept>
 
@@ -107,6 +108,70 @@ TEST(TileResolver, RecordsSumToTheTileInAnyTileOrder) {
     for (size_t id = 0; id < r.visible_area.size(); ++id)  // summed in another order: equal to rounding
       EXPECT_NEAR(r.visible_area[id], reference.visible_area[id], 1e-9 * (1.0 + reference.visible_area[id]));
   }
+}
+
+// Tiles resolved ahead on other threads give golden's result bit for bit, visible areas and
+// kept pieces included (they wait per tile and are summed in the consumer's order), in every
+// mode, whatever order the consumer takes the tiles in. (The bunny: many triangles are split
+// into several pieces in one tile, whose areas' order shows in their sum.)
+TEST(TileResolver, AheadOnThreadsIsTheSameBits) {
+  const trace::Frame f = testsupport::shipped("bunny", 240, 135, 4);
+  const vis::Setup s = vis::primitive_setup(f, {});
+  const char* old = std::getenv("TILEVIS_THREADS");
+  const std::string saved = old ? old : "";
+  auto golden_with = [&](const char* threads, const vis::GoldenConfig& cfg) {
+    setenv("TILEVIS_THREADS", threads, 1);
+    return vis::golden_visibility(s, cfg);
+  };
+  for (const std::string& mode : vis::tile_resolver_modes()) {
+    SCOPED_TRACE(mode);
+    vis::GoldenConfig cfg = config(mode, 8);
+    cfg.options.keep_pieces = true;
+    const vis::GoldenResult one = golden_with("1", cfg);
+    const vis::GoldenResult four = golden_with("4", cfg);
+    EXPECT_EQ(four.ids, one.ids);
+    EXPECT_EQ(four.tiles.rows, one.tiles.rows);
+    EXPECT_EQ(four.visible_area, one.visible_area);  // bit for bit
+    ASSERT_EQ(four.pieces.size(), one.pieces.size());
+    for (size_t i = 0; i < one.pieces.size(); ++i) {
+      EXPECT_EQ(four.pieces[i].id, one.pieces[i].id) << i;
+      EXPECT_EQ(four.pieces[i].xy, one.pieces[i].xy) << i;
+    }
+    EXPECT_EQ(four.visible_triangles, one.visible_triangles);
+    EXPECT_EQ(four.shader_invocations, one.shader_invocations);
+    EXPECT_EQ(four.max_tile_pieces, one.max_tile_pieces);
+    EXPECT_EQ(four.fallback_tiles, one.fallback_tiles);
+    EXPECT_EQ(four.detection_tests, one.detection_tests);
+
+    // The model's way: per-triangle records, tiles queued in one order and taken in another.
+    auto records_with = [&](const char* threads, std::vector<double>& areas) {
+      setenv("TILEVIS_THREADS", threads, 1);
+      vis::GoldenResult r;
+      vis::GoldenTiler tiler(s, cfg, r);
+      tiler.bin();
+      std::vector<uint32_t> queued(tiler.tile_count()), taken;
+      std::iota(queued.begin(), queued.end(), 0u);
+      tiler.resolve_ahead(queued, true);
+      for (uint32_t t = 0; t < tiler.tile_count(); t += 2) taken.push_back(t);  // evens, then odds backwards
+      for (uint32_t t = tiler.tile_count() - 1 - tiler.tile_count() % 2; t < tiler.tile_count(); t -= 2) taken.push_back(t);
+      std::vector<std::pair<uint32_t, vis::TileCounters>> out;
+      for (uint32_t t : taken) {
+        std::vector<vis::TileTriangleWork> records;
+        tiler.process_tile(t, &records);
+        for (const auto& rec : records) out.emplace_back(rec.triangle, rec.counters);
+      }
+      areas = r.visible_area;
+      return out;
+    };
+    std::vector<double> areas_one, areas_four;
+    const auto records_one = records_with("1", areas_one);
+    const auto records_four = records_with("4", areas_four);
+    EXPECT_EQ(records_four.size(), records_one.size());
+    EXPECT_TRUE(records_four == records_one);
+    EXPECT_EQ(areas_four, areas_one);
+  }
+  if (old) setenv("TILEVIS_THREADS", saved.c_str(), 1);
+  else unsetenv("TILEVIS_THREADS");
 }
 
 TEST(TileCounters, ColumnsFollowTheFieldsAndRowsRoundTrip) {

@@ -1,7 +1,9 @@
 // Primitive setup, golden SVGPU pipeline and z-buffer truth on small scenes: golden
 // agrees with the truth sample for sample, runs are deterministic, clipping conserves
 // area, and the per-pixel modes count what they must.
+#include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <numeric>
 #include <stdexcept>
@@ -135,6 +137,54 @@ TEST(ForEachIndex, TilevisThreadsSetsTheCount) {
   EXPECT_EQ(order, (std::vector<size_t>{0, 1, 2, 3, 4}));
   if (old) setenv("TILEVIS_THREADS", saved.c_str(), 1);
   else unsetenv("TILEVIS_THREADS");
+}
+
+// Ahead: results handed over whatever order the consumer asks in, keys not queued left to the
+// caller, a thread's exception rethrown at its key, and never more than `window` results
+// computed and waiting.
+TEST(Ahead, HandsOverInAnyOrderWithinItsWindow) {
+  constexpr unsigned kThreads = 3;
+  constexpr size_t kWindow = 4;
+  std::atomic<int> waiting{0}, most{0};
+  std::atomic<bool> wrong_worker{false};
+  std::vector<std::atomic<bool>> by_thread(61);
+  vis::Ahead<int64_t> ahead(kThreads, kWindow, [&](uint32_t key, int64_t& r, unsigned worker) {
+    if (worker > kThreads) wrong_worker = true;
+    if (key == 13) throw std::runtime_error("thirteen");
+    r = int64_t(key) * key;
+    if (worker < kThreads) {
+      by_thread[key] = true;
+      const int now = ++waiting;
+      for (int m = most.load(); now > m && !most.compare_exchange_weak(m, now);) {}
+    }
+  });
+  std::vector<uint32_t> keys(60);
+  std::iota(keys.begin(), keys.end(), 0u);
+  ahead.submit(keys);
+  ahead.submit({5, 60});  // 5 is queued already; 60 is new
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));  // the threads fill the window
+  std::vector<uint32_t> order = {59, 1, 0, 60, 30, 2};
+  for (uint32_t k = 3; k < 59; ++k)
+    if (k != 30) order.push_back(k);
+  for (uint32_t k : order) {
+    int64_t r = -1;
+    if (k == 13) {
+      EXPECT_THROW(ahead.take(k, r), std::runtime_error);
+      continue;
+    }
+    ASSERT_TRUE(ahead.take(k, r)) << k;
+    EXPECT_EQ(r, int64_t(k) * k);
+    if (by_thread[k]) --waiting;  // a thread's result no longer waits
+  }
+  int64_t r = -1;
+  EXPECT_FALSE(ahead.take(7, r));    // taken already
+  EXPECT_FALSE(ahead.take(1000, r));  // never queued
+  EXPECT_EQ(r, -1);
+  EXPECT_FALSE(wrong_worker);
+  // The count here lags take() by one: a thread may start the next result between take()
+  // freeing its slot and the decrement above. Without the window it would reach about 60.
+  EXPECT_LE(most.load(), int(kWindow) + 1);
+  EXPECT_GE(most.load(), 1);
 }
 
 TEST(Setup, NearPlaneClipsIntoAFanWithOneId) {

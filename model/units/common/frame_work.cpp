@@ -380,6 +380,11 @@ uint32_t FrameWork::covering_fan(uint32_t id, geom::Point p) {
   throw std::logic_error("no setup triangle of triangle " + std::to_string(id) + " covers a sample it owns");
 }
 
+void FrameWork::resolve_ahead(const std::vector<uint32_t>& tiles) {
+  if (!m_seg) throw std::logic_error("resolve_ahead: no segment");
+  if (uses_evu(m_cfg.mode)) m_seg->golden->resolve_ahead(tiles, true);
+}
+
 void FrameWork::resolve_tile(TileWork& w) {
   if (w.resolved) return;
   if (uses_evu(m_cfg.mode)) resolve_analytic(w);

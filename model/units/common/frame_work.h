@@ -104,6 +104,9 @@ class FrameWork {
   uint32_t tile_triangle_count(uint32_t tile) const;        // binned in the open segment (before open_tile)
   uint32_t tile_edge_count(uint32_t tile) const;            // silhouette edges binned likewise (0: per-pixel modes)
   TileWork* open_tile(uint32_t tile);                        // TileFetch
+  // Tiles of the open segment about to be opened, in about that order: their visibility is
+  // resolved meanwhile on the host's other threads (the EVU modes; the same results).
+  void resolve_ahead(const std::vector<uint32_t>& tiles);
   void resolve_tile(TileWork& w);                            // the mode's visibility step
   void close_tile(TileWork* w);                              // TileWriter: results kept, work freed
   bool tile_closed(uint32_t tile) const;                     // in the open segment

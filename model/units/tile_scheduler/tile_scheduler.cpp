@@ -84,6 +84,7 @@ void TileScheduler::dispatch() {
     if (m_cfg.sampled) {
       dispatch_sampled(k, tiles);
     } else {
+      m_work.resolve_ahead(tiles);
       for (size_t i = 0; i < tiles.size(); ++i) send(k, tiles[i], i);
     }
     Item end;
@@ -166,6 +167,9 @@ void TileScheduler::dispatch_sampled(uint32_t segment, const std::vector<uint32_
       }
       std::sort(sent.begin(), sent.end());
       first_round = false;
+      std::vector<uint32_t> ahead(sent.size());
+      for (size_t i = 0; i < sent.size(); ++i) ahead[i] = tiles[sent[i].pos];
+      m_work.resolve_ahead(ahead);
       for (size_t i = 0; i < sent.size(); ++i) {
         sent[i].tile = tiles[sent[i].pos];
         sent[i].core = send(segment, sent[i].tile, i);
