@@ -12,6 +12,7 @@
 #include "tilevis/trace.h"
 #include "visibility/evu_jobs.h"
 #include "visibility/golden.h"
+#include "visibility/parallel.h"
 #include "visibility/setup.h"
 #include "visibility/svg.h"
 #include "visibility/truth.h"
@@ -148,7 +149,8 @@ int run_golden(const GoldenArgs& a, const trace::Frame& frame, uint32_t tw, uint
                {"config", config},
                {"totals", totals},
                {"stage_seconds", {{"setup", setup_s}, {"tiles", tiles_s}}},
-               {"host_seconds", setup_s + tiles_s}};
+               {"host_seconds", setup_s + tiles_s},
+               {"host_threads", vis::host_threads()}};
   outputs::write_result(out, a.out);
   if (!a.svg.empty()) vis::write_svg(a.svg, r.width, r.height, r.pieces);
   if (!a.dump_evu_jobs.empty()) {

@@ -25,8 +25,10 @@ struct Spawned {
 };
 
 // Starts argv with stdin from /dev/null and stdout + stderr into `log`; the child dies with
-// its parent (PR_SET_PDEATHSIG).
-Spawned spawn(const std::vector<std::string>& argv, const std::filesystem::path& log);
+// its parent (PR_SET_PDEATHSIG). `env`: "NAME=value" entries set in the child's environment
+// (replacing the parent's of the same names).
+Spawned spawn(const std::vector<std::string>& argv, const std::filesystem::path& log,
+              const std::vector<std::string>& env = {});
 
 // Runs argv to completion; its stdout and stderr in `output`. Returns the exit status (-1: not run).
 int run_capture(const std::vector<std::string>& argv, std::string* output);

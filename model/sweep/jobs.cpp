@@ -80,11 +80,11 @@ std::vector<Job> make_jobs(const Sweep& sw, const Plan& plan, const fs::path& ou
   return jobs;
 }
 
-Spawned start_job(const Job& job) {
+Spawned start_job(const Job& job, const std::vector<std::string>& env) {
   std::error_code ec;
   fs::create_directories(job.log.parent_path(), ec);
   for (const auto& [from, to] : job.command.renames) fs::create_directories(from.parent_path(), ec);
-  return spawn(job.command.argv, job.log);
+  return spawn(job.command.argv, job.log, env);
 }
 
 namespace {

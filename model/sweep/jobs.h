@@ -48,8 +48,8 @@ struct RunContext {
   nlohmann::json machine;
 };
 
-// Makes a job's output directories and starts it, its output into its log.
-Spawned start_job(const Job& job);
+// Makes a job's output directories and starts it, its output into its log; `env` as spawn()'s.
+Spawned start_job(const Job& job, const std::vector<std::string>& env = {});
 
 // What became of a job whose process ended with `status` (from wait4) after `wall` seconds:
 // renames its outputs into place and writes the point's process.json when it succeeded.

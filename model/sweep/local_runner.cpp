@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
+#include <cstdlib>
 #include <cstring>
 #include <set>
 #include <thread>
@@ -19,6 +20,7 @@
 #include "sweep/detail.h"
 #include "sweep/jobs.h"
 #include "sweep/progress.h"
+#include "visibility/parallel.h"
 
 namespace tilevis::sweep {
 
@@ -97,6 +99,10 @@ class LocalRunner {
         j.state = JobState::unavailable;
     m_sum.total = m_jobs.size();
     for (const Job& j : m_jobs) m_sum.already_done += j.state == JobState::done;
+    // Each job's share of the CPUs for its host threads (vis::host_threads), unless the user
+    // chose: `jobs` processes each with every CPU's worth of threads would oversubscribe them.
+    if (!std::getenv("TILEVIS_THREADS"))
+      m_env.push_back(fmt::format("TILEVIS_THREADS={}", std::max(1u, vis::host_threads() / std::max(1u, opt.jobs))));
   }
 
   RunSummary run() {
@@ -152,7 +158,7 @@ class LocalRunner {
       if (m_running >= m_opt.jobs) break;
       Job& j = m_jobs[i];
       if (!j.exclusive.empty() && m_held.count(j.exclusive)) continue;
-      Spawned s = start_job(j);
+      Spawned s = start_job(j, m_env);
       if (s.pid < 0) {
         j.state = JobState::failed;
         m_sum.failures.push_back(fmt::format("{}: {}", j.label, s.error));
@@ -269,6 +275,7 @@ class LocalRunner {
   RunSummary m_sum;
   EtaModel m_eta;
   std::set<std::string> m_held;  // exclusive resources in use
+  std::vector<std::string> m_env;  // set in every job's environment
   size_t m_running = 0;
   Clock::time_point m_last_report = Clock::now();
 };

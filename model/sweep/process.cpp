@@ -17,6 +17,7 @@
 #include <ctime>
 #include <fstream>
 #include <sstream>
+#include <string_view>
 #include <thread>
 
 #include <fmt/format.h>
@@ -53,10 +54,22 @@ std::string shell_quote(const std::string& s) {
 // Between fork and exec only async-signal-safe calls. The child asks the kernel to kill it
 // when its parent dies (PR_SET_PDEATHSIG), so a sweep killed with SIGKILL (or a Slurm task
 // cancelled) leaves no point writing into its folder.
-Spawned spawn(const std::vector<std::string>& argv, const fs::path& log) {
+Spawned spawn(const std::vector<std::string>& argv, const fs::path& log, const std::vector<std::string>& env) {
   std::vector<char*> args;
   for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
+  // The child's environment, made before fork (nothing after it may allocate).
+  std::vector<char*> envp;
+  for (char** e = environ; *e; ++e) {
+    const std::string_view entry(*e);
+    const bool replaced = std::any_of(env.begin(), env.end(), [&](const std::string& n) {
+      const size_t eq = n.find('=');
+      return entry.substr(0, entry.find('=')) == std::string_view(n).substr(0, eq);
+    });
+    if (!replaced) envp.push_back(*e);
+  }
+  for (const std::string& n : env) envp.push_back(const_cast<char*>(n.c_str()));
+  envp.push_back(nullptr);
   const std::string log_path = log.string();
   const pid_t parent = getpid();
   int err_pipe[2];
@@ -74,7 +87,7 @@ Spawned spawn(const std::vector<std::string>& argv, const fs::path& log) {
     if (in < 0 || out < 0 || dup2(in, 0) < 0 || dup2(out, 1) < 0 || dup2(out, 2) < 0) {
       e = errno;
     } else {
-      execvp(args[0], args.data());
+      execvpe(args[0], args.data(), envp.data());
       e = errno;
     }
     (void)!write(err_pipe[1], &e, sizeof e);

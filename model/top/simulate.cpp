@@ -13,6 +13,7 @@
 #include "top/heatmap_png.h"
 #include "top/tiler.h"
 #include "units/early_visibility_unit/rtl_evu.h"
+#include "visibility/parallel.h"
 
 namespace tilevis::sim {
 namespace {
@@ -139,7 +140,8 @@ SimOutput simulate(const trace::Frame& frame, const TilerConfig& config, const S
              {"systemc_reports", out.systemc_reports},
              {"sampling", fc.sampled ? tiler.scheduler().sampling_json() : nlohmann::json(nullptr)},
              {"host_seconds", out.host_seconds},
-             {"host_prepare_seconds", out.host_prepare_seconds}};
+             {"host_prepare_seconds", out.host_prepare_seconds},
+             {"host_threads", vis::host_threads()}};
   return out;
 }
 

@@ -13,6 +13,9 @@
 #include <exception>
 #include <functional>
 #include <mutex>
+#ifdef __linux__
+#include <sched.h>
+#endif
 #include <thread>
 #include <unordered_map>
 #include <utility>
@@ -21,13 +24,19 @@
 namespace tilevis::vis {
 
 // Threads to use: TILEVIS_THREADS when set to a positive number (1: everything on the calling
-// thread), else what the host offers.
+// thread), else the CPUs this process may run on (its affinity mask: what taskset, a Slurm
+// task's binding or a container's cpuset leave it; the host's count where there is none).
 inline unsigned host_threads() {
   if (const char* env = std::getenv("TILEVIS_THREADS")) {
     char* end = nullptr;
     const unsigned long n = std::strtoul(env, &end, 10);
     if (end != env && *end == '\0' && n > 0) return unsigned(std::min<unsigned long>(n, 1024));
   }
+#ifdef __linux__
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (sched_getaffinity(0, sizeof set, &set) == 0 && CPU_COUNT(&set) > 0) return unsigned(CPU_COUNT(&set));
+#endif
   return std::max(1u, std::thread::hardware_concurrency());
 }
 

@@ -18,6 +18,7 @@
 """
 import argparse
 import json
+import os
 import shutil
 import subprocess
 import sys
@@ -107,6 +108,12 @@ def main():
         same = r.returncode == 0 and totals(d / "stats.json") == totals(out / "points" / point / "stats.json")
         check(same, f"points/{point} equals `tilevis {' '.join(str(c) for c in cmd[:1] + cmd[2:])}`"
               + ("" if r.returncode == 0 else f" (exit {r.returncode}: {r.stderr[-300:]})"))
+    # Two jobs at a time share the CPUs' host threads (unless TILEVIS_THREADS says otherwise).
+    threads = int(os.environ["TILEVIS_THREADS"]) if os.environ.get("TILEVIS_THREADS", "").isdigit() \
+        else max(1, len(os.sched_getaffinity(0)) // 2)
+    used = {json.loads((out / pt["dir"] / "stats.json").read_text()).get("host_threads")
+            for pt in m["points"] if "/sim_tile-" in pt["dir"]}
+    check(used == {threads}, f"every sim point ran on {threads} host threads, its share of the CPUs: {used}")
     f0 = totals(out / "points/two_pass/f0-320x180-s1/sim_tile-hybrid/t16x16/stats.json")
     f1 = totals(out / "points/two_pass/f1-192x128-s1/sim_tile-hybrid/t16x16/stats.json")
     check(f0["triangles_in"] != f1["triangles_in"], "frames 0 and 1 are different points")

@@ -10,6 +10,8 @@
 #include <string>
 #include <thread>
 
+#include <sched.h>
+
 
 #include <gtest/gtest.h>
 
@@ -128,8 +130,22 @@ TEST(ForEachIndex, TilevisThreadsSetsTheCount) {
   EXPECT_EQ(vis::host_threads(), 1u);
   setenv("TILEVIS_THREADS", "3", 1);
   EXPECT_EQ(vis::host_threads(), 3u);
-  setenv("TILEVIS_THREADS", "zero", 1);  // not a count: the host's
-  EXPECT_EQ(vis::host_threads(), std::max(1u, std::thread::hardware_concurrency()));
+  setenv("TILEVIS_THREADS", "zero", 1);  // not a count: the CPUs this process may use
+  EXPECT_GE(vis::host_threads(), 1u);
+  EXPECT_LE(vis::host_threads(), std::max(1u, std::thread::hardware_concurrency()));
+  // Bound to one CPU (as taskset or a Slurm task of one CPU would), one thread.
+  cpu_set_t all, one;
+  ASSERT_EQ(sched_getaffinity(0, sizeof all, &all), 0);
+  CPU_ZERO(&one);
+  for (int c = 0; c < CPU_SETSIZE; ++c)
+    if (CPU_ISSET(c, &all)) {
+      CPU_SET(c, &one);
+      break;
+    }
+  ASSERT_EQ(sched_setaffinity(0, sizeof one, &one), 0);
+  EXPECT_EQ(vis::host_threads(), 1u);
+  ASSERT_EQ(sched_setaffinity(0, sizeof all, &all), 0);
+  EXPECT_EQ(vis::host_threads(), unsigned(CPU_COUNT(&all)));
   // One thread: every index on the calling thread, in order.
   setenv("TILEVIS_THREADS", "1", 1);
   std::vector<size_t> order;
