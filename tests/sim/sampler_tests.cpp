@@ -2,6 +2,7 @@
 // the normal quantile, rounds without replacement, an exact fit where the occupancy is a
 // linear function of the auxiliaries, the interval's coverage on a noisy population (fixed
 // seeds: deterministic), and the sample size the budget asks for.
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <set>
@@ -35,7 +36,7 @@ void observe_round(TileSampler& s, const std::vector<uint64_t>& round, const std
       }
       y += occupancy[p], x += triangles[p], ++m;
     }
-    s.observe_cluster(c, y, m, x);
+    s.observe_cluster(c, y, double(m), x);
   }
 }
 
@@ -96,6 +97,49 @@ TEST(Sampler, AnExactLinearPopulationIsEstimatedExactlyWithZeroWidth) {
   EXPECT_FALSE(e.complete);
   EXPECT_EQ(e.clusters_observed, 12u);
   EXPECT_EQ(e.tiles_observed, 48u);
+}
+
+// Tiles cut by the screen's bottom edge (a quarter of their rows gone) cost their share of a
+// full tile's fixed cost: with each tile's size as the regressor the estimate is exact from a
+// sample of full tiles alone; counting tiles, it would be a full tile's cost too high for each
+// cut tile (decals at 1080p: +1.09 % inside a zero-width interval).
+TEST(Sampler, TilesCutByTheScreenEdgeCountTheirShare) {
+  const size_t n = 400, row = 40;  // 10 rows of 40 tiles; the last row 24 of 32 pixel rows
+  std::vector<double> tris(n), size(n, 1.0), occ(n);
+  std::mt19937_64 rng(5);
+  for (size_t i = 0; i < n; ++i) {
+    if (i >= n - row) size[i] = 0.75;
+    tris[i] = double(rng() % 50);
+    occ[i] = 264.0 * size[i] + 3.0 * tris[i];
+  }
+  TileSampler s(tris, config(8, 3), 0, size);
+  // A round of clusters that holds none of the last row's.
+  std::vector<uint64_t> round;
+  while (round.size() < 6) {
+    for (uint64_t c : s.next_round(1))
+      if (s.cluster_end(c) <= n - row) round.push_back(c);
+  }
+  std::sort(round.begin(), round.end());
+  bool first = true;
+  for (uint64_t c : round) {
+    double y = 0, m = 0, x = 0;
+    for (uint64_t p = s.cluster_begin(c); p < s.cluster_end(c); ++p) {
+      if (first) {
+        s.observe_fill(occ[p]);
+        first = false;
+        continue;
+      }
+      y += occ[p], m += size[p], x += tris[p];
+    }
+    s.observe_cluster(c, y, m, x);
+  }
+  double sum_tris = 0, sum_size = 0;
+  for (size_t i = 0; i < n; ++i) sum_tris += tris[i], sum_size += size[i];
+  const double fill = occ[s.cluster_begin(round.front())];
+  const double share = double(n - 1) / double(n);  // all but the core's first tile, on average
+  const double expect = fill + (264.0 * sum_size + 3.0 * sum_tris) * share;
+  EXPECT_NEAR(s.estimate(1).cycles, expect, 1e-9 * expect);
+  EXPECT_THROW(TileSampler(tris, config(8, 3), 0, std::vector<double>(n - 1, 1.0)), std::invalid_argument);
 }
 
 TEST(Sampler, TheIntervalCoversTheTruthAtItsConfidence) {

@@ -192,7 +192,7 @@ void GeometryFrontEnd::sample_round(uint64_t want) {
         ++m;
       }
     }
-    sampler.observe_cluster(c, y, m, x);
+    sampler.observe_cluster(c, y, double(m), x);
   }
   g.estimate = sampler.estimate(1);
 }

@@ -21,10 +21,17 @@ double student_quantile(double confidence, double dof) {
   return boost::math::quantile(boost::math::complement(boost::math::students_t(dof), (1.0 - confidence) / 2));
 }
 
-TileSampler::TileSampler(std::vector<double> aux, const SamplingConfig& config, uint64_t stream)
+TileSampler::TileSampler(std::vector<double> aux, const SamplingConfig& config, uint64_t stream,
+                         const std::vector<double>& size)
     : m_tiles(aux.size()), m_cfg(config), m_z(normal_quantile(config.confidence)) {
   if (config.cluster_tiles == 0) throw std::invalid_argument("sampling: cluster_tiles must be at least 1");
+  if (!size.empty() && size.size() != aux.size()) throw std::invalid_argument("sampling: one size per unit");
   for (double t : aux) m_aux_total += t;
+  m_size_total = double(m_tiles);
+  if (!size.empty()) {
+    m_size_total = 0;
+    for (double t : size) m_size_total += t;
+  }
   m_clusters = (m_tiles + config.cluster_tiles - 1) / config.cluster_tiles;
   // Strata: the clusters sorted by their auxiliary (ties by position), cut where the running
   // total of (auxiliary + tiles) passes each equal share, at least two clusters a stratum:
@@ -109,9 +116,9 @@ std::vector<uint64_t> TileSampler::next_round(uint64_t count) {
   return r;
 }
 
-void TileSampler::observe_cluster(uint64_t c, double occupancy_sum, uint64_t tiles_observed, double aux) {
+void TileSampler::observe_cluster(uint64_t c, double occupancy_sum, double size, double aux) {
   m_y.push_back(occupancy_sum);
-  m_m.push_back(double(tiles_observed));
+  m_m.push_back(size);
   m_x.push_back(aux);
   m_h.push_back(m_stratum_of.at(c));
 }
@@ -171,10 +178,12 @@ TileSampler::Fit TileSampler::fit(uint32_t cores) const {
     if (f.n[h] == 1 && pooled_dof > 0) f.s2[h] = pooled / double(pooled_dof);
     else f.variance_known = false;
   }
-  // The population's tiles and auxiliary less the cores' first tiles (their cost is the fill).
+  // The population's size and auxiliary less the cores' first tiles' (average tiles: their
+  // cost is the fill).
   const double c = std::min<double>(std::max<uint32_t>(cores, 1), double(m_tiles));
-  const double tiles = double(m_tiles) - c;
-  const double aux = m_tiles ? m_aux_total * tiles / double(m_tiles) : 0.0;
+  const double share = m_tiles ? (double(m_tiles) - c) / double(m_tiles) : 0.0;
+  const double tiles = m_size_total * share;
+  const double aux = m_aux_total * share;
   // The generalised regression estimator: the fit's prediction plus the residuals expanded
   // by their design weights (zero where the model holds; it corrects a misspecified model).
   double residual_total = 0;

@@ -114,17 +114,26 @@ void TileScheduler::dispatch_sampled(uint32_t segment, const std::vector<uint32_
   std::vector<bool> certain_cluster = heavy_cluster;
   for (size_t c = 1; c < heavy_cluster.size(); ++c)
     if (heavy_cluster[c] && !heavy_cluster[c - 1]) certain_cluster[c - 1] = true;
+  // A tile's size: its pixels over a full tile's (the screen's right and bottom edges cut tiles).
+  const geom::TileGrid& grid = m_work.grid();
+  std::vector<double> size(tiles.size());
+  for (size_t i = 0; i < tiles.size(); ++i) {
+    const uint32_t tx = grid.tile_x(tiles[i]), ty = grid.tile_y(tiles[i]);
+    const uint32_t w = std::min(grid.tile_w, grid.width - tx * grid.tile_w), h = std::min(grid.tile_h, grid.height - ty * grid.tile_h);
+    size[i] = double(w) * double(h) / (double(grid.tile_w) * double(grid.tile_h));
+  }
   std::vector<size_t> sampled_pos, certain_pos;
-  std::vector<double> sampled_work;
+  std::vector<double> sampled_work, sampled_size;
   for (size_t i = 0; i < tiles.size(); ++i) {
     if (certain_cluster[i / ct]) {
       certain_pos.push_back(i);
     } else {
       sampled_pos.push_back(i);
       sampled_work.push_back(work[i]);
+      sampled_size.push_back(size[i]);
     }
   }
-  TileSampler sampler(sampled_work, m_cfg.sampling, segment);
+  TileSampler sampler(sampled_work, m_cfg.sampling, segment, sampled_size);
   SegmentSample rec;
   rec.segment = segment;
   rec.certain_tiles = certain_pos.size();
@@ -184,8 +193,8 @@ void TileScheduler::dispatch_sampled(uint32_t segment, const std::vector<uint32_
       // Occupancies: a core's tiles end in the order it got them.
       std::vector<uint64_t> last(m_cfg.cores, round_start);
       std::vector<bool> started(m_cfg.cores, false);
-      std::map<uint64_t, std::tuple<double, uint64_t, double>> clusters;  // y, m, x per sampled cluster
-      for (uint64_t c : round) clusters[c] = {0.0, 0, 0.0};
+      std::map<uint64_t, std::tuple<double, double, double>> clusters;  // y, m (size), x per sampled cluster
+      for (uint64_t c : round) clusters[c] = {0.0, 0.0, 0.0};
       for (const Sent& s : sent) {
         const uint64_t end = m_work.tile_end_cycle(s.tile);
         const double occupancy = double(end - last[s.core]);
@@ -200,7 +209,7 @@ void TileScheduler::dispatch_sampled(uint32_t segment, const std::vector<uint32_
         } else {
           auto& [y, m, x] = clusters[s.cluster];
           y += occupancy;
-          ++m;
+          m += size[s.pos];
           x += work[s.pos];
         }
       }
