@@ -9,6 +9,8 @@
 // No hand-sized buffers (SVGPU §4.3's failure): piece slots and polygon edges come from pools
 // with device-side bump counters. An item that finds its pool exhausted stops and is counted;
 // the host grows the pools from the counters and runs the frame again.
+#include <cstdlib>
+
 #include "pipeline.cuh"
 
 namespace tilevis::cuda {
@@ -41,6 +43,8 @@ struct ClipArgs {
   uint64_t* counters;
   uint32_t slot_factor;
   uint64_t n_items;
+  uint32_t long_chain;   // items of this many candidates or more: k_clip_long
+  uint32_t small_chain;  // items of fewer: a thread each (k_clip_items; 0: none)
 };
 
 // A run whose candidate list overflowed has per-item counts without all their records: it is
@@ -573,7 +577,7 @@ __global__ void __launch_bounds__(kLongBlockOf<P>, 1) k_clip_long(ClipArgs<P> a,
   for (uint64_t w = blockIdx.x; w < n; w += gridDim.x) {
     const uint32_t j = a.clip_items[w];
     const uint32_t c = a.cand_count[j];
-    if (c < kLongChain) continue;
+    if (c < a.long_chain) continue;
     if (candidates_overflowed(a) || uint64_t(a.cand_offset[j]) + c > a.cand_cap) continue;
     const uint64_t want = tmin<uint64_t>(piece_bound(c), uint64_t(a.slot_factor) * (c + 1));
     if (want <= kTreeSlots && c <= kTreeCands) clip_item_tree<P>(a, j, want, smem, ts);
@@ -592,6 +596,14 @@ __global__ void k_cand_scatter(ClipArgs<P> a, const uint64_t* count, uint64_t ca
   TV_GRID_LOOP(i, n) cand_scatter<P>(a, i);
 }
 inline constexpr uint32_t kClipBlock = 128;
+// Items of fewer candidates than this are clipped by a thread each in k_clip_items.
+inline constexpr uint32_t kSmallChain = 8;
+
+// A threshold from the environment (sweeps), else `def`.
+inline uint32_t env_count(const char* name, uint32_t def) {
+  const char* v = std::getenv(name);
+  return v && *v ? uint32_t(std::strtoul(v, nullptr, 10)) : def;
+}
 
 template <class P>
 __global__ void k_clip_items(ClipArgs<P> a, const uint64_t* count, uint64_t cap) {
@@ -599,8 +611,26 @@ __global__ void k_clip_items(ClipArgs<P> a, const uint64_t* count, uint64_t cap)
   const uint64_t warp = (uint64_t(blockIdx.x) * blockDim.x + threadIdx.x) / 32;
   const uint64_t warps = uint64_t(gridDim.x) * blockDim.x / 32;
   __shared__ uint64_t stage[kClipBlock / 32][kStageSlots];
-  for (uint64_t w = warp; w < n; w += warps)
-    if (a.cand_count[a.clip_items[w]] < kLongChain) clip_item<P>(a, w, WarpTeam{}, stage[threadIdx.x / 32]);
+  if (a.small_chain == 0) {
+    for (uint64_t w = warp; w < n; w += warps)
+      if (a.cand_count[a.clip_items[w]] < a.long_chain) clip_item<P>(a, w, WarpTeam{}, stage[threadIdx.x / 32]);
+    return;
+  }
+  // A warp takes 32 items at a time: those of fewer than small_chain candidates a lane each
+  // (the sequential loop, as on the host), then the others one after the other, the whole warp
+  // on each.
+  const uint32_t lane = threadIdx.x & 31u;
+  for (uint64_t w0 = warp * 32; w0 < n; w0 += warps * 32) {
+    const uint64_t w = w0 + lane;
+    const uint32_t c = w < n ? a.cand_count[a.clip_items[w]] : kNone;
+    if (c < a.small_chain && c < a.long_chain) clip_item<P>(a, w, HostTeam{}, nullptr);
+    uint32_t rest = __ballot_sync(0xffffffffu, c >= a.small_chain && c < a.long_chain);
+    while (rest != 0) {
+      const uint32_t k = uint32_t(ctz32(rest));
+      rest &= rest - 1u;
+      clip_item<P>(a, w0 + k, WarpTeam{}, stage[threadIdx.x / 32]);
+    }
+  }
 }
 
 }  // namespace
@@ -635,6 +665,10 @@ bool stage_clip(Pipeline<P>& p) {
   a.counters = p.counters.get();
   a.slot_factor = p.caps.slot_factor;
   a.n_items = ni;
+  static const uint32_t long_chain = env_count("TILEVIS_CLIP_LONG", kLongChain);
+  static const uint32_t small_chain = env_count("TILEVIS_CLIP_SMALL", kSmallChain);
+  a.long_chain = long_chain;
+  a.small_chain = small_chain;
 
   ex.exclusive_scan(a.cand_count, p.cand_offset.get(), p.N(kSzItems, ni), ni);
   ex.launch_dyn(k_cand_scatter<P>, cand_scatter<P>, p.counters.get() + kCandidates, p.caps.candidates, a);
