@@ -613,7 +613,7 @@ __global__ void k_cand_scatter(ClipArgs<P> a, const uint64_t* count, uint64_t ca
 inline constexpr uint32_t kClipBlock = 128;
 // Items of fewer candidates than this are clipped by a thread each in k_clip_items.
 template <class P>
-inline constexpr uint32_t kSmallChain = P::kExact ? 0 : 8;
+inline constexpr uint32_t kSmallChain = P::kExact ? 0 : 4;
 
 // A threshold from the environment (sweeps), else `def`.
 inline uint32_t env_count(const char* name, uint32_t def) {
@@ -627,9 +627,14 @@ __global__ void k_clip_items(ClipArgs<P> a, const uint64_t* count, uint64_t cap)
   const uint64_t warp = (uint64_t(blockIdx.x) * blockDim.x + threadIdx.x) / 32;
   const uint64_t warps = uint64_t(gridDim.x) * blockDim.x / 32;
   __shared__ uint64_t stage[kClipBlock / 32][kStageSlots];
-  // Items of fewer than small_chain candidates: a thread each (the sequential loop, as on the
-  // host), their slots and first edges reserved with one atomic per warp; then the others, a
-  // warp each.
+  // The items of small_chain candidates or more (below long_chain), a warp each.
+  for (uint64_t w = warp; w < n; w += warps) {
+    const uint32_t c = a.cand_count[a.clip_items[w]];
+    if (c >= a.small_chain && c < a.long_chain) clip_item<P>(a, w, WarpTeam{}, stage[threadIdx.x / 32]);
+  }
+  // Then the items of fewer than small_chain candidates, a thread each (the sequential loop, as
+  // on the host), their slots and first edges reserved with one atomic per warp: after the
+  // others, so that the longer chains start at once.
   const uint32_t lane = threadIdx.x & 31u;
   if (a.small_chain != 0 && !candidates_overflowed(a)) {
     const uint64_t threads = uint64_t(gridDim.x) * blockDim.x;
@@ -663,10 +668,6 @@ __global__ void k_clip_items(ClipArgs<P> a, const uint64_t* count, uint64_t cap)
       if (pre.chunk_at + kFirstGrab > a.pool_cap) pre.chunk_at = ~uint64_t{0};
       if (mine) clip_item<P>(a, w, HostTeam{}, nullptr, pre);
     }
-  }
-  for (uint64_t w = warp; w < n; w += warps) {
-    const uint32_t c = a.cand_count[a.clip_items[w]];
-    if (c >= a.small_chain && c < a.long_chain) clip_item<P>(a, w, WarpTeam{}, stage[threadIdx.x / 32]);
   }
 }
 
