@@ -2,13 +2,12 @@
 // the clipping, then the clipped ones'): the centroid of the piece's first three vertices
 // against the tile's original opaque triangles, nearest first (stable by z_min), stopping at
 // the first that hides it or at the first wholly behind it. A thread per piece, visiting only
-// the list entries whose bounding boxes can hold its point (the tile's cell masks, below);
+// the list entries whose bounding boxes can hold its point (the tile's cell masks, below),
+// except float's clipped pieces when they are few (a warp per piece, 32 entries at a time);
 // with finer occlusion bins, a thread per piece for the first kSoloOccluders entries of its
 // bin's list, then one warp per piece still undecided, its lanes judging 32 entries at a time.
 // Visible pieces get their exact area (doubled area terms rounded once each, summed in fan
 // order).
-#include <cstdlib>
-
 #include "pieces.cuh"
 
 namespace tilevis::cuda {
@@ -330,105 +329,20 @@ __global__ void k_occlude_cells(OccArgs<P> a, const uint64_t* count, uint64_t ca
   TV_GRID_LOOP(i, n) occlude_cells<P>(a, i);
 }
 
-// Float on the device: each thread makes its piece's query (tile polygon, interior point,
-// cell), then the warp searches the 32 pieces' lists one piece at a time, a lane per word
-// (32 words, 1,024 list entries, a round): each lane walks its word's set bits in order to
-// its first verdict that ends the search; the lowest lane with one decides, and the tests
-// counted are those of the lanes before it and its own (the sequential order); lanes past the
-// first word in which the search ends (its last entry behind the piece) have nothing to add.
-// The same verdicts, the same first hider and the same tests as scan_cells.
-__global__ void k_occlude_cells_warp(OccArgs<FloatP> a, const uint64_t* count, uint64_t cap) {
-  using P = FloatP;
+// The clipped pass in float: with fewer than kWarpSlots piece slots (every scene but million
+// at 1080p), a warp per piece over its whole list, 32 entries at a time (its list is long for
+// one thread's walk, and there are too few pieces to keep the threads busy: measured, the
+// thread walk took the bunny's clipped pass from 0.021 to 0.069 ms); with more, a thread per
+// piece through the cell masks (million: 0.82 -> about 0.36 ms). The same verdicts either way.
+inline constexpr uint64_t kWarpSlots = 65536;
+
+template <class P>
+__global__ void k_occlude_clipped_float(OccArgs<P> a, const uint64_t* count, uint64_t cap) {
   const uint64_t n = *count < cap ? *count : cap;
-  const uint32_t lane = threadIdx.x & 31u;
-  const uint64_t threads = uint64_t(gridDim.x) * blockDim.x;
-  for (uint64_t i0 = uint64_t(blockIdx.x) * blockDim.x + (threadIdx.x & ~31u); i0 < n; i0 += threads) {
-    const uint64_t i = i0 + lane, p = a.base + i;
-    PEdge<P> local[kTileCap];
-    OccQuery<P> o;
-    bool open = false;
-    if (i < n) {
-      if (p < a.src.n_items) count_unclipped<P>(a, p);
-      open = occ_query<P>(a, p, local, o);
-      if (!open) a.visible[p] = 0;
-    }
-    uint64_t b = 0, e = 0;
-    uint32_t cx = 0, cy = 0, tri = 0;
-    bool placed = false;
-    if (open) {
-      b = a.item_begin[o.v.tile];
-      e = b + o.n_occ;
-      tri = o.v.tri;
-      placed = fabs(o.qx) < 0x1p52 && fabs(o.qy) < 0x1p52;
-      if (placed) {
-        const Rect r = a.cells.grid.rect(o.v.tile);
-        cx = cell_of(int64_t(floor(o.qx)), r.x0, a.cells.cell_w);
-        cy = kCells + cell_of(int64_t(floor(o.qy)), r.y0, a.cells.cell_h);
-      }
-    }
-    uint32_t my_tests = 0;
-    bool my_hidden = false;
-    uint32_t pending = __ballot_sync(0xffffffffu, open && e > b);
-    while (pending != 0) {
-      const uint32_t src = uint32_t(__ffs(pending) - 1);
-      pending &= pending - 1u;
-      const uint64_t sb = __shfl_sync(0xffffffffu, static_cast<unsigned long long>(b), src);
-      const uint64_t se = __shfl_sync(0xffffffffu, static_cast<unsigned long long>(e), src);
-      const uint32_t scx = __shfl_sync(0xffffffffu, cx, src), scy = __shfl_sync(0xffffffffu, cy, src);
-      const bool splaced = __shfl_sync(0xffffffffu, placed ? 1u : 0u, src) != 0;
-      const uint32_t stri = __shfl_sync(0xffffffffu, tri, src);
-      P::R q;
-      q.x = __shfl_sync(0xffffffffu, open ? o.q.x : 0.0f, src);
-      q.y = __shfl_sync(0xffffffffu, open ? o.q.y : 0.0f, src);
-      const double qx = P::rx(q), qy = P::ry(q);
-      const TileTri<P>& tt = a.src.tris[stri];
-      const uint32_t z_max = tt.z_max;
-      uint32_t tests = 0;
-      int result = -1;
-      for (uint64_t w0 = sb / 32; w0 * 32 < se && result < 0; w0 += 32) {
-        const uint64_t w = w0 + lane;
-        const bool in = w * 32 < se;
-        uint32_t m = 0;
-        bool last = false;
-        if (in) {
-          const uint32_t lo = uint32_t(tmax<uint64_t>(sb, w * 32) - w * 32), hi = uint32_t(tmin<uint64_t>(se, w * 32 + 32) - w * 32);
-          m = splaced ? a.cell_mask[w * kCellWords + scx] & a.cell_mask[w * kCellWords + scy] : ~0u;
-          m &= (hi == 32 ? ~0u : (1u << hi) - 1u) & ~((1u << lo) - 1u);
-          last = a.occ[w * 32 + hi - 1].z_min > z_max;
-        }
-        const uint32_t lasts = __ballot_sync(0xffffffffu, last);
-        const uint32_t limit = lasts ? uint32_t(__ffs(lasts) - 1) : 31u;
-        uint32_t lane_tests = 0;
-        int lane_res = -1;  // 1 hides, 0 ends
-        if (lane <= limit) {
-          while (m != 0) {
-            const uint32_t k = uint32_t(__ffs(m) - 1);
-            m &= m - 1u;
-            const OccVerdict v = occluder_verdict<P>(q, qx, qy, tt, a.src.tris, a.occ[w * 32 + k]);
-            if (v == OccVerdict::ends) {
-              lane_res = 0;
-              break;
-            }
-            if (v == OccVerdict::skip) continue;
-            ++lane_tests;
-            if (v == OccVerdict::hides) {
-              lane_res = 1;
-              break;
-            }
-          }
-        }
-        const uint32_t decided = __ballot_sync(0xffffffffu, lane_res >= 0);
-        const uint32_t upto = decided ? uint32_t(__ffs(decided) - 1) : limit;
-        tests += __reduce_add_sync(0xffffffffu, lane <= upto ? lane_tests : 0u);
-        if (decided) result = __shfl_sync(0xffffffffu, lane_res, int(upto));
-        else if (lasts) result = 0;
-      }
-      if (lane == src) {
-        my_tests = tests;
-        my_hidden = result > 0;
-      }
-    }
-    if (open) occ_finish<P>(a, p, o.v, my_hidden, my_tests);
+  if (n < kWarpSlots) {
+    TV_WARP_LOOP(w, n) occlude_team<P>(a, a.base + w, 0, WarpTeam{});
+  } else {
+    TV_GRID_LOOP(i, n) occlude_cells<P>(a, i);
   }
 }
 
@@ -482,17 +396,8 @@ void stage_occlusion(Pipeline<P>& p, Pass pass) {
   if (p.obins_x * p.obins_y == 1) {  // both passes: a thread per piece through its cell's bits
     a.cells = cell_geometry(p.grid);
     a.cell_mask = p.occ_cells.get();
-    static const bool warp_scan = [] {
-      const char* v = std::getenv("TILEVIS_OCC_WARP");
-      return !(v && *v == '0');
-    }();
-    if constexpr (!P::kExact) {
-      if (ex.where == Where::gpu && warp_scan) {
-        ex.launch_dyn(k_occlude_cells_warp, occlude_cells<P>, r.count, r.cap, a);
-        return;
-      }
-    }
-    ex.launch_dyn(k_occlude_cells<P>, occlude_cells<P>, r.count, r.cap, a);
+    if (!P::kExact && pass == Pass::clipped) ex.launch_dyn(k_occlude_clipped_float<P>, occlude_cells<P>, r.count, r.cap, a);
+    else ex.launch_dyn(k_occlude_cells<P>, occlude_cells<P>, r.count, r.cap, a);
     return;
   }
   if (pass == Pass::clipped) {
