@@ -459,6 +459,9 @@ void stage_binning(Pipeline<P>& p) {
   ex.sort_pairs(a.occ_key, p.occ_key_sorted.need(ni + 1), a.occ_tri, p.occ_tri_sorted.need(ni + 1), n_items,
                 tile_bits + d + 1, ni, true);
   ex.launch(k_gather_occ<P>, gather_occ<P>, n_items, OccGatherArgs<P>{p.tris.get(), p.occ_tri_sorted.get(), p.occ_rec.need(ni + 1)});
+  const uint32_t bw = c.occlusion_bin_w && c.occlusion_bin_w < c.tile_w ? c.occlusion_bin_w : c.tile_w;
+  const uint32_t bh = c.occlusion_bin_h && c.occlusion_bin_h < c.tile_h ? c.occlusion_bin_h : c.tile_h;
+  if (bw == c.tile_w && bh == c.tile_h) occlusion_cells(p);
   ex.on_main();
   ex.sort_pairs(a.item_key, p.item_key_sorted.need(ni + 1), a.item_tri, p.item_tri_sorted.need(ni + 1), n_items,
                 tile_bits, ni, true);
@@ -468,8 +471,6 @@ void stage_binning(Pipeline<P>& p) {
   // Finer occlusion bins: (bin, record) pairs counted, emitted in record order, sorted
   // stably by bin (so records keep their tile order in each bin), gathered.
   p.obins_x = p.obins_y = 1;
-  const uint32_t bw = c.occlusion_bin_w && c.occlusion_bin_w < c.tile_w ? c.occlusion_bin_w : c.tile_w;
-  const uint32_t bh = c.occlusion_bin_h && c.occlusion_bin_h < c.tile_h ? c.occlusion_bin_h : c.tile_h;
   if (bw != c.tile_w || bh != c.tile_h) {
     if (p.dev) throw std::runtime_error("cuda: finer occlusion bins read a size on the host (no device-sized run)");
     ex.merge(1);  // on the main stream: the pair count is read

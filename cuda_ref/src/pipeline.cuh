@@ -286,8 +286,7 @@ struct Pipeline {
   Buf<uint32_t> slot_item;         // per piece slot, its item (kNone: unused)
   Buf<uint8_t> piece_visible;
   Buf<uint64_t> heavy;             // occlusion (unclipped, finer bins): pieces queued for a warp each
-  Buf<uint32_t> occ_units;         // occlusion by tiles: work units per tile, and their scan
-  Buf<uint64_t> occ_unit_off;
+  Buf<uint32_t> occ_cells;         // occlusion (finer bins off): the occluder lists' cell masks
   Buf<double> piece_area;
 
   // Hybrid (hybrid.cu): per tile its verdict and detection work; per occluder position the
@@ -306,12 +305,12 @@ struct Pipeline {
                     &tedge_id_sorted, &tile_item_begin, &tile_edge_begin, &tile_occ_count, &area_item,
                     &area_item_sorted, &piece_count, &cand_count, &cand_cursor, &cand_offset,
                     &cand_edges, &cand_scratch, &clip_items, &item_slot, &indices, &tri_draw, &sample_xy,
-                    &obin_cnt, &obin_val, &obin_val_sorted, &obin_begin, &obin_count, &slot_item, &occ_units, &big_tris,
+                    &obin_cnt, &obin_val, &obin_val_sorted, &obin_begin, &obin_count, &slot_item, &occ_cells, &big_tris,
                     &big_edges, &long_folds})
       b->bind(&e);
     for (auto* b : {&sizes, &fan_offset, &use_key, &sil_offset, &sil_key, &sil_key_sorted,
                     &front_offset, &tri_tiles_off, &edge_tiles_off, &item_key, &item_key_sorted, &occ_key,
-                    &occ_key_sorted, &tedge_key, &tedge_key_sorted, &area_key, &area_key_sorted, &deep, &cands, &slot_poly, &counters, &heavy, &occ_unit_off,
+                    &occ_key_sorted, &tedge_key, &tedge_key_sorted, &area_key, &area_key_sorted, &deep, &cands, &slot_poly, &counters, &heavy,
                     &obin_off, &obin_key, &obin_key_sorted})
       b->bind(&e);
     vertices.bind(&e);
@@ -381,6 +380,8 @@ bool pools_fit(Pipeline<P>& p, const uint64_t* c);
 enum class Pass;
 template <class P>
 void stage_occlusion(Pipeline<P>& p, Pass pass);
+template <class P>
+void occlusion_cells(Pipeline<P>& p);  // finer bins off: the sorted occluder records' cell masks (binning, side 1)
 template <class P>
 void raster_begin(Pipeline<P>& p);  // clears the id buffer, before either raster pass
 template <class P>
