@@ -166,15 +166,21 @@ TV_HD void count_unclipped(const OccArgs<P>& a, uint64_t j) {
 
 // First pass, one thread per piece over the first `solo` entries of its list; a piece still
 // undecided is queued for the second pass.
+// A piece's search begins: an unclipped piece is counted and its query made; false (the piece
+// marked not visible) when there is nothing to search.
+template <class P>
+TV_HD bool begin_piece(const OccArgs<P>& a, uint64_t p, PEdge<P>* local, OccQuery<P>& o) {
+  if (p < a.src.n_items) count_unclipped<P>(a, p);
+  if (occ_query<P>(a, p, local, o)) return true;
+  a.visible[p] = 0;
+  return false;
+}
+
 template <class P>
 TV_HD void occlude_first(const OccArgs<P>& a, uint64_t p, uint32_t solo) {
-  if (p < a.src.n_items) count_unclipped<P>(a, p);
   PEdge<P> local[kTileCap];
   OccQuery<P> o;
-  if (!occ_query<P>(a, p, local, o)) {
-    a.visible[p] = 0;
-    return;
-  }
+  if (!begin_piece<P>(a, p, local, o)) return;
   const TileTri<P>& tt = a.src.tris[o.v.tri];
   uint32_t tests = 0;
   solo = tmin(o.n_occ, solo);
@@ -311,13 +317,9 @@ TV_HD int scan_cells(const OccArgs<P>& a, const OccQuery<P>& o, const TileTri<P>
 template <class P>
 TV_HD void occlude_cells(const OccArgs<P>& a, uint64_t i) {
   const uint64_t p = a.base + i;
-  if (p < a.src.n_items) count_unclipped<P>(a, p);
   PEdge<P> local[kTileCap];
   OccQuery<P> o;
-  if (!occ_query<P>(a, p, local, o)) {
-    a.visible[p] = 0;
-    return;
-  }
+  if (!begin_piece<P>(a, p, local, o)) return;
   uint32_t tests = 0;
   const int r = scan_cells<P>(a, o, a.src.tris[o.v.tri], tests);
   occ_finish<P>(a, p, o.v, r > 0, tests);
