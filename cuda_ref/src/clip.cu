@@ -9,8 +9,6 @@
 // No hand-sized buffers (SVGPU §4.3's failure): piece slots and polygon edges come from pools
 // with device-side bump counters. An item that finds its pool exhausted stops and is counted;
 // the host grows the pools from the counters and runs the frame again.
-#include <cstdlib>
-
 #include "pipeline.cuh"
 
 namespace tilevis::cuda {
@@ -43,9 +41,11 @@ struct ClipArgs {
   uint64_t* counters;
   uint32_t slot_factor;
   uint64_t n_items;
-  uint32_t long_chain;   // items of this many candidates or more: k_clip_long
-  uint32_t small_chain;  // items of fewer: a thread each (k_clip_items; 0: none) ...
-  uint64_t small_min_items;  // ... when there are at least this many items
+  // The thresholds below, as values (kSmallChain is 0 in exact, where a constant would make
+  // k_clip_items' comparisons pointless to the compiler):
+  uint32_t long_chain;       // kLongChain: items of this many candidates or more go to k_clip_long
+  uint32_t small_chain;      // kSmallChain: items of fewer, a thread each (k_clip_items; 0: none) ...
+  uint64_t small_min_items;  // kSmallMinItems: ... when there are at least this many items
 };
 
 // A run whose candidate list overflowed has per-item counts without all their records: it is
@@ -619,12 +619,6 @@ template <class P>
 inline constexpr uint32_t kSmallChain = P::kExact ? 0 : 8;
 inline constexpr uint32_t kSmallMinItems = 16384;
 
-// A threshold from the environment (sweeps), else `def`.
-inline uint32_t env_count(const char* name, uint32_t def) {
-  const char* v = std::getenv(name);
-  return v && *v ? uint32_t(std::strtoul(v, nullptr, 10)) : def;
-}
-
 template <class P>
 __global__ void k_clip_items(ClipArgs<P> a, const uint64_t* count, uint64_t cap) {
   const uint64_t n = *count < cap ? *count : cap;
@@ -711,10 +705,8 @@ bool stage_clip(Pipeline<P>& p) {
   a.counters = p.counters.get();
   a.slot_factor = p.caps.slot_factor;
   a.n_items = ni;
-  static const uint32_t long_chain = env_count("TILEVIS_CLIP_LONG", kLongChain);
-  static const uint32_t small_chain = env_count("TILEVIS_CLIP_SMALL", kSmallChain<P>);
-  a.long_chain = long_chain;
-  a.small_chain = small_chain;
+  a.long_chain = kLongChain;
+  a.small_chain = kSmallChain<P>;
   a.small_min_items = kSmallMinItems;
 
   ex.exclusive_scan(a.cand_count, p.cand_offset.get(), p.N(kSzItems, ni), ni);

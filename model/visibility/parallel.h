@@ -84,7 +84,7 @@ class Ahead {
   // thread calls submit() and take().
   using Fn = std::function<void(uint32_t, Result&, unsigned)>;
 
-  Ahead(unsigned threads, size_t window, Fn fn) : m_fn(std::move(fn)), m_threads(threads), m_window(window) {
+  Ahead(unsigned threads, size_t window, Fn fn) : m_fn(std::move(fn)), m_window(window) {
     for (unsigned t = 0; t < threads; ++t) m_pool.emplace_back([this, t] { run(t); });
   }
   ~Ahead() {
@@ -119,13 +119,13 @@ class Ahead {
     if (s.state == State::queued) {
       s.state = State::taken;
       lock.unlock();
-      m_fn(key, result, m_threads);
+      m_fn(key, result, caller());
       return true;
     }
     // A thread is on it: meanwhile the caller computes the next queued result, if any.
     while (s.state != State::done) {
       if (Slot* next = next_queued())
-        compute(*next, m_threads, lock);
+        compute(*next, caller(), lock);
       else
         m_done.wait(lock);
     }
@@ -148,6 +148,8 @@ class Ahead {
     Result result{};
     std::exception_ptr error;
   };
+
+  unsigned caller() const { return unsigned(m_pool.size()); }  // the caller's worker index
 
   // The next queued slot a thread may start within the window (null: none), marked running.
   // Called with the lock held.
@@ -191,7 +193,6 @@ class Ahead {
   }
 
   Fn m_fn;
-  unsigned m_threads;
   size_t m_window;
   std::mutex m_m;
   std::condition_variable m_work, m_done;

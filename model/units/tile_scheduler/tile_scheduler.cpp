@@ -5,6 +5,8 @@
 #include <map>
 #include <tuple>
 
+#include "visibility/zbuffer.h"
+
 namespace tilevis::sim {
 namespace {
 
@@ -118,9 +120,8 @@ void TileScheduler::dispatch_sampled(uint32_t segment, const std::vector<uint32_
   const geom::TileGrid& grid = m_work.grid();
   std::vector<double> size(tiles.size());
   for (size_t i = 0; i < tiles.size(); ++i) {
-    const uint32_t tx = grid.tile_x(tiles[i]), ty = grid.tile_y(tiles[i]);
-    const uint32_t w = std::min(grid.tile_w, grid.width - tx * grid.tile_w), h = std::min(grid.tile_h, grid.height - ty * grid.tile_h);
-    size[i] = double(w) * double(h) / (double(grid.tile_w) * double(grid.tile_h));
+    const vis::zbuffer::PixelRect r = vis::zbuffer::tile_pixels(grid, tiles[i]);
+    size[i] = double(r.x1 - r.x0) * double(r.y1 - r.y0) / (double(grid.tile_w) * double(grid.tile_h));
   }
   std::vector<size_t> sampled_pos, certain_pos;
   std::vector<double> sampled_work, sampled_size;
