@@ -11,10 +11,6 @@
 //     kInlineTiles tiles of 64 samples (8x8 pixels at 1 sample) bins itself: per tile, the
 //     exact edge test over the tile's rectangle, then a rank in the tile's list (atomic count)
 //     and a (tile, rank, record) pair. A larger one appends a unit per coarse bin of 8x8 tiles.
-//     A tiny one (unclipped, its pixel box at most kDirectSamples samples) is rastered by its own
-//     thread instead, as a naive rasteriser would: each covered sample is merged into the id
-//     buffer by CAS, keeping the nearer in the exact order of step 5 (a tiny triangle's id is its
-//     record, slot t, so the id buffer doubles as their owner words). It makes no bin entry.
 //  3. units: a warp per (big triangle, coarse bin): the coarse bin's rectangle first (one edge
 //     test for 64 tiles), then its tiles, a lane per two, as in 2.
 //  4. an exclusive scan of the tiles' counts; a thread per pair puts its record at offset + rank.
@@ -26,7 +22,6 @@
 //     the tile's warp takes the first kSegment records and queues the rest as helper items; a
 //     warp per helper merges its nearest into the tile's per-sample owner word by CAS (the
 //     order is total, so the merge is order-free), and the last helper of a tile writes its ids.
-//     A tile's nearest is merged with the tiny triangles' owner in the id buffer before it is written.
 // Per sample the depth numerator N = alpha x + beta y + gamma (area z) is exact: with depth
 // bits D <= 26 every plane is "small" (geom/depth.h): |N| < 2^(51+D), |N area| < 2^(100+D) <=
 // 2^126: I128. Every buffer is sized from capacities learned by earlier frames; device counters
@@ -47,7 +42,6 @@ namespace {
 constexpr uint32_t kTileSamples = 64;  // a fine tile: a warp, two samples a lane
 constexpr uint32_t kCoarse = 8;        // a coarse bin: 8x8 tiles (a big triangle's unit of work)
 constexpr uint32_t kInlineTiles = 16;  // at most this many tiles in its box: a triangle bins itself
-constexpr uint32_t kDirectSamples = 8; // at most this many samples in its pixel box: rastered by its thread
 constexpr uint32_t kRasterBlock = 128;
 constexpr uint32_t kWarpsPerBlock = kRasterBlock / 32;
 
@@ -57,13 +51,12 @@ constexpr uint32_t kWarpsPerBlock = kRasterBlock / 32;
 // shared by every thread), then the tiles' counts (uint32), all in one allocation, one memset.
 // kZBig: big triangles << 40 | their units (one atomic takes both, so a big triangle's first
 // unit grows with its index and a unit finds its triangle by binary search); kZTiles: the tiles
-// with a non-empty list (the first entry of a tile appends it). The spread words: the drawn
-// triangles (group 0), the tiny ones rastered by their own thread (group 1).
+// with a non-empty list (the first entry of a tile appends it).
 enum ZCounter : uint32_t { kZRecords, kZPairs, kZBig, kZHelpers, kZRare, kZTiles, kZCounterCount };
 constexpr uint32_t kZUnitBits = 40;
 constexpr uint64_t kZUnitMask = (uint64_t{1} << kZUnitBits) - 1;
 constexpr uint32_t kZSpread = 32;
-constexpr uint32_t kZCounterWords = kZCounterCount + 2 * kZSpread;
+constexpr uint32_t kZCounterWords = kZCounterCount + kZSpread;
 
 // A front opaque setup triangle (48 bytes): its snapped vertices and its setup order,
 // trace triangle << 3 | fan position (a fan has at most 7 triangles).
@@ -229,7 +222,7 @@ TV_HD inline void put_pair(const ZArgs& a, uint64_t p, uint32_t tile, uint32_t s
 // A small triangle's tiles: those of its box (at most kInlineTiles) that the exact edge test
 // keeps, as bits of the box in row-major order.
 struct Inline {
-  uint32_t slot = kNone, mask = 0, drawn = 0, direct = 0;
+  uint32_t slot = kNone, mask = 0, drawn = 0;
   int32_t tx0 = 0, ty0 = 0, w = 1, h = 1;
   TV_HD uint32_t count() const { return popc(mask); }
   // Pairs p, p + 1, ... for the kept tiles in row-major order (no division by the box's width).
@@ -252,9 +245,6 @@ TV_HD inline uint64_t* spread(const ZArgs& a, uint32_t which) {
   return a.ctr + kZCounterCount + which * kZSpread;
 #endif
 }
-
-// A tiny triangle rastered by its own thread (step 2; defined with the raster, step 5).
-TV_HD void zb_direct(const ZArgs& a, const ZRec& r, uint32_t slot, const TileBox& b);
 
 // One setup triangle (fan position k of trace triangle t) into record `slot` (kNone: take one
 // from the clipped pool), if front-facing (facing > 0 is the trace triangle's; the snapped
@@ -279,12 +269,6 @@ TV_HD inline void zb_triangle(const ZArgs& a, uint64_t t, uint32_t k, const Vtx&
   r.v[2] = v2;
   r.order = uint32_t(t) << 3 | k;
   r.pad[0] = r.pad[1] = r.pad[2] = 0;
-  if (slot == uint32_t(t) && uint64_t(b.px1 - b.px0 + 1) * uint64_t(b.py1 - b.py0 + 1) * a.samples <= kDirectSamples) {
-    a.rec[slot] = r;
-    in.direct = 1;
-    zb_direct(a, r, slot, b);
-    return;
-  }
   const uint64_t n_tiles = uint64_t(b.tx1 - b.tx0 + 1) * uint64_t(b.ty1 - b.ty0 + 1);
   if (n_tiles > kInlineTiles) {
     const int64_t cx0 = b.tx0 / kCoarse, cx1 = b.tx1 / kCoarse, cy0 = b.ty0 / kCoarse, cy1 = b.ty1 / kCoarse;
@@ -357,7 +341,6 @@ TV_HD void zb_rare(const ZArgs& a, uint64_t r) {
   const uint64_t t = a.rare[r];
   const Inline in = zb_trace_triangle(a, t, false);
   if (in.drawn) count_add(spread(a, 0), 1);
-  if (in.direct) count_add(spread(a, 1), 1);
   const uint64_t p0 = bump(&a.ctr[kZPairs], in.count(), a.pair_cap);
   in.put(a, p0 == ~uint64_t{0} ? a.pair_cap : p0);
 }
@@ -366,7 +349,6 @@ TV_HD void zb_rare(const ZArgs& a, uint64_t r) {
 void zb_trace_triangle_host(const ZArgs& a, uint64_t t) {
   const Inline in = zb_trace_triangle(a, t, false);
   if (in.drawn) count_add(spread(a, 0), 1);
-  if (in.direct) count_add(spread(a, 1), 1);
   const uint64_t p0 = bump(&a.ctr[kZPairs], in.count(), a.pair_cap);
   in.put(a, p0 == ~uint64_t{0} ? a.pair_cap : p0);
 }
@@ -391,8 +373,6 @@ __global__ void __launch_bounds__(kTriBlock, 3) k_zb_triangles(ZArgs a, uint64_t
     if (lane == 31) warp_total[w] = incl;
     const int drawn = __syncthreads_count(in.drawn);
     if (threadIdx.x == 0 && drawn) atomicAdd(reinterpret_cast<unsigned long long*>(spread(a, 0)), uint64_t(drawn));
-    const int direct = __syncthreads_count(in.direct);
-    if (threadIdx.x == 0 && direct) atomicAdd(reinterpret_cast<unsigned long long*>(spread(a, 1)), uint64_t(direct));
     if (threadIdx.x == 0) {
       uint32_t sum = 0;
       for (uint32_t k = 0; k < kTriBlock / 32; ++k) {
@@ -496,23 +476,18 @@ struct ZSample {
   bool inside;
 };
 
-// Sample k of pixel (px, py).
-TV_HD inline ZSample sample_at(const ZArgs& a, int32_t px, int32_t py, uint32_t k) {
-  ZSample s;
-  s.px = px;
-  s.py = py;
-  s.inside = px < int32_t(a.width) && py < int32_t(a.height);
-  const uint32_t sxy = a.sample_xy[k];
-  s.x = (int64_t(px) << a.sb) + (sxy & 0xffffu);
-  s.y = (int64_t(py) << a.sb) + (sxy >> 16);
-  s.out = (uint64_t(py) * a.width + uint64_t(px)) * a.samples + k;
-  return s;
-}
-
 TV_HD inline ZSample sample_of(const ZArgs& a, uint64_t tile, uint32_t u) {
   const uint32_t k = u & (a.samples - 1), p = u >> a.ls;
   const uint32_t ty = uint32_t(tile) / a.tiles_x, tx = uint32_t(tile) - ty * a.tiles_x;
-  return sample_at(a, int32_t((tx << a.ltw) + (p & (a.tw - 1))), int32_t((ty << a.lth) + (p >> a.ltw)), k);
+  ZSample s;
+  s.px = int32_t((tx << a.ltw) + (p & (a.tw - 1)));
+  s.py = int32_t((ty << a.lth) + (p >> a.ltw));
+  s.inside = s.px < int32_t(a.width) && s.py < int32_t(a.height);
+  const uint32_t sxy = a.sample_xy[k];
+  s.x = (int64_t(s.px) << a.sb) + (sxy & 0xffffu);
+  s.y = (int64_t(s.py) << a.sb) + (sxy >> 16);
+  s.out = (uint64_t(s.py) * a.width + uint64_t(s.px)) * a.samples + k;
+  return s;
 }
 
 TV_HD inline void test_sample(const ZDer& d, const ZSample& s, Owner& o) {
@@ -534,75 +509,22 @@ TV_HD inline void test_sample(const ZDer& d, const ZSample& s, Owner& o) {
 
 TV_HD inline int32_t id_of(uint32_t order) { return order == kNone ? -1 : int32_t(order >> 3); }
 
-// Record `slot`. Coherent: as read by another thread of the kernel that wrote it (step 2's tiny
-// triangles), from L2, past this SM's L1, after a fence that pairs with the writer's.
-template <bool Coherent>
-TV_HD inline ZRec load_rec(const ZArgs& a, uint32_t slot) {
-#if defined(__CUDA_ARCH__)
-  if (!Coherent) return a.rec[slot];
-  __threadfence();
-  static_assert(sizeof(ZRec) % sizeof(int4) == 0, "a record is whole int4 words");
-  union {
-    int4 w[sizeof(ZRec) / sizeof(int4)];
-    ZRec r;
-  } u;
-  const int4* p = reinterpret_cast<const int4*>(a.rec + slot);
-  for (uint32_t i = 0; i < sizeof(ZRec) / sizeof(int4); ++i) u.w[i] = __ldcg(p + i);
-  return u.r;
-#else
-  return a.rec[slot];
-#endif
-}
-
-// The owner `slot` of a sample as `nearer` compares it: its record's exact depth there.
-template <bool Coherent = false>
-TV_HD inline Owner holder(const ZArgs& a, const ZSample& s, uint32_t slot) {
-  const ZDer c = derive(load_rec<Coherent>(a, slot), slot, a.sb);
-  return {I128{c.alpha} * s.x + I128{c.beta} * s.y + c.gamma, c.area, c.order, slot};
-}
-
-// Merges `o` into an owner word: replaced while nearer (a total order: the result does not
-// depend on which comes first). Coherent: the records are being written by the same kernel.
-template <bool Coherent>
-TV_HD inline void merge_into(const ZArgs& a, uint32_t* word, const ZSample& s, const Owner& o) {
+// Merges a helper's nearest into the tile's owner word of the sample: replaced while nearer (a
+// total order: the result does not depend on which helper comes first).
+TV_HD inline void merge_owner(const ZArgs& a, const ZSample& s, const Owner& o) {
   if (o.slot == kNone) return;
-  uint32_t cur = kNone;
+  uint32_t cur = a.owner[s.out];
   while (true) {
-    const uint32_t seen = atomic_cas(word, cur, o.slot);
+    if (cur != kNone) {
+      const ZDer c = derive(a.rec[cur], cur, a.sb);
+      const I128 n = I128{c.alpha} * s.x + I128{c.beta} * s.y + c.gamma;
+      const Owner co{n, c.area, c.order, cur};
+      if (!nearer(o.n, o.area, o.order, co)) return;
+    }
+    const uint32_t seen = atomic_cas(&a.owner[s.out], cur, o.slot);
     if (seen == cur) return;
     cur = seen;
-    if (!nearer(o.n, o.area, o.order, holder<Coherent>(a, s, cur))) return;
   }
-}
-
-// A helper's nearest into the tile's owner word of the sample.
-TV_HD inline void merge_owner(const ZArgs& a, const ZSample& s, const Owner& o) { merge_into<false>(a, &a.owner[s.out], s, o); }
-
-// The id buffer as the tiny triangles' owner words (kNone = -1: none; a tiny triangle's record is
-// slot t, its id t).
-TV_HD inline uint32_t* direct_word(const ZArgs& a, const ZSample& s) { return reinterpret_cast<uint32_t*>(a.ids) + s.out; }
-
-// A tile's nearest at a sample against the tiny triangles' owner there (set before the raster).
-TV_HD inline Owner with_direct(const ZArgs& a, const ZSample& s, const Owner& o) {
-  const uint32_t h = *direct_word(a, s);
-  if (h == kNone) return o;
-  const Owner c = holder(a, s, h);
-  return o.slot != kNone && nearer(o.n, o.area, o.order, c) ? o : c;
-}
-
-TV_HD void zb_direct(const ZArgs& a, const ZRec& r, uint32_t slot, const TileBox& b) {
-#if defined(__CUDA_ARCH__)
-  __threadfence();  // the record before any owner word names it
-#endif
-  const ZDer d = derive(r, slot, a.sb);
-  for (int64_t py = b.py0; py <= b.py1; ++py)
-    for (int64_t px = b.px0; px <= b.px1; ++px)
-      for (uint32_t k = 0; k < a.samples; ++k) {
-        const ZSample s = sample_at(a, int32_t(px), int32_t(py), k);
-        Owner o;
-        test_sample(d, s, o);
-        merge_into<true>(a, direct_word(a, s), s, o);
-      }
 }
 
 // After a tile's list: ids written (the whole list done), or the owner words and its helpers
@@ -637,9 +559,8 @@ void zb_tile_host(const ZArgs& a, uint64_t tile) {
   for (uint32_t u = 0; u < kTileSamples; ++u) {
     const ZSample s = sample_of(a, tile, u);
     if (!s.inside) continue;
-    const Owner m = with_direct(a, s, o[u]);
-    if (cut < end) a.owner[s.out] = m.slot;
-    else a.ids[s.out] = id_of(m.order);
+    if (cut < end) a.owner[s.out] = o[u].slot;
+    else a.ids[s.out] = id_of(o[u].order);
   }
   if (cut < end) queue_helpers(a, tile, cut, end);
 }
@@ -812,14 +733,12 @@ __global__ void __launch_bounds__(kRasterBlock, 5) k_zb_tiles(ZArgs a) {
     sm_clear(sm[w]);
     warp_part(a, tile, begin, cut, sm[w], stage[w], screen, s0, s1);
     const OwnerS &o0 = sm[w][lane], &o1 = sm[w][lane + 32];
-    const Owner m0 = s0.inside ? with_direct(a, s0, Owner{o0.n, o0.area, o0.order, o0.slot}) : Owner{};
-    const Owner m1 = s1.inside ? with_direct(a, s1, Owner{o1.n, o1.area, o1.order, o1.slot}) : Owner{};
     if (cut == end) {
-      if (s0.inside) a.ids[s0.out] = id_of(m0.order);
-      if (s1.inside) a.ids[s1.out] = id_of(m1.order);
+      if (s0.inside) a.ids[s0.out] = id_of(o0.order);
+      if (s1.inside) a.ids[s1.out] = id_of(o1.order);
     } else {
-      if (s0.inside) a.owner[s0.out] = m0.slot;
-      if (s1.inside) a.owner[s1.out] = m1.slot;
+      if (s0.inside) a.owner[s0.out] = o0.slot;
+      if (s1.inside) a.owner[s1.out] = o1.slot;
       if (lane == 0) queue_helpers(a, tile, cut, end);
     }
     __syncwarp();
@@ -1251,8 +1170,6 @@ ZBufferResult run_cuda_zbuffer(const trace::Frame& frame, const CudaConfig& cfg,
     r.triangles_drawn = 0;
     for (uint32_t k = 0; k < kZSpread; ++k) r.triangles_drawn += got[kZCounterCount + k];
     r.bin_entries = got[kZPairs];
-    r.direct = 0;
-    for (uint32_t k = 0; k < kZSpread; ++k) r.direct += got[kZCounterCount + kZSpread + k];
     r.retries = retries;
   }
   return r;

@@ -32,7 +32,7 @@ nlohmann::json zbuffer_json(const cuda::ZBufferResult& z) {
   nlohmann::json st = nlohmann::json::object();
   for (const auto& s : z.stage_ms) st[s.name] = s.ms;
   return {{"total_ms", z.total_ms}, {"stage_ms", st}, {"runs", z.runs}, {"host_syncs", z.host_syncs},
-          {"triangles_drawn", z.triangles_drawn}, {"bin_entries", z.bin_entries}, {"direct_triangles", z.direct}, {"skipped", z.skipped},
+          {"triangles_drawn", z.triangles_drawn}, {"bin_entries", z.bin_entries}, {"skipped", z.skipped},
           {"retries", z.retries},
           {"bin", std::to_string(z.bin_w) + "x" + std::to_string(z.bin_h)}};
 }

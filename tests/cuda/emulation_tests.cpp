@@ -304,31 +304,6 @@ TEST(Emulation, ZBufferTiledOnShippedScenes) {
   }
 }
 
-// The tiled z-buffer's two paths meeting: the bunny's tiny triangles rastered by their own
-// threads into the id buffer, its larger ones binned into tile lists whose raster merges with
-// them, in a scrambled order, at 1 and 4 samples (4: fewer tiny ones), from default and tiny pools.
-TEST(Emulation, ZBufferTinyTrianglesMeetTheTiles) {
-  for (uint32_t samples : {1u, 4u}) {
-    tilevis::scene::BuildOptions o;
-    o.width = 400;
-    o.height = 300;
-    o.samples = samples;
-    const trace::Frame f =
-        tilevis::scene::build_trace(std::filesystem::path(TILEVIS_SOURCE_DIR) / "traces/scenes/bunny.json", o).frames.at(0);
-    const std::vector<int32_t> truth = ct::truth_ids_of(f);
-    for (uint32_t pool : {0u, 4u}) {
-      auto cfg = ct::config(cuda::Device::cpu, cuda::Precision::exact, 32, 32);
-      cfg.shuffle_cpu = true;
-      cfg.initial_pool = pool;
-      const auto z = cuda::run_cuda_zbuffer(f, cfg, cuda::ZBufferKind::tiled);
-      EXPECT_GT(z.direct, 0u) << samples;
-      EXPECT_GT(z.bin_entries, 0u) << samples;
-      EXPECT_LT(z.direct, z.triangles_drawn) << samples;
-      EXPECT_EQ(z.ids, truth) << samples << " pool " << pool;
-    }
-  }
-}
-
 // A shipped mesh scene (the Stanford bunny) at a small viewport, built by the scene generator.
 TEST(Emulation, ShippedBunnyAgrees) {
   tilevis::scene::BuildOptions o;

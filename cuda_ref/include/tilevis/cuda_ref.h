@@ -169,7 +169,6 @@ struct ZBufferResult {
   uint32_t retries = 0;          // tiled: frames run again after a pool overflowed (learning capacities)
   uint64_t triangles_drawn = 0;  // tiled: front opaque setup triangles; naive: trace triangles rastered
   uint64_t bin_entries = 0;      // tiled: (tile, triangle) pairs
-  uint64_t direct = 0;           // tiled: tiny triangles rastered by their own thread (no pair)
   uint64_t skipped = 0;          // naive: opaque triangles not drawn (near plane, guard band)
   uint32_t bin_w = 0, bin_h = 0;
   std::string device_name;
