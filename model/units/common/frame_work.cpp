@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <future>
 #include <numeric>
 #include <stdexcept>
 #include <string>
@@ -9,6 +10,7 @@
 #include <systemc>
 
 #include "units/early_visibility_unit/rtl_evu.h"
+#include "visibility/parallel.h"
 #include "visibility/evu_jobs.h"
 
 namespace tilevis::sim {
@@ -139,6 +141,46 @@ void FrameWork::run_setup() {
 }
 
 void FrameWork::run_binning() {
+  // Edge owners: the first front-facing triangle of the draw with the edge as one of its own.
+  // They read the setup alone: on a host with a second core they are found beside the binning.
+  auto find_owners = [this] {
+    const size_t n_edges = m_setup.silhouettes.size();
+    std::vector<uint32_t> owner(n_edges, kNone);
+    if (uses_evu(m_cfg.mode) && n_edges > 0) {
+      std::unordered_map<EdgeKey, uint32_t, EdgeKeyHash> by_key;
+      by_key.reserve(n_edges * 2);
+      // A bit per hash value (16 or more bits per edge): most triangle edges are no silhouette,
+      // and one clear bit says so without a look-up in the map.
+      const EdgeKeyHash hash;
+      std::vector<uint64_t> maybe(std::bit_ceil(std::max<size_t>(n_edges / 4, 1)), 0);
+      const size_t mask = maybe.size() * 64 - 1;
+      for (uint32_t e = 0; e < n_edges; ++e) {
+        const auto& se = m_setup.silhouettes[e];
+        const EdgeKey key = edge_key(se.draw, se.a, se.b);
+        const size_t h = hash(key) & mask;
+        maybe[h / 64] |= uint64_t(1) << (h % 64);
+        by_key.emplace(key, e);
+      }
+      for (const vis::SetupTriangle& t : m_setup.triangles) {
+        if (!t.front) continue;
+        for (int k = 0; k < 3; ++k) {
+          const EdgeKey key = edge_key(t.draw, t.v[k], t.v[(k + 1) % 3]);
+          const size_t h = hash(key) & mask;
+          if (!(maybe[h / 64] >> (h % 64) & 1)) continue;
+          auto it = by_key.find(key);
+          if (it != by_key.end() && owner[it->second] == kNone) owner[it->second] = t.id;
+        }
+      }
+      // An edge no front triangle claims (none expected: a silhouette has a front triangle)
+      // rides with the last triangle of its draw.
+      std::vector<uint32_t> draw_last(m_frame.draws.size(), 0);
+      for (uint32_t id = 0; id < m_trace_triangles; ++id) draw_last[m_setup.triangle_draw[id]] = id;
+      for (uint32_t e = 0; e < n_edges; ++e)
+        if (owner[e] == kNone) owner[e] = draw_last[m_setup.silhouettes[e].draw];
+    }
+    return owner;
+  };
+  auto owners = std::async(vis::host_threads() > 1 ? std::launch::async : std::launch::deferred, find_owners);
   m_full.width = m_setup.width;
   m_full.height = m_setup.height;
   m_full.samples = samples();
@@ -171,40 +213,7 @@ void FrameWork::run_binning() {
             .count();
   }
 
-  // Edge owners: the first front-facing triangle of the draw with the edge as one of its own.
-  std::vector<uint32_t> owner(n_edges, kNone);
-  if (uses_evu(m_cfg.mode) && n_edges > 0) {
-    std::unordered_map<EdgeKey, uint32_t, EdgeKeyHash> by_key;
-    by_key.reserve(n_edges * 2);
-    // A bit per hash value (16 or more bits per edge): most triangle edges are no silhouette,
-    // and one clear bit says so without a look-up in the map.
-    const EdgeKeyHash hash;
-    std::vector<uint64_t> maybe(std::bit_ceil(std::max<size_t>(n_edges / 4, 1)), 0);
-    const size_t mask = maybe.size() * 64 - 1;
-    for (uint32_t e = 0; e < n_edges; ++e) {
-      const auto& se = m_setup.silhouettes[e];
-      const EdgeKey key = edge_key(se.draw, se.a, se.b);
-      const size_t h = hash(key) & mask;
-      maybe[h / 64] |= uint64_t(1) << (h % 64);
-      by_key.emplace(key, e);
-    }
-    for (const vis::SetupTriangle& t : m_setup.triangles) {
-      if (!t.front) continue;
-      for (int k = 0; k < 3; ++k) {
-        const EdgeKey key = edge_key(t.draw, t.v[k], t.v[(k + 1) % 3]);
-        const size_t h = hash(key) & mask;
-        if (!(maybe[h / 64] >> (h % 64) & 1)) continue;
-        auto it = by_key.find(key);
-        if (it != by_key.end() && owner[it->second] == kNone) owner[it->second] = t.id;
-      }
-    }
-    // An edge no front triangle claims (none expected: a silhouette has a front triangle)
-    // rides with the last triangle of its draw.
-    std::vector<uint32_t> draw_last(m_frame.draws.size(), 0);
-    for (uint32_t id = 0; id < m_trace_triangles; ++id) draw_last[m_setup.triangle_draw[id]] = id;
-    for (uint32_t e = 0; e < n_edges; ++e)
-      if (owner[e] == kNone) owner[e] = draw_last[m_setup.silhouettes[e].draw];
-  }
+  const std::vector<uint32_t> owner = owners.get();
   m_owned_begin.assign(size_t(m_trace_triangles) + 1, 0);
   for (uint32_t o : owner)
     if (o != kNone) ++m_owned_begin[o + 1];
