@@ -23,21 +23,31 @@
 
 namespace tilevis::vis {
 
+// A positive count in environment variable `name`, else 0.
+inline unsigned long env_count(const char* name) {
+  const char* env = std::getenv(name);
+  if (!env) return 0;
+  char* end = nullptr;
+  const unsigned long n = std::strtoul(env, &end, 10);
+  return end != env && *end == '\0' ? n : 0;
+}
+
 // Threads to use: TILEVIS_THREADS when set to a positive number (1: everything on the calling
 // thread), else the CPUs this process may run on (its affinity mask: what taskset, a Slurm
-// task's binding or a container's cpuset leave it; the host's count where there is none).
+// task's binding or a container's cpuset leave it; the host's count where there is none), and
+// inside a Slurm job at most the CPUs the job holds on its node (SLURM_CPUS_ON_NODE): without
+// task binding every task's mask is the whole node, and the array tasks sharing it would each
+// start a thread per CPU.
 inline unsigned host_threads() {
-  if (const char* env = std::getenv("TILEVIS_THREADS")) {
-    char* end = nullptr;
-    const unsigned long n = std::strtoul(env, &end, 10);
-    if (end != env && *end == '\0' && n > 0) return unsigned(std::min<unsigned long>(n, 1024));
-  }
+  if (const unsigned long n = env_count("TILEVIS_THREADS")) return unsigned(std::min<unsigned long>(n, 1024));
+  unsigned cpus = std::max(1u, std::thread::hardware_concurrency());
 #ifdef __linux__
   cpu_set_t set;
   CPU_ZERO(&set);
-  if (sched_getaffinity(0, sizeof set, &set) == 0 && CPU_COUNT(&set) > 0) return unsigned(CPU_COUNT(&set));
+  if (sched_getaffinity(0, sizeof set, &set) == 0 && CPU_COUNT(&set) > 0) cpus = unsigned(CPU_COUNT(&set));
 #endif
-  return std::max(1u, std::thread::hardware_concurrency());
+  if (const unsigned long job = env_count("SLURM_CPUS_ON_NODE")) cpus = unsigned(std::min<unsigned long>(cpus, job));
+  return cpus;
 }
 
 // Runs fn(i, scratch) for every i in [0, n) on up to host_threads() threads, each with a

@@ -126,6 +126,9 @@ TEST(ForEachIndex, VisitsEveryIndexOnceAndRethrowsTheLowestFailure) {
 TEST(ForEachIndex, TilevisThreadsSetsTheCount) {
   const char* old = std::getenv("TILEVIS_THREADS");
   const std::string saved = old ? old : "";
+  const char* old_slurm = std::getenv("SLURM_CPUS_ON_NODE");
+  const std::string saved_slurm = old_slurm ? old_slurm : "";
+  unsetenv("SLURM_CPUS_ON_NODE");
   setenv("TILEVIS_THREADS", "1", 1);
   EXPECT_EQ(vis::host_threads(), 1u);
   setenv("TILEVIS_THREADS", "3", 1);
@@ -146,6 +149,18 @@ TEST(ForEachIndex, TilevisThreadsSetsTheCount) {
   EXPECT_EQ(vis::host_threads(), 1u);
   ASSERT_EQ(sched_setaffinity(0, sizeof all, &all), 0);
   EXPECT_EQ(vis::host_threads(), unsigned(CPU_COUNT(&all)));
+  // A Slurm job of one CPU whose task is not bound (its mask is the whole node): one thread.
+  setenv("SLURM_CPUS_ON_NODE", "1", 1);
+  EXPECT_EQ(vis::host_threads(), 1u);
+  setenv("SLURM_CPUS_ON_NODE", "4096", 1);  // more than the mask holds: the mask
+  EXPECT_EQ(vis::host_threads(), unsigned(CPU_COUNT(&all)));
+  setenv("SLURM_CPUS_ON_NODE", "two", 1);  // not a count: ignored
+  EXPECT_EQ(vis::host_threads(), unsigned(CPU_COUNT(&all)));
+  setenv("TILEVIS_THREADS", "3", 1);  // the user's count wins
+  setenv("SLURM_CPUS_ON_NODE", "1", 1);
+  EXPECT_EQ(vis::host_threads(), 3u);
+  if (old_slurm) setenv("SLURM_CPUS_ON_NODE", saved_slurm.c_str(), 1);
+  else unsetenv("SLURM_CPUS_ON_NODE");
   // One thread: every index on the calling thread, in order.
   setenv("TILEVIS_THREADS", "1", 1);
   std::vector<size_t> order;
