@@ -32,6 +32,7 @@ struct CullArgs {
   uint64_t* cands;
   uint64_t cand_cap;
   uint64_t n_items;
+  uint32_t lanes;         // threads per item (kCullLanes unless a trial sets it)
 };
 
 namespace {
@@ -43,8 +44,8 @@ namespace {
 // cheap tests go to the exact tests.
 template <class P>
 TV_HD void cull_item(const CullArgs<P>& a, uint64_t i) {
-  const uint64_t j = i / kCullLanes;
-  const uint32_t lane = uint32_t(i % kCullLanes);
+  const uint64_t j = i / a.lanes;
+  const uint32_t lane = uint32_t(i % a.lanes);
   const uint32_t tile = uint32_t(a.item_key[j]);
   const TileTri<P>& tt = a.tris[a.item_tri[j]];
   if (lane == 0) a.cand_count[j] = a.cand_cursor[j] = 0;
@@ -74,7 +75,7 @@ TV_HD void cull_item(const CullArgs<P>& a, uint64_t i) {
   if (lo == 0) return;
   if (lane == 0) count_add(&a.rows[uint64_t(tile) * kTileColumns + kColPairTests], lo);
   const Rect tb = tt.bbox;
-  for (uint32_t k = begin + lane; k < begin + lo; k += kCullLanes) {
+  for (uint32_t k = begin + lane; k < begin + lo; k += a.lanes) {
     // Bounding boxes that at most touch: the segment cannot meet the interior (test 2). The
     // boxes are streamed in the tile's order; the edge itself is read only past this test.
     const Rect eb = a.tedge_box[k];
@@ -147,7 +148,8 @@ void stage_cull(Pipeline<P>& p) {
   a.cands = p.cands.need(p.caps.candidates);
   a.cand_cap = p.caps.candidates;
   a.n_items = ni;
-  ex.launch(k_cull_item<P>, cull_item<P>, p.N(kSzCullLanes, ni * kCullLanes), a);
+  a.lanes = p.cull_lanes;
+  ex.launch(k_cull_item<P>, cull_item<P>, p.N(kSzCullLanes, ni * p.cull_lanes), a);
   ex.launch_dyn(k_cull_exact<P>, cull_exact<P>, p.counters.get() + kDeepPairs, p.caps.deep_pairs, a);
 }
 
