@@ -36,6 +36,7 @@ struct HashArgs {
   uint32_t* sil_use;
   uint64_t key_base;  // vertices + 1: the sort key of (lo, hi) is lo * key_base + hi (a boundary's hi: vertices)
   uint32_t mode;      // kHash* bits
+  const uint32_t* front;  // per setup triangle: front-facing (setup's flags), or null: read setup
   uint64_t stride;    // kHashLocal: slots per vertex index
 };
 
@@ -45,6 +46,8 @@ struct HashArgs {
 // L2), then on from the key's hash over the whole table (a vertex of very many edges spills
 // there instead of making a long run). Inserts and finds walk the same sequence.
 inline constexpr uint32_t kHashLocal = 1, kHashWide = 2, kHashWarp = 4, kLocalProbes = 32;
+
+TV_HD inline uint32_t front_of(const HashArgs& a, uint64_t u) { return a.front ? a.front[u / 3] : a.setup[u / 3].front; }
 
 TV_HD inline uint64_t probe_first(const HashArgs& a, uint64_t key, uint64_t hk) {
   if (a.mode & kHashLocal) return ((key >> 32) * a.stride + (hk & 15)) & a.mask;
@@ -143,7 +146,7 @@ TV_HD void hash_insert(const HashArgs& a, uint64_t u) {
   if (key == kSkip || is_boundary(key)) return;
 #if defined(__CUDA_ARCH__)
   if (a.mode & (kHashWide | kHashWarp)) {
-    uint64_t count = 1, fronts = a.setup[u / 3].front, forwards = a.use_forward[u];
+    uint64_t count = 1, fronts = front_of(a, u), forwards = a.use_forward[u];
     uint64_t inv_first = uint64_t(~uint32_t(u));
     if (a.mode & kHashWarp) {  // the uses of one key in this warp's active lanes, added by its lowest lane
       const unsigned group = __match_any_sync(__activemask(), static_cast<unsigned long long>(key));
@@ -169,7 +172,7 @@ TV_HD void hash_insert(const HashArgs& a, uint64_t u) {
   }
 #endif
   const uint64_t h = find_slot(a, key, true);
-  const uint64_t front = a.setup[u / 3].front, forward = a.use_forward[u];
+  const uint64_t front = front_of(a, u), forward = a.use_forward[u];
   // Payload: uses, front uses and forward uses in 10 bits each (saturating: only "two" matters),
   // the complement of the lowest use index in the high 32 bits.
   uint64_t* p = &a.slots[h].payload;
@@ -192,7 +195,7 @@ TV_HD void hash_judge(const HashArgs& a, uint64_t u) {
   if (key == kSkip) {
     sil = 0;
   } else if (is_boundary(key)) {
-    sil = a.setup[u / 3].front;
+    sil = front_of(a, u);
   } else {
     const uint64_t c = a.slots[find_slot(a, key, false)].payload;  // keys are never moved: the find's walk ends at it
     if (~uint32_t(c >> 32) == uint32_t(u)) {
@@ -321,6 +324,8 @@ void stage_silhouettes(Pipeline<P>& p) {
              p.sil_flag.need(uses + 1), p.sil_offset.need(uses + 1), nullptr,       nullptr, 0};
   h.mode = ex.where == Where::gpu ? knob("TILEVIS_X_HASH", kHashLocal | kHashWide) : knob("TILEVIS_X_HASH", kHashLocal) & kHashLocal;
   h.stride = tmax<uint64_t>(1, cap / (p.f.n_vertices + 1));
+  const bool front_block = knob("TILEVIS_X_FRONT", 1) != 0;  // setup wrote the front flags
+  if (front_block && knob("TILEVIS_X_HFRONT", 1)) h.front = p.front_flag.get();
   // The table is all zeros between runs: cleared once when (re)allocated, and after each run's
   // last use on a side stream, off the stages' chain.
   if (p.hash_clean_at != h.slots || p.hash_clean < cap) ex.zero(h.slots, cap * sizeof(HashSlot));
@@ -332,7 +337,6 @@ void stage_silhouettes(Pipeline<P>& p) {
   // Front triangles beside the hash (side stream 0), scanned here so that one read brings back
   // both counts.
   FrontArgs<P> fa{p.setup.get(), p.front_flag.need(p.n_setup + 1), p.front_offset.need(p.n_setup + 1), nullptr};
-  const bool front_block = knob("TILEVIS_X_FRONT", 1) != 0;  // setup wrote the front flags
   ex.branch(0);
   if (!front_block) ex.launch(k_front_flag<P>, front_flag<P>, n_setup, fa);
   ex.exclusive_scan(fa.flag, p.front_offset.get(), n_setup, p.n_setup);
