@@ -374,7 +374,6 @@ void stage_binning(Pipeline<P>& p) {
   p.n_tiles = p.tiles_x * p.tiles_y;
   p.grid = {c.tile_w, c.tile_h, p.tiles_x, p.tiles_y, p.f.subpixel_bits, p.f.width, p.f.height};
   const uint32_t tiles = p.n_tiles;
-  p.cull_lanes = knob("TILEVIS_X_CULL_LANES", kCullLanes);
   int64_t* rows = p.tile_rows.need(uint64_t(tiles) * kTileColumns);
   ex.zero(rows, uint64_t(tiles) * kTileColumns * 8);
   uint32_t* occ_count = p.tile_occ_count.need(tiles);
@@ -418,7 +417,7 @@ void stage_binning(Pipeline<P>& p) {
     p.n_tile_edges = p.caps.tile_edges;
     const uint64_t ni = p.n_items, ne = p.n_tile_edges;
     SizeArgs s{p.sizes.get(), 2, {p.tri_tiles_off.get() + p.n_tris, p.edge_tiles_off.get() + p.n_edges},
-               {ni, ne}, 0, p.cull_lanes,
+               {ni, ne}, 0, kCullLanes,
                {{p.item_key.need(ni + 1), 0, ni}, {p.occ_key.need(ni + 1), 0, ni}, {p.area_key.need(ni + 1), 0, ni},
                 {p.tedge_key.need(ne + 1), 1, ne}}, 4};
     queue_take_sizes(ex, s);

@@ -32,7 +32,6 @@ struct CullArgs {
   uint64_t* cands;
   uint64_t cand_cap;
   uint64_t n_items;
-  uint32_t lanes;         // threads per item (kCullLanes unless a trial sets it)
 };
 
 namespace {
@@ -44,8 +43,8 @@ namespace {
 // cheap tests go to the exact tests.
 template <class P>
 TV_HD void cull_item(const CullArgs<P>& a, uint64_t i) {
-  const uint64_t j = i / a.lanes;
-  const uint32_t lane = uint32_t(i % a.lanes);
+  const uint64_t j = i / kCullLanes;
+  const uint32_t lane = uint32_t(i % kCullLanes);
   const uint32_t tile = uint32_t(a.item_key[j]);
   const TileTri<P>& tt = a.tris[a.item_tri[j]];
   if (lane == 0) a.cand_count[j] = a.cand_cursor[j] = 0;
@@ -75,7 +74,7 @@ TV_HD void cull_item(const CullArgs<P>& a, uint64_t i) {
   if (lo == 0) return;
   if (lane == 0) count_add(&a.rows[uint64_t(tile) * kTileColumns + kColPairTests], lo);
   const Rect tb = tt.bbox;
-  for (uint32_t k = begin + lane; k < begin + lo; k += a.lanes) {
+  for (uint32_t k = begin + lane; k < begin + lo; k += kCullLanes) {
     // Bounding boxes that at most touch: the segment cannot meet the interior (test 2). The
     // boxes are streamed in the tile's order; the edge itself is read only past this test.
     const Rect eb = a.tedge_box[k];
@@ -114,86 +113,6 @@ template <class P>
 __global__ void k_cull_item(CullArgs<P> a, uint64_t n) {
   TV_GRID_LOOP(i, n) cull_item<P>(a, i);
 }
-
-// The same work with a warp per 32 items: lane l does item l's own part once (its tile polygon,
-// the test-6 search, the counters) instead of every lane of the item repeating it, then the
-// warp's lanes take the 32 items' pairs in turn, 32 consecutive pairs at a time, each lane
-// finding its pair's item among the lanes' running totals. The same pairs pass the same tests
-// (the deep list is unordered: its slots come from a counter either way).
-template <class P>
-__global__ void __launch_bounds__(256) k_cull_warp(CullArgs<P> a, uint64_t n_tagged) {
-  const uint64_t n = count_of(n_tagged);
-  const uint32_t lane = threadIdx.x & 31u;
-  const uint64_t warps = uint64_t(gridDim.x) * blockDim.x / 32;
-  for (uint64_t base = (uint64_t(blockIdx.x) * blockDim.x + threadIdx.x) / 32 * 32; base < n; base += warps * 32) {
-    const uint64_t j = base + lane;
-    uint32_t lo = 0, begin = 0, tri = 0;
-    Rect tb{0, 0, 0, 0};
-    if (j < n) {
-      const uint32_t tile = uint32_t(a.item_key[j]);
-      tri = a.item_tri[j];
-      const TileTri<P>& tt = a.tris[tri];
-      a.cand_count[j] = a.cand_cursor[j] = 0;
-      uint32_t np = 3;
-      if constexpr (!P::kExact) {
-        PEdge<P> poly[kTileCap];
-        bool overflow = false;
-        np = tile_polygon<P>(tt, a.grid.rect(tile), poly, overflow);
-        if (overflow) atomic_add(&a.counters[kFloatAnomalies], 1);
-      }
-      a.piece_count[j] = np == 0 ? 0 : 1;
-      if (np != 0) {
-        const int64_t* row = a.rows + uint64_t(tile) * kTileColumns;
-        begin = a.edge_begin[tile];
-        const uint32_t count = uint32_t(row[kColEdges]);
-        const uint64_t zmask = (uint64_t{1} << a.depth_bits) - 1;
-        uint32_t hi = count;
-        while (lo < hi) {
-          const uint32_t mid = (lo + hi) / 2;
-          if ((a.tedge_key[begin + mid] & zmask) <= tt.z_max) lo = mid + 1;
-          else hi = mid;
-        }
-        if (lo > 0) count_add(&a.rows[uint64_t(tile) * kTileColumns + kColPairTests], lo);
-        tb = tt.bbox;
-      }
-    }
-    // Inclusive running totals of the lanes' pair counts.
-    uint32_t incl = lo;
-    for (uint32_t d = 1; d < 32; d <<= 1) {
-      const uint32_t t = __shfl_up_sync(0xffffffffu, incl, d);
-      if (lane >= d) incl += t;
-    }
-    const uint32_t total = __shfl_sync(0xffffffffu, incl, 31);
-    const uint32_t excl = incl - lo;
-    for (uint32_t k0 = 0; k0 < total; k0 += 32) {
-      const uint32_t q = k0 + lane;
-      // The owner: the number of lanes whose running total is <= q.
-      uint32_t l = 0;
-      for (uint32_t step = 16; step > 0; step >>= 1) {
-        const uint32_t v = __shfl_sync(0xffffffffu, incl, l + step - 1);
-        if (v <= q) l += step;
-      }
-      const uint32_t at = q - __shfl_sync(0xffffffffu, excl, l) + __shfl_sync(0xffffffffu, begin, l);
-      const Rect ob{int32_t(__shfl_sync(0xffffffffu, tb.x0, l)), int32_t(__shfl_sync(0xffffffffu, tb.y0, l)),
-                    int32_t(__shfl_sync(0xffffffffu, tb.x1, l)), int32_t(__shfl_sync(0xffffffffu, tb.y1, l))};
-      const uint32_t otri = __shfl_sync(0xffffffffu, tri, l);
-      if (q >= total) continue;
-      const Rect eb = a.tedge_box[at];
-      if (eb.x1 <= ob.x0 || eb.x0 >= ob.x1 || eb.y1 <= ob.y0 || eb.y0 >= ob.y1) continue;
-      const uint32_t ei = a.tedge_id[at];
-      const SilEdge<P>& e = a.edges[ei];
-      const TileTri<P>& tt = a.tris[otri];
-      bool same = false;
-      for (int r = 0; r < 3; ++r) {
-        const Vtx &u = tt.v[r], &w = tt.v[(r + 1) % 3];
-        same |= (u == e.a && w == e.b) || (u == e.b && w == e.a);
-      }
-      if (same) continue;
-      const uint64_t d = bump_one(&a.counters[kDeepPairs], a.deep_cap);
-      if (d != ~uint64_t{0}) a.deep[d] = ((base + l) << 32) | ei;
-    }
-  }
-}
 template <class P>
 __global__ void k_cull_exact(CullArgs<P> a, const uint64_t* count, uint64_t cap) {
   const uint64_t n = *count < cap ? *count : cap;
@@ -228,13 +147,7 @@ void stage_cull(Pipeline<P>& p) {
   a.cands = p.cands.need(p.caps.candidates);
   a.cand_cap = p.caps.candidates;
   a.n_items = ni;
-  a.lanes = p.cull_lanes;
-  if (knob("TILEVIS_X_CULL", 1)) {
-    a.lanes = 1;  // the host runs cull_item once per item
-    ex.launch(k_cull_warp<P>, cull_item<P>, p.N(kSzItems, ni), a);
-  } else {
-    ex.launch(k_cull_item<P>, cull_item<P>, p.N(kSzCullLanes, ni * p.cull_lanes), a);
-  }
+  ex.launch(k_cull_item<P>, cull_item<P>, p.N(kSzCullLanes, ni * kCullLanes), a);
   ex.launch_dyn(k_cull_exact<P>, cull_exact<P>, p.counters.get() + kDeepPairs, p.caps.deep_pairs, a);
 }
 

@@ -3,7 +3,6 @@
 // raster.cu) fills its part; pipeline.cu runs them, times them and grows buffers on overflow.
 #pragma once
 
-#include <cstdlib>
 #include <vector>
 
 #include "exec.cuh"
@@ -14,12 +13,6 @@ namespace tilevis::cuda {
 
 inline constexpr uint32_t kNone = 0xffffffffu;
 inline constexpr uint32_t kCullLanes = 8;  // culling threads per (tile, triangle) item (cull.cu)
-
-// Trial switches (measurement only): the environment variable's value, else the default.
-inline uint32_t knob(const char* name, uint32_t def) {
-  const char* v = std::getenv(name);
-  return v && *v ? uint32_t(std::strtoul(v, nullptr, 10)) : def;
-}
 
 // The tile grid. A tile's rectangle ends at the viewport's right and bottom edges: the last
 // column and row of tiles may reach past the screen, and nothing there is visible.
@@ -224,8 +217,7 @@ struct Pipeline {
   Buf<SetupTri> setup;
   Buf<uint64_t> use_key;        // 3 per setup triangle: edge key, or kBoundary
   Buf<uint32_t> use_forward;    // 3 per setup triangle: 1 where the keyed edge runs from its lower index
-  Buf<int4> setup_vtx;          // per vertex: snapped x, y, z and whether it is inside every plane
-  uint32_t cull_lanes = kCullLanes;
+  Buf<int4> setup_vtx;          // per vertex: snapped x, y, z and 1 when inside every plane
   uint64_t n_setup = 0;
 
   // Silhouettes.
@@ -241,7 +233,7 @@ struct Pipeline {
   uint64_t n_edges = 0;
 
   // Front triangles.
-  Buf<uint32_t> front_flag;
+  Buf<uint32_t> front_flag;     // per setup triangle: front-facing (written by setup)
   Buf<uint64_t> front_offset;
   Buf<TileTri<P>> tris;
   uint64_t n_tris = 0;

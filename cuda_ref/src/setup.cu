@@ -27,21 +27,21 @@ struct SetupArgs {
   uint32_t* use_forward;
   uint64_t* counters;
   double gx, gy;  // guard band half-widths in NDC
-  int4* vtx;            // per vertex: snapped x, y, z, 1 when inside every plane (k_setup_vertex)
-  uint32_t* front_flag;  // per setup triangle: front-facing (the front triangles' scan, silhouettes)
-  uint32_t mode;         // 1: vertices snapped once each and the facing filtered; 0: per triangle
-  uint64_t out_base;     // the first setup triangle the output pointers hold (k_setup_emit_block: a block's run)
+  int4* vtx;             // per vertex: snapped x, y, z, 1 when inside every plane (k_setup_vertex)
+  uint32_t* front_flag;  // per setup triangle: front-facing (silhouettes scans them into the front list)
 };
 
+// The exact facing; the double filter settles nearly every triangle (the expansion took most
+// of setup's double arithmetic, twice per triangle: count and emit).
 TV_HD inline int clip_facing(const SetupArgs& a, uint64_t t) {
-  const float4 &v0 = a.vertices[a.indices[3 * t]], &v1 = a.vertices[a.indices[3 * t + 1]],
-               &v2 = a.vertices[a.indices[3 * t + 2]];
-  return a.mode ? clip_facing_fast(v0, v1, v2) : ::tilevis::cuda::clip_facing(v0, v1, v2);
+  return clip_facing_fast(a.vertices[a.indices[3 * t]], a.vertices[a.indices[3 * t + 1]],
+                          a.vertices[a.indices[3 * t + 2]]);
 }
 
 // Per vertex: its snap and whether it lies inside every plane (as zbuffer.cu's zb_vertex). A
 // triangle whose three vertices are inside is its own clipped polygon, and its setup triangle's
-// vertices are these snaps (the same function of the same vertex).
+// vertices are these snaps (the same function of the same vertex), so a vertex is snapped once
+// rather than once per triangle corner (three double divisions per triangle, twice).
 TV_HD void setup_vertex(const SetupArgs& a, uint64_t i) {
   const float4 fv = a.vertices[i];
   const ClipV v{double(fv.x), double(fv.y), double(fv.z), double(fv.w), uint32_t(i)};
@@ -52,16 +52,10 @@ TV_HD void setup_vertex(const SetupArgs& a, uint64_t i) {
 }
 
 // The common case: every vertex inside every plane, so clipping changes nothing (the polygon
-// stays the triangle's three vertices in order). Decided in registers, without the clipper.
-TV_HD inline bool load_inside(const SetupArgs& a, uint64_t t, ClipV* v) {
-  bool all = true;
-  for (int k = 0; k < 3; ++k) {
-    const uint32_t vi = a.indices[3 * t + k];
-    const float4 f = a.vertices[vi];
-    v[k] = {double(f.x), double(f.y), double(f.z), double(f.w), vi};
-    for (int p = 0; p < 6; ++p) all &= distance(p, a.gx, a.gy, v[k]) >= 0;
-  }
-  return all;
+// stays the triangle's three vertices in order). Decided from the vertices' flags, without the
+// clipper.
+TV_HD inline bool all_inside(const SetupArgs& a, uint64_t t) {
+  return (a.vtx[a.indices[3 * t]].w & a.vtx[a.indices[3 * t + 1]].w & a.vtx[a.indices[3 * t + 2]].w) != 0;
 }
 
 TV_HD __noinline__ uint32_t count_clipped(const SetupArgs& a, uint64_t t) {
@@ -79,13 +73,7 @@ TV_HD void setup_count(const SetupArgs& a, uint64_t t) {
     a.fan_count[t] = 0;
     return;
   }
-  if (a.mode) {
-    const bool inside = a.vtx[a.indices[3 * t]].w & a.vtx[a.indices[3 * t + 1]].w & a.vtx[a.indices[3 * t + 2]].w;
-    a.fan_count[t] = inside ? 1 : count_clipped(a, t);
-    return;
-  }
-  ClipV v[3];
-  a.fan_count[t] = load_inside(a, t, v) ? 1 : count_clipped(a, t);
+  a.fan_count[t] = all_inside(a, t) ? 1 : count_clipped(a, t);
 }
 
 // One setup triangle: facing after the snap, and its three edge keys for silhouettes.
@@ -108,9 +96,8 @@ TV_HD inline void emit_one(const SetupArgs& a, uint64_t t, uint64_t out, const V
   const bool turns_as_facing = facing > 0 ? area < 0 : area > 0;
   st.front = facing > 0 && turns_as_facing;
   count_add(&a.counters[!turns_as_facing ? kDegenerate : facing < 0 ? kBackFacing : kFrontFacing], 1);
-  out -= a.out_base;
   a.setup[out] = st;
-  if (a.front_flag) a.front_flag[out] = st.front;
+  a.front_flag[out] = st.front;
   // Edges made by clipping have no neighbour: boundaries, sorted after the draw's keyed edges.
   const uint64_t boundary = (uint64_t(di.vertex_offset + di.vertex_count - 1) << 32) | 0xffffffffu;
   for (int e = 0; e < 3; ++e) {
@@ -152,25 +139,14 @@ TV_HD __noinline__ void emit_clipped(const SetupArgs& a, uint64_t t) {
 TV_HD void setup_emit(const SetupArgs& a, uint64_t t) {
   const int facing = clip_facing(a, t);
   if (facing == 0) return;  // edge-on: setup_count gave it no fan
-  if (a.mode) {
-    const uint32_t idx[3] = {a.indices[3 * t], a.indices[3 * t + 1], a.indices[3 * t + 2]};
-    const int4 q0 = a.vtx[idx[0]], q1 = a.vtx[idx[1]], q2 = a.vtx[idx[2]];
-    if (!(q0.w & q1.w & q2.w)) {
-      emit_clipped(a, t);
-      return;
-    }
-    emit_one(a, t, a.fan_offset[t], Vtx{q0.x, q0.y, uint32_t(q0.z)}, Vtx{q1.x, q1.y, uint32_t(q1.z)},
-             Vtx{q2.x, q2.y, uint32_t(q2.z)}, idx, false, facing);
-    return;
-  }
-  ClipV v[3];
-  if (!load_inside(a, t, v)) {
+  const uint32_t idx[3] = {a.indices[3 * t], a.indices[3 * t + 1], a.indices[3 * t + 2]};
+  const int4 q0 = a.vtx[idx[0]], q1 = a.vtx[idx[1]], q2 = a.vtx[idx[2]];
+  if (!(q0.w & q1.w & q2.w)) {
     emit_clipped(a, t);
     return;
   }
-  const uint32_t idx[3] = {v[0].index, v[1].index, v[2].index};
-  emit_one(a, t, a.fan_offset[t], snap(a.f, a.gx, a.gy, v[0]), snap(a.f, a.gx, a.gy, v[1]),
-           snap(a.f, a.gx, a.gy, v[2]), idx, false, facing);
+  emit_one(a, t, a.fan_offset[t], Vtx{q0.x, q0.y, uint32_t(q0.z)}, Vtx{q1.x, q1.y, uint32_t(q1.z)},
+           Vtx{q2.x, q2.y, uint32_t(q2.z)}, idx, false, facing);
 }
 
 __global__ void k_setup_vertex(SetupArgs a, uint64_t n) {
@@ -181,53 +157,6 @@ __global__ void k_setup_count(SetupArgs a, uint64_t n) {
 }
 __global__ void k_setup_emit(SetupArgs a, uint64_t n) {
   TV_GRID_LOOP(i, n) setup_emit(a, i);
-}
-
-// The same, kEmitBlock trace triangles a block: their setup triangles are one run of the
-// outputs (the scan keeps trace order), written to shared memory first and then copied out with
-// consecutive threads on consecutive words (a thread's own 56-byte record and 24-byte keys left
-// three quarters of the L2 sectors written excess: Nsight Compute, million). A block whose run
-// is longer than kEmitBlock (clipped fans) writes directly.
-inline constexpr uint32_t kEmitBlock = 256;
-__global__ void __launch_bounds__(kEmitBlock) k_setup_emit_block(SetupArgs a, uint64_t n_tagged) {
-  __shared__ SetupTri s_setup[kEmitBlock];
-  __shared__ uint64_t s_key[3 * kEmitBlock];
-  __shared__ uint32_t s_forward[3 * kEmitBlock];
-  __shared__ uint32_t s_front[kEmitBlock];
-  const uint64_t n = count_of(n_tagged);
-  for (uint64_t base = uint64_t(blockIdx.x) * kEmitBlock; base < n; base += uint64_t(gridDim.x) * kEmitBlock) {
-    const uint32_t m = uint32_t(n - base < kEmitBlock ? n - base : kEmitBlock);
-    const uint64_t o0 = a.fan_offset[base], count = a.fan_offset[base + m] - o0;
-    const bool staged = count <= kEmitBlock;
-    if (threadIdx.x < m) {
-      if (staged) {
-        SetupArgs s = a;
-        s.setup = s_setup;
-        s.use_key = s_key;
-        s.use_forward = s_forward;
-        s.front_flag = s_front;
-        s.out_base = o0;
-        setup_emit(s, base + threadIdx.x);
-      } else {
-        setup_emit(a, base + threadIdx.x);
-      }
-    }
-    __syncthreads();
-    if (staged) {
-      const uint32_t c = uint32_t(count);
-      constexpr uint32_t kWords = sizeof(SetupTri) / 4;
-      uint32_t* dst = reinterpret_cast<uint32_t*>(a.setup + o0);
-      const uint32_t* src = reinterpret_cast<const uint32_t*>(s_setup);
-      for (uint32_t k = threadIdx.x; k < c * kWords; k += kEmitBlock) dst[k] = src[k];
-      for (uint32_t k = threadIdx.x; k < 3 * c; k += kEmitBlock) {
-        a.use_key[3 * o0 + k] = s_key[k];
-        a.use_forward[3 * o0 + k] = s_forward[k];
-      }
-      if (a.front_flag)
-        for (uint32_t k = threadIdx.x; k < c; k += kEmitBlock) a.front_flag[o0 + k] = s_front[k];
-    }
-    __syncthreads();
-  }
 }
 
 // ---- welding of triangle-soup draws by position -------------------------------------------
@@ -376,11 +305,8 @@ void stage_setup(Pipeline<P>& p) {
   SetupArgs a{f,       p.vertices.get(), p.indices.get(), p.tri_draw.get(), p.draws.get(), weld, p.fan_count.need(n + 1),
               nullptr, nullptr,          nullptr,         nullptr,          p.counters.get(), gx, gy};
   a.fan_offset = p.fan_offset.need(n + 1);
-  a.mode = knob("TILEVIS_X_SETUP", 1);
-  if (a.mode) {
-    a.vtx = p.setup_vtx.need(f.n_vertices + 1);
-    ex.launch(k_setup_vertex, setup_vertex, f.n_vertices, a);
-  }
+  a.vtx = p.setup_vtx.need(f.n_vertices + 1);
+  ex.launch(k_setup_vertex, setup_vertex, f.n_vertices, a);
   ex.launch(k_setup_count, setup_count, n, a);
   ex.exclusive_scan(a.fan_count, p.fan_offset.get(), n);
   if (p.dev) {  // the count stays on the device, within the learned bound
@@ -394,9 +320,8 @@ void stage_setup(Pipeline<P>& p) {
   a.setup = p.setup.need(p.n_setup + 1);
   a.use_key = p.use_key.need(3 * p.n_setup + 1);
   a.use_forward = p.use_forward.need(3 * p.n_setup + 1);
-  a.front_flag = knob("TILEVIS_X_FRONT", 1) ? p.front_flag.need(p.n_setup + 1) : nullptr;
-  if (knob("TILEVIS_X_EMIT", 1)) ex.launch(k_setup_emit_block, setup_emit, p.N(kSzSetupEmit, n), a, kEmitBlock);
-  else ex.launch(k_setup_emit, setup_emit, p.N(kSzSetupEmit, n), a);
+  a.front_flag = p.front_flag.need(p.n_setup + 1);
+  ex.launch(k_setup_emit, setup_emit, p.N(kSzSetupEmit, n), a);
 }
 
 template void stage_setup<ExactP>(Pipeline<ExactP>&);

@@ -35,28 +35,24 @@ struct HashArgs {
   uint64_t* sil_key;
   uint32_t* sil_use;
   uint64_t key_base;  // vertices + 1: the sort key of (lo, hi) is lo * key_base + hi (a boundary's hi: vertices)
-  uint32_t mode;      // kHash* bits
-  const uint32_t* front;  // per setup triangle: front-facing (setup's flags), or null: read setup
-  uint64_t stride;    // kHashLocal: slots per vertex index
+  uint64_t stride;     // slots per vertex index (probe_first)
+  const uint32_t* front;  // per setup triangle: front-facing (setup's flags: 4 bytes a triangle, not its record's sector)
 };
 
 // Where a key's slot is looked for. Nothing but time depends on it: a key's payload is the same
-// wherever it lies. kHashLocal: first kLocalProbes slots from lo * stride plus a jitter of the
-// key's hash (keys of nearby vertices, used by nearby triangles, share cache lines and stay in
-// L2), then on from the key's hash over the whole table (a vertex of very many edges spills
-// there instead of making a long run). Inserts and finds walk the same sequence.
-inline constexpr uint32_t kHashLocal = 1, kHashWide = 2, kHashWarp = 4, kLocalProbes = 32;
-
-TV_HD inline uint32_t front_of(const HashArgs& a, uint64_t u) { return a.front ? a.front[u / 3] : a.setup[u / 3].front; }
+// wherever it lies. The first kLocalProbes slots from lo * stride plus a jitter of the key's
+// hash (keys of nearby vertices, used by nearby triangles, share cache lines and stay in L2:
+// the plain hash scattered them over a table larger than L2), then on from the key's hash over
+// the whole table (a vertex of very many edges spills there instead of making one long run).
+// Inserts and finds walk the same sequence; an insert stops at the key or the first empty slot,
+// and slots only ever fill, so a find meets its key on the way.
+inline constexpr uint32_t kLocalProbes = 32;
 
 TV_HD inline uint64_t probe_first(const HashArgs& a, uint64_t key, uint64_t hk) {
-  if (a.mode & kHashLocal) return ((key >> 32) * a.stride + (hk & 15)) & a.mask;
-  return hk & a.mask;
+  return ((key >> 32) * a.stride + (hk & 15)) & a.mask;
 }
 TV_HD inline uint64_t probe_next(const HashArgs& a, uint64_t h, uint64_t hk, uint32_t& step) {
-  ++step;
-  if ((a.mode & kHashLocal) && step == kLocalProbes) return hk & a.mask;
-  return (h + 1) & a.mask;
+  return ++step == kLocalProbes ? hk & a.mask : (h + 1) & a.mask;
 }
 
 TV_HD inline uint64_t find_slot(const HashArgs& a, uint64_t key, bool insert) {
@@ -85,7 +81,7 @@ TV_HD inline uint64_t payload_add(uint64_t old, uint64_t count, uint64_t fronts,
   return c | f << 10 | w << 20 | i << 32;
 }
 
-#if defined(__CUDA_ARCH__) && !defined(TV_NO_CAS128)
+#if defined(__CUDA_ARCH__)
 // 16-byte compare-and-swap (sm_90): the slot held (c0, c1) -> (d0, d1); returns what it held.
 __device__ inline void cas128(HashSlot* p, uint64_t c0, uint64_t c1, uint64_t d0, uint64_t d1, uint64_t& o0,
                               uint64_t& o1) {
@@ -99,12 +95,11 @@ __device__ inline void cas128(HashSlot* p, uint64_t c0, uint64_t c1, uint64_t d0
       : "l"(p), "l"(c0), "l"(c1), "l"(d0), "l"(d1)
       : "memory");
 }
-#endif
 
-#if defined(__CUDA_ARCH__)
-// The device insert of one key's uses (kHashWide): the slot's key and payload read together,
-// an empty slot claimed with its payload in one 16-byte CAS, a found key's payload updated by
-// 64-bit CAS from the value read.
+// The device insert of a use: the slot's key and payload read together (one 16-byte load from
+// L2), an empty slot claimed with its payload in one 16-byte CAS, a found key's payload updated
+// by 64-bit CAS from the value read (the host's find_slot and payload CAS took up to four round
+// trips: key, key CAS, payload, payload CAS).
 __device__ inline void insert_wide(const HashArgs& a, uint64_t key, uint64_t count, uint64_t fronts, uint64_t forwards,
                                    uint64_t inv_first) {
   const uint64_t k1 = key + 1;
@@ -116,17 +111,11 @@ __device__ inline void insert_wide(const HashArgs& a, uint64_t key, uint64_t cou
     const uint4 q = __ldcg(reinterpret_cast<const uint4*>(s));
     uint64_t cur = uint64_t(q.x) | uint64_t(q.y) << 32, old = uint64_t(q.z) | uint64_t(q.w) << 32;
     if (cur == 0) {  // an empty slot's payload is 0 too
-#if !defined(TV_NO_CAS128)
       uint64_t o0, o1;
       cas128(s, 0, 0, k1, payload_add(0, count, fronts, forwards, inv_first), o0, o1);
       if (o0 == 0 && o1 == 0) return;
       cur = o0;
       old = o1;
-#else
-      cur = atomic_cas(&s->key1, 0, k1);
-      if (cur == 0) cur = k1;  // claimed: its payload is 0 or another use's
-      else old = __ldcg(reinterpret_cast<const unsigned long long*>(&s->payload));
-#endif
     }
     if (cur == k1) {
       for (;;) {
@@ -144,49 +133,22 @@ __device__ inline void insert_wide(const HashArgs& a, uint64_t key, uint64_t cou
 TV_HD void hash_insert(const HashArgs& a, uint64_t u) {
   const uint64_t key = a.use_key[u];
   if (key == kSkip || is_boundary(key)) return;
-#if defined(__CUDA_ARCH__)
-  if (a.mode & (kHashWide | kHashWarp)) {
-    uint64_t count = 1, fronts = front_of(a, u), forwards = a.use_forward[u];
-    uint64_t inv_first = uint64_t(~uint32_t(u));
-    if (a.mode & kHashWarp) {  // the uses of one key in this warp's active lanes, added by its lowest lane
-      const unsigned group = __match_any_sync(__activemask(), static_cast<unsigned long long>(key));
-      count = __popc(group);
-      fronts = __reduce_add_sync(group, uint32_t(fronts));
-      forwards = __reduce_add_sync(group, uint32_t(forwards));
-      inv_first = __reduce_max_sync(group, uint32_t(inv_first));
-      if ((threadIdx.x & 31u) != unsigned(__ffs(group) - 1)) return;
-    }
-    if (a.mode & kHashWide) {
-      insert_wide(a, key, count, fronts, forwards, inv_first);
-      return;
-    }
-    const uint64_t h = find_slot(a, key, true);
-    uint64_t* p = &a.slots[h].payload;
-    uint64_t old = *p;
-    for (;;) {
-      const uint64_t next = payload_add(old, count, fronts, forwards, inv_first);
-      const uint64_t seen = atomic_cas(p, old, next);
-      if (seen == old) return;
-      old = seen;
-    }
-  }
-#endif
-  const uint64_t h = find_slot(a, key, true);
-  const uint64_t front = front_of(a, u), forward = a.use_forward[u];
   // Payload: uses, front uses and forward uses in 10 bits each (saturating: only "two" matters),
   // the complement of the lowest use index in the high 32 bits.
+  const uint64_t front = a.front[u / 3], forward = a.use_forward[u], inv_first = uint64_t(~uint32_t(u));
+#if defined(__CUDA_ARCH__)
+  insert_wide(a, key, 1, front, forward, inv_first);
+#else
+  const uint64_t h = find_slot(a, key, true);
   uint64_t* p = &a.slots[h].payload;
   uint64_t old = *p;
   for (;;) {
-    const uint64_t count = tmin<uint64_t>((old & 0x3ffu) + 1, 0x3ffu);
-    const uint64_t fronts = tmin<uint64_t>(((old >> 10) & 0x3ffu) + front, 0x3ffu);
-    const uint64_t forwards = tmin<uint64_t>(((old >> 20) & 0x3ffu) + forward, 0x3ffu);
-    const uint64_t inv_first = tmax<uint64_t>(old >> 32, uint64_t(~uint32_t(u)));
-    const uint64_t next = count | fronts << 10 | forwards << 20 | inv_first << 32;
+    const uint64_t next = payload_add(old, 1, front, forward, inv_first);
     const uint64_t seen = atomic_cas(p, old, next);
     if (seen == old) break;
     old = seen;
   }
+#endif
 }
 
 TV_HD void hash_judge(const HashArgs& a, uint64_t u) {
@@ -195,7 +157,7 @@ TV_HD void hash_judge(const HashArgs& a, uint64_t u) {
   if (key == kSkip) {
     sil = 0;
   } else if (is_boundary(key)) {
-    sil = front_of(a, u);
+    sil = a.front[u / 3];
   } else {
     const uint64_t c = a.slots[find_slot(a, key, false)].payload;  // keys are never moved: the find's walk ends at it
     if (~uint32_t(c >> 32) == uint32_t(u)) {
@@ -241,9 +203,6 @@ struct FrontArgs {
 };
 
 template <class P>
-TV_HD void front_flag(const FrontArgs<P>& a, uint64_t i) { a.flag[i] = a.setup[i].front; }
-
-template <class P>
 TV_HD void front_build(const FrontArgs<P>& a, uint64_t i) {
   const SetupTri& t = a.setup[i];
   if (!t.front) return;
@@ -263,20 +222,12 @@ template <class P>
 __global__ void k_build_edge(EdgeArgs<P> a, uint64_t n) {
   TV_GRID_LOOP(i, n) build_edge<P>(a, i);
 }
-template <class P>
-__global__ void k_front_flag(FrontArgs<P> a, uint64_t n) {
-  TV_GRID_LOOP(i, n) front_flag<P>(a, i);
-}
-template <class P>
-__global__ void k_front_build(FrontArgs<P> a, uint64_t n) {
-  TV_GRID_LOOP(i, n) front_build<P>(a, i);
-}
 
-// The same records built by a block for kFrontBlock setup triangles at a time, through shared
-// memory: the block's front triangles are consecutive in the list (the scan keeps setup order),
-// so their records leave as one run of words, every store coalesced (a thread's own record,
-// 140 bytes in float, took 35 stores each touching another sector). The setup records come in
-// the same way.
+// The front records (front_build's) built by a block for kFrontBlock setup triangles at a time,
+// through shared memory: the block's front triangles are consecutive in the list (the scan keeps
+// setup order), so their records leave as one run of words, every store coalesced (a thread per
+// record, 140 bytes in float, made 35 stores each touching other sectors: 307 us on million with
+// Nsight Compute, 56 us this way). The setup records come in the same way.
 template <class P>
 inline constexpr uint32_t kFrontBlock = sizeof(TileTri<P>) <= 160 ? 256 : 128;
 template <class P>
@@ -322,10 +273,8 @@ void stage_silhouettes(Pipeline<P>& p) {
   p.hash_cap = cap;
   HashArgs h{p.use_key.get(),    p.use_forward.get(),         p.setup.get(), p.hash_slots.need(cap), cap - 1,
              p.sil_flag.need(uses + 1), p.sil_offset.need(uses + 1), nullptr,       nullptr, 0};
-  h.mode = ex.where == Where::gpu ? knob("TILEVIS_X_HASH", kHashLocal | kHashWide) : knob("TILEVIS_X_HASH", kHashLocal) & kHashLocal;
   h.stride = tmax<uint64_t>(1, cap / (p.f.n_vertices + 1));
-  const bool front_block = knob("TILEVIS_X_FRONT", 1) != 0;  // setup wrote the front flags
-  if (front_block && knob("TILEVIS_X_HFRONT", 1)) h.front = p.front_flag.get();
+  h.front = p.front_flag.get();  // setup's
   // The table is all zeros between runs: cleared once when (re)allocated, and after each run's
   // last use on a side stream, off the stages' chain.
   if (p.hash_clean_at != h.slots || p.hash_clean < cap) ex.zero(h.slots, cap * sizeof(HashSlot));
@@ -334,11 +283,10 @@ void stage_silhouettes(Pipeline<P>& p) {
   ex.launch(k_hash_judge, hash_judge, n_uses, h);
   ex.exclusive_scan(h.flag, p.sil_offset.get(), n_uses, uses);
 
-  // Front triangles beside the hash (side stream 0), scanned here so that one read brings back
-  // both counts.
-  FrontArgs<P> fa{p.setup.get(), p.front_flag.need(p.n_setup + 1), p.front_offset.need(p.n_setup + 1), nullptr};
+  // Front triangles (setup's flags) beside the hash (side stream 0), scanned here so that one
+  // read brings back both counts.
+  FrontArgs<P> fa{p.setup.get(), p.front_flag.get(), p.front_offset.need(p.n_setup + 1), nullptr};
   ex.branch(0);
-  if (!front_block) ex.launch(k_front_flag<P>, front_flag<P>, n_setup, fa);
   ex.exclusive_scan(fa.flag, p.front_offset.get(), n_setup, p.n_setup);
   ex.on_main();
   ex.merge(0);
@@ -358,8 +306,7 @@ void stage_silhouettes(Pipeline<P>& p) {
 
   fa.tris = p.tris.need(p.n_tris + 1);
   ex.branch(0);
-  if (front_block) ex.launch(k_front_build_block<P>, front_build<P>, p.N(kSzFrontBuild, p.n_setup), fa, kFrontBlock<P>);
-  else ex.launch(k_front_build<P>, front_build<P>, p.N(kSzFrontBuild, p.n_setup), fa);
+  ex.launch(k_front_build_block<P>, front_build<P>, p.N(kSzFrontBuild, p.n_setup), fa, kFrontBlock<P>);
   ex.on_main();
 
   h.sil_key = p.sil_key.need(p.n_edges + 1);
