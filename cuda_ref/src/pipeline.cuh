@@ -217,6 +217,7 @@ struct Pipeline {
   Buf<SetupTri> setup;
   Buf<uint64_t> use_key;        // 3 per setup triangle: edge key, or kBoundary
   Buf<uint32_t> use_forward;    // 3 per setup triangle: 1 where the keyed edge runs from its lower index
+  Buf<int4> setup_vtx;          // per vertex: snapped x, y, z and 1 when inside every plane
   uint64_t n_setup = 0;
 
   // Silhouettes.
@@ -232,7 +233,7 @@ struct Pipeline {
   uint64_t n_edges = 0;
 
   // Front triangles.
-  Buf<uint32_t> front_flag;
+  Buf<uint32_t> front_flag;     // per setup triangle: front-facing (written by setup)
   Buf<uint64_t> front_offset;
   Buf<TileTri<P>> tris;
   uint64_t n_tris = 0;
@@ -314,6 +315,7 @@ struct Pipeline {
                     &obin_off, &obin_key, &obin_key_sorted})
       b->bind(&e);
     vertices.bind(&e);
+    setup_vtx.bind(&e);
     tedge_box.bind(&e);
     hash_slots.bind(&e);
     occ_rec.bind(&e);

@@ -27,24 +27,35 @@ struct SetupArgs {
   uint32_t* use_forward;
   uint64_t* counters;
   double gx, gy;  // guard band half-widths in NDC
+  int4* vtx;             // per vertex: snapped x, y, z, 1 when inside every plane (k_setup_vertex)
+  uint32_t* front_flag;  // per setup triangle: front-facing (silhouettes scans them into the front list)
 };
 
+// The exact facing; the double filter settles nearly every triangle (the expansion took most
+// of setup's double arithmetic, twice per triangle: count and emit).
 TV_HD inline int clip_facing(const SetupArgs& a, uint64_t t) {
-  return ::tilevis::cuda::clip_facing(a.vertices[a.indices[3 * t]], a.vertices[a.indices[3 * t + 1]],
-                                      a.vertices[a.indices[3 * t + 2]]);
+  return clip_facing_fast(a.vertices[a.indices[3 * t]], a.vertices[a.indices[3 * t + 1]],
+                          a.vertices[a.indices[3 * t + 2]]);
+}
+
+// Per vertex: its snap and whether it lies inside every plane (as zbuffer.cu's zb_vertex). A
+// triangle whose three vertices are inside is its own clipped polygon, and its setup triangle's
+// vertices are these snaps (the same function of the same vertex), so a vertex is snapped once
+// rather than once per triangle corner (three double divisions per triangle, twice).
+TV_HD void setup_vertex(const SetupArgs& a, uint64_t i) {
+  const float4 fv = a.vertices[i];
+  const ClipV v{double(fv.x), double(fv.y), double(fv.z), double(fv.w), uint32_t(i)};
+  bool inside = true;
+  for (int p = 0; p < 6; ++p) inside &= distance(p, a.gx, a.gy, v) >= 0;
+  const Vtx s = inside ? snap(a.f, a.gx, a.gy, v) : Vtx{0, 0, 0};
+  a.vtx[i] = make_int4(s.x, s.y, int32_t(s.z), inside ? 1 : 0);
 }
 
 // The common case: every vertex inside every plane, so clipping changes nothing (the polygon
-// stays the triangle's three vertices in order). Decided in registers, without the clipper.
-TV_HD inline bool load_inside(const SetupArgs& a, uint64_t t, ClipV* v) {
-  bool all = true;
-  for (int k = 0; k < 3; ++k) {
-    const uint32_t vi = a.indices[3 * t + k];
-    const float4 f = a.vertices[vi];
-    v[k] = {double(f.x), double(f.y), double(f.z), double(f.w), vi};
-    for (int p = 0; p < 6; ++p) all &= distance(p, a.gx, a.gy, v[k]) >= 0;
-  }
-  return all;
+// stays the triangle's three vertices in order). Decided from the vertices' flags, without the
+// clipper.
+TV_HD inline bool all_inside(const SetupArgs& a, uint64_t t) {
+  return (a.vtx[a.indices[3 * t]].w & a.vtx[a.indices[3 * t + 1]].w & a.vtx[a.indices[3 * t + 2]].w) != 0;
 }
 
 TV_HD __noinline__ uint32_t count_clipped(const SetupArgs& a, uint64_t t) {
@@ -62,8 +73,7 @@ TV_HD void setup_count(const SetupArgs& a, uint64_t t) {
     a.fan_count[t] = 0;
     return;
   }
-  ClipV v[3];
-  a.fan_count[t] = load_inside(a, t, v) ? 1 : count_clipped(a, t);
+  a.fan_count[t] = all_inside(a, t) ? 1 : count_clipped(a, t);
 }
 
 // One setup triangle: facing after the snap, and its three edge keys for silhouettes.
@@ -87,6 +97,7 @@ TV_HD inline void emit_one(const SetupArgs& a, uint64_t t, uint64_t out, const V
   st.front = facing > 0 && turns_as_facing;
   count_add(&a.counters[!turns_as_facing ? kDegenerate : facing < 0 ? kBackFacing : kFrontFacing], 1);
   a.setup[out] = st;
+  a.front_flag[out] = st.front;
   // Edges made by clipping have no neighbour: boundaries, sorted after the draw's keyed edges.
   const uint64_t boundary = (uint64_t(di.vertex_offset + di.vertex_count - 1) << 32) | 0xffffffffu;
   for (int e = 0; e < 3; ++e) {
@@ -128,16 +139,19 @@ TV_HD __noinline__ void emit_clipped(const SetupArgs& a, uint64_t t) {
 TV_HD void setup_emit(const SetupArgs& a, uint64_t t) {
   const int facing = clip_facing(a, t);
   if (facing == 0) return;  // edge-on: setup_count gave it no fan
-  ClipV v[3];
-  if (!load_inside(a, t, v)) {
+  const uint32_t idx[3] = {a.indices[3 * t], a.indices[3 * t + 1], a.indices[3 * t + 2]};
+  const int4 q0 = a.vtx[idx[0]], q1 = a.vtx[idx[1]], q2 = a.vtx[idx[2]];
+  if (!(q0.w & q1.w & q2.w)) {
     emit_clipped(a, t);
     return;
   }
-  const uint32_t idx[3] = {v[0].index, v[1].index, v[2].index};
-  emit_one(a, t, a.fan_offset[t], snap(a.f, a.gx, a.gy, v[0]), snap(a.f, a.gx, a.gy, v[1]),
-           snap(a.f, a.gx, a.gy, v[2]), idx, false, facing);
+  emit_one(a, t, a.fan_offset[t], Vtx{q0.x, q0.y, uint32_t(q0.z)}, Vtx{q1.x, q1.y, uint32_t(q1.z)},
+           Vtx{q2.x, q2.y, uint32_t(q2.z)}, idx, false, facing);
 }
 
+__global__ void k_setup_vertex(SetupArgs a, uint64_t n) {
+  TV_GRID_LOOP(i, n) setup_vertex(a, i);
+}
 __global__ void k_setup_count(SetupArgs a, uint64_t n) {
   TV_GRID_LOOP(i, n) setup_count(a, i);
 }
@@ -291,6 +305,8 @@ void stage_setup(Pipeline<P>& p) {
   SetupArgs a{f,       p.vertices.get(), p.indices.get(), p.tri_draw.get(), p.draws.get(), weld, p.fan_count.need(n + 1),
               nullptr, nullptr,          nullptr,         nullptr,          p.counters.get(), gx, gy};
   a.fan_offset = p.fan_offset.need(n + 1);
+  a.vtx = p.setup_vtx.need(f.n_vertices + 1);
+  ex.launch(k_setup_vertex, setup_vertex, f.n_vertices, a);
   ex.launch(k_setup_count, setup_count, n, a);
   ex.exclusive_scan(a.fan_count, p.fan_offset.get(), n);
   if (p.dev) {  // the count stays on the device, within the learned bound
@@ -304,6 +320,7 @@ void stage_setup(Pipeline<P>& p) {
   a.setup = p.setup.need(p.n_setup + 1);
   a.use_key = p.use_key.need(3 * p.n_setup + 1);
   a.use_forward = p.use_forward.need(3 * p.n_setup + 1);
+  a.front_flag = p.front_flag.need(p.n_setup + 1);
   ex.launch(k_setup_emit, setup_emit, p.N(kSzSetupEmit, n), a);
 }
 

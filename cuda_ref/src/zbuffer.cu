@@ -126,26 +126,6 @@ TV_HD void zb_vertex(const ZArgs& a, uint64_t i) {
   a.vtx[i] = make_int4(s.x, s.y, int32_t(s.z), inside ? 1 : 0);
 }
 
-// Sign of det[x y w] (setup.cuh clip_facing) where a filter settles it: the six triple products
-// in double (x y is exact, times w rounds by at most 2^-53 relative) and their sum are within
-// 2^-48 of the total of their magnitudes; 0 when the sum is that close to zero (then only the
-// exact expansion decides).
-TV_HD inline int facing_filter(const float4& a, const float4& b, const float4& c) {
-  const double t[6] = {dmul(dmul(double(a.x), double(b.y)), double(c.w)),
-                       dmul(dmul(-double(a.x), double(c.y)), double(b.w)),
-                       dmul(dmul(double(b.x), double(c.y)), double(a.w)),
-                       dmul(dmul(-double(b.x), double(a.y)), double(c.w)),
-                       dmul(dmul(double(c.x), double(a.y)), double(b.w)),
-                       dmul(dmul(-double(c.x), double(b.y)), double(a.w))};
-  double sum = 0, mag = 0;
-  for (double v : t) {
-    sum = dadd(sum, v);
-    mag = dadd(mag, dabs(v));
-  }
-  const double bound = dmul(mag, 0x1p-48);
-  return sum > bound ? 1 : sum < -bound ? -1 : 0;  // 0: not settled (the exact expansion decides)
-}
-
 struct Edges {
   ILine e[3];  // inside: eval > 0, or 0 on an owned edge
 };
