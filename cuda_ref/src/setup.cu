@@ -42,14 +42,7 @@ TV_HD inline int clip_facing(const SetupArgs& a, uint64_t t) {
 // triangle whose three vertices are inside is its own clipped polygon, and its setup triangle's
 // vertices are these snaps (the same function of the same vertex), so a vertex is snapped once
 // rather than once per triangle corner (three double divisions per triangle, twice).
-TV_HD void setup_vertex(const SetupArgs& a, uint64_t i) {
-  const float4 fv = a.vertices[i];
-  const ClipV v{double(fv.x), double(fv.y), double(fv.z), double(fv.w), uint32_t(i)};
-  bool inside = true;
-  for (int p = 0; p < 6; ++p) inside &= distance(p, a.gx, a.gy, v) >= 0;
-  const Vtx s = inside ? snap(a.f, a.gx, a.gy, v) : Vtx{0, 0, 0};
-  a.vtx[i] = make_int4(s.x, s.y, int32_t(s.z), inside ? 1 : 0);
-}
+TV_HD void setup_vertex(const SetupArgs& a, uint64_t i) { a.vtx[i] = snapped_vertex(a.f, a.gx, a.gy, a.vertices, i); }
 
 // The common case: every vertex inside every plane, so clipping changes nothing (the polygon
 // stays the triangle's three vertices in order). Decided from the vertices' flags, without the
@@ -303,7 +296,7 @@ void stage_setup(Pipeline<P>& p) {
   }
 
   SetupArgs a{f,       p.vertices.get(), p.indices.get(), p.tri_draw.get(), p.draws.get(), weld, p.fan_count.need(n + 1),
-              nullptr, nullptr,          nullptr,         nullptr,          p.counters.get(), gx, gy};
+              nullptr, nullptr,          nullptr,         nullptr,          p.counters.get(), gx, gy, nullptr, nullptr};
   a.fan_offset = p.fan_offset.need(n + 1);
   a.vtx = p.setup_vtx.need(f.n_vertices + 1);
   ex.launch(k_setup_vertex, setup_vertex, f.n_vertices, a);

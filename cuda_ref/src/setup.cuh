@@ -189,4 +189,15 @@ TV_HD inline Vtx snap(const FrameDev& f, double gx, double gy, const ClipV& v) {
   return s;
 }
 
+// Vertex i alone: its snap and whether it lies inside every plane (w 1), else zeros (w 0). A
+// triangle whose three vertices are inside is its own clipped polygon, with these snaps.
+TV_HD inline int4 snapped_vertex(const FrameDev& f, double gx, double gy, const float4* vertices, uint64_t i) {
+  const float4 fv = vertices[i];
+  const ClipV v{double(fv.x), double(fv.y), double(fv.z), double(fv.w), uint32_t(i)};
+  bool inside = true;
+  for (int p = 0; p < 6; ++p) inside &= distance(p, gx, gy, v) >= 0;
+  const Vtx s = inside ? snap(f, gx, gy, v) : Vtx{0, 0, 0};
+  return make_int4(s.x, s.y, int32_t(s.z), inside ? 1 : 0);
+}
+
 }  // namespace tilevis::cuda

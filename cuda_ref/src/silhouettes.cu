@@ -272,9 +272,8 @@ void stage_silhouettes(Pipeline<P>& p) {
   while (cap < 2 * uses) cap <<= 1;  // load factor <= 1/2
   p.hash_cap = cap;
   HashArgs h{p.use_key.get(),    p.use_forward.get(),         p.setup.get(), p.hash_slots.need(cap), cap - 1,
-             p.sil_flag.need(uses + 1), p.sil_offset.need(uses + 1), nullptr,       nullptr, 0};
-  h.stride = tmax<uint64_t>(1, cap / (p.f.n_vertices + 1));
-  h.front = p.front_flag.get();  // setup's
+             p.sil_flag.need(uses + 1), p.sil_offset.need(uses + 1), nullptr,       nullptr, 0,
+             tmax<uint64_t>(1, cap / (p.f.n_vertices + 1)), p.front_flag.get() /* setup's */};
   // The table is all zeros between runs: cleared once when (re)allocated, and after each run's
   // last use on a side stream, off the stages' chain.
   if (p.hash_clean_at != h.slots || p.hash_clean < cap) ex.zero(h.slots, cap * sizeof(HashSlot));

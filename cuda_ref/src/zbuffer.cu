@@ -117,14 +117,7 @@ TV_HD inline bool overflowed(const ZArgs& a) {
 
 // ---- 1, 2: setup and binning -----------------------------------------------------------
 
-TV_HD void zb_vertex(const ZArgs& a, uint64_t i) {
-  const float4 fv = a.vertices[i];
-  const ClipV v{double(fv.x), double(fv.y), double(fv.z), double(fv.w), uint32_t(i)};
-  bool inside = true;
-  for (int p = 0; p < 6; ++p) inside &= distance(p, a.gx, a.gy, v) >= 0;
-  const Vtx s = inside ? snap(a.f, a.gx, a.gy, v) : Vtx{0, 0, 0};
-  a.vtx[i] = make_int4(s.x, s.y, int32_t(s.z), inside ? 1 : 0);
-}
+TV_HD void zb_vertex(const ZArgs& a, uint64_t i) { a.vtx[i] = snapped_vertex(a.f, a.gx, a.gy, a.vertices, i); }
 
 struct Edges {
   ILine e[3];  // inside: eval > 0, or 0 on an owned edge
