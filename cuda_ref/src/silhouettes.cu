@@ -27,7 +27,6 @@ TV_HD inline uint64_t hash64(uint64_t k) {
 struct HashArgs {
   const uint64_t* use_key;
   const uint32_t* use_forward;
-  const SetupTri* setup;
   HashSlot* slots;
   uint64_t mask;
   uint32_t* flag;
@@ -271,7 +270,7 @@ void stage_silhouettes(Pipeline<P>& p) {
   uint64_t cap = 16;
   while (cap < 2 * uses) cap <<= 1;  // load factor <= 1/2
   p.hash_cap = cap;
-  HashArgs h{p.use_key.get(),    p.use_forward.get(),         p.setup.get(), p.hash_slots.need(cap), cap - 1,
+  HashArgs h{p.use_key.get(),    p.use_forward.get(),         p.hash_slots.need(cap), cap - 1,
              p.sil_flag.need(uses + 1), p.sil_offset.need(uses + 1), nullptr,       nullptr, 0,
              tmax<uint64_t>(1, cap / (p.f.n_vertices + 1)), p.front_flag.get() /* setup's */};
   // The table is all zeros between runs: cleared once when (re)allocated, and after each run's
