@@ -33,8 +33,7 @@ void parse_tile(const std::string& text, uint32_t& width, uint32_t& height) {
 
 void parse_occlusion_bin(const std::string& text, uint32_t tile_w, uint32_t tile_h, uint32_t& width,
                          uint32_t& height) {
-  width = height = 0;
-  if (text.empty()) return;
+  if (text.empty()) return;  // the caller's default
   if (!parse_size(text, width, height) || width > tile_w || height > tile_h)
     throw std::runtime_error(
         fmt::format("--occlusion-bin {}: expected N or WxH no larger than the tile ({}x{})", text, tile_w, tile_h));
@@ -44,8 +43,8 @@ nlohmann::json visibility_config(uint32_t tile_w, uint32_t tile_h, uint32_t occl
                                  uint32_t samples, uint32_t depth_bits) {
   return {{"tile_w", tile_w},
           {"tile_h", tile_h},
-          {"occlusion_bin_w", occlusion_bin_w ? occlusion_bin_w : tile_w},
-          {"occlusion_bin_h", occlusion_bin_h ? occlusion_bin_h : tile_h},
+          {"occlusion_bin_w", occlusion_bin_w ? std::min(occlusion_bin_w, tile_w) : tile_w},
+          {"occlusion_bin_h", occlusion_bin_h ? std::min(occlusion_bin_h, tile_h) : tile_h},
           {"samples", samples},
           {"depth_bits", depth_bits}};
 }

@@ -207,7 +207,7 @@ Command add_golden_command(CLI::App& app) {
                   "analytic counters) to DIR/evu_jobs.txt: the RTL testbenches' vectors (rtl_ref/README.md)");
   cmd->add_option("--occlusion-bin", a->occlusion_bin,
                   "Finer occlusion bins (SVGPU 4.1), N or WxH pixels within each tile: only the scanning of "
-                  "occluders shrinks; ids and counters are unchanged (default: the tile)");
+                  "occluders shrinks; ids and counters are unchanged (default: 8, or the tile if smaller)");
   return {cmd, [a]() {
             uint32_t tw = 0, th = 0;
             parse_tile(a->tile, tw, th);

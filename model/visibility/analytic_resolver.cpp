@@ -17,6 +17,18 @@ using geom::Point;
 using geom::Rect;
 
 class AnalyticResolver final : public TileResolver {
+  // An occluder as the occlusion test's scan reads it: 48 bytes, no pointer (FrontTriangle
+  // is wide and its id sits behind a pointer: the scan was bound by those loads).
+  // A silhouette edge as the pair tests' scan reads it (tests 6 and 2), 24 bytes.
+  struct PairEdge {
+    uint32_t z_min, index;  // index into TileFrame::edges()
+    geom::Rect bbox;
+  };
+  struct Occluder {
+    uint32_t z_min, id, index;  // index into TileFrame::triangles()
+    double x0, x1, y0, y1;      // the bounding box widened by the test's margin (int -+ 1: exact)
+  };
+
  public:
   explicit AnalyticResolver(const ResolverOptions& o) : m_opt(o) {}
 
@@ -30,9 +42,10 @@ class AnalyticResolver final : public TileResolver {
     // Edges by nearest depth: a triangle whose farthest point is nearer than an edge's
     // nearest (test 6) can skip that edge and every later one.
     const auto& edge_ids = f.tile_edges(tile);
-    m_sorted_edges.assign(edge_ids.begin(), edge_ids.end());
+    m_sorted_edges.clear();
+    for (uint32_t ei : edge_ids) m_sorted_edges.push_back({f.edges()[ei].z_min, ei, f.edges()[ei].bbox});
     std::stable_sort(m_sorted_edges.begin(), m_sorted_edges.end(),
-                     [&](uint32_t a, uint32_t b) { return f.edges()[a].z_min < f.edges()[b].z_min; });
+                     [](const PairEdge& a, const PairEdge& b) { return a.z_min < b.z_min; });
     // Occluders: nearest first (the first hit ends the search).
     f.occluders(tile, m_occluders);
     bin_occluders(f, rect);
@@ -60,15 +73,16 @@ class AnalyticResolver final : public TileResolver {
     uint64_t shaded = 0;
     // Candidate edges (tests 1–6 against the triangle's tile polygon), in ascending id.
     m_candidates.clear();
-    for (uint32_t ei : m_sorted_edges) {
-      const svgpu::Edge& e = f.edges()[ei];
-      if (svgpu::edge_behind(e, tt)) {  // test 6: and so is every later edge
+    for (const PairEdge& pe : m_sorted_edges) {
+      if (pe.z_min > tt.z_max) {  // test 6 (svgpu::edge_behind): and so is every later edge
         m_shape.test6_stop = 1;
         break;
       }
       ++c.pair_tests;
-      if (svgpu::boxes_apart(e, tt) || svgpu::shares_edge(e, tt.tri)) continue;  // tests 2 (boxes) and 4
-      if (svgpu::survives(poly, tt, e)) m_candidates.push_back(ei);
+      if (svgpu::boxes_apart(pe.bbox, tt.bbox)) continue;  // test 2 (boxes)
+      const svgpu::Edge& e = f.edges()[pe.index];
+      if (svgpu::shares_edge(e, tt.tri)) continue;  // test 4
+      if (svgpu::survives(poly, tt, e)) m_candidates.push_back(pe.index);
     }
     std::sort(m_candidates.begin(), m_candidates.end());
     c.candidate_pairs += int64_t(m_candidates.size());
@@ -146,14 +160,14 @@ class AnalyticResolver final : public TileResolver {
   bool occluded(const TileFrame& f, const ConvexPolygon& piece, const FrontTriangle& tt, TileCounters& c) const {
     const geom::RationalPoint q = geom::interior_point(piece);
     const double qx = q.fx / q.fw, qy = q.fy / q.fw;
-    for (uint32_t oi : occluders_at(qx, qy)) {
-      const FrontTriangle& u = f.triangles()[oi];
-      if (u.z_min > tt.z_max) break;  // u is behind everywhere: so are all later occluders
-      if (u.t->id == tt.t->id) continue;
+    const uint32_t id = tt.t->id;
+    for (const Occluder& o : occluders_at(qx, qy)) {
+      if (o.z_min > tt.z_max) break;  // behind everywhere: so are all later occluders
+      if (o.id == id) continue;
       // The bounding box rejects with a margin far above the error of qx, qy.
-      if (qx < u.bbox.x0 - 1.0 || qx > u.bbox.x1 + 1.0 || qy < u.bbox.y0 - 1.0 || qy > u.bbox.y1 + 1.0) continue;
+      if (qx < o.x0 || qx > o.x1 || qy < o.y0 || qy > o.y1) continue;
       ++c.occlusion_tests;
-      if (svgpu::occludes(u, u.t->id, tt, tt.t->id, q)) return true;
+      if (svgpu::occludes(f.triangles()[o.index], o.id, tt, id, q)) return true;
     }
     return false;
   }
@@ -192,25 +206,31 @@ class AnalyticResolver final : public TileResolver {
     return uint32_t(std::clamp<double>(k, 0.0, double(n - 1)));
   }
 
+  // The tile's occluders as compact records, nearest first, and in each finer bin.
   void bin_occluders(const TileFrame& f, const Rect& rect) {
+    m_occ.clear();
+    for (uint32_t oi : m_occluders) {
+      const FrontTriangle& u = f.triangles()[oi];
+      m_occ.push_back({u.z_min, u.t->id, oi, u.bbox.x0 - 1.0, u.bbox.x1 + 1.0, u.bbox.y0 - 1.0, u.bbox.y1 + 1.0});
+    }
     if (!binned()) return;
     m_bin_x0 = rect.x0;
     m_bin_y0 = rect.y0;
     for (auto& b : m_bin_occ) b.clear();
-    for (uint32_t oi : m_occluders) {
-      const Rect& b = f.triangles()[oi].bbox;
+    for (const Occluder& o : m_occ) {
+      const Rect& b = f.triangles()[o.index].bbox;
       const uint32_t bx0 = bin_index(int64_t(b.x0) - 1, m_bin_x0, m_bin_step_x, m_bins_x);
       const uint32_t bx1 = bin_index(int64_t(b.x1) + 1, m_bin_x0, m_bin_step_x, m_bins_x);
       const uint32_t by0 = bin_index(int64_t(b.y0) - 1, m_bin_y0, m_bin_step_y, m_bins_y);
       const uint32_t by1 = bin_index(int64_t(b.y1) + 1, m_bin_y0, m_bin_step_y, m_bins_y);
       for (uint32_t by = by0; by <= by1; ++by)
-        for (uint32_t bx = bx0; bx <= bx1; ++bx) m_bin_occ[size_t(by) * m_bins_x + bx].push_back(oi);
+        for (uint32_t bx = bx0; bx <= bx1; ++bx) m_bin_occ[size_t(by) * m_bins_x + bx].push_back(o);
     }
   }
 
   // The occluders a piece with interior point (qx, qy) scans: its bin's, or the tile's.
-  const std::vector<uint32_t>& occluders_at(double qx, double qy) const {
-    if (!binned()) return m_occluders;
+  const std::vector<Occluder>& occluders_at(double qx, double qy) const {
+    if (!binned()) return m_occ;
     return m_bin_occ[size_t(bin_index(qy, m_bin_y0, m_bin_step_y, m_bins_y)) * m_bins_x +
                      bin_index(qx, m_bin_x0, m_bin_step_x, m_bins_x)];
   }
@@ -231,13 +251,15 @@ class AnalyticResolver final : public TileResolver {
   }
 
   ResolverOptions m_opt;
-  std::vector<uint32_t> m_sorted_edges, m_occluders, m_candidates;
+  std::vector<PairEdge> m_sorted_edges;  // the tile's edges, nearest z_min first
+  std::vector<uint32_t> m_occluders, m_candidates;
+  std::vector<Occluder> m_occ;
   std::vector<ConvexPolygon> m_pieces;
   EvuShape m_shape;  // of the triangle in process
   std::vector<uint64_t> m_stamp;  // per pixel of the tile: the last triangle serial that shaded it
   uint64_t m_serial = 0;
   geom::TileGrid m_bins_for{};
-  std::vector<std::vector<uint32_t>> m_bin_occ;  // finer occlusion bins of the current tile (one: off)
+  std::vector<std::vector<Occluder>> m_bin_occ;  // finer occlusion bins of the current tile (one: off)
   uint32_t m_bins_x = 1, m_bins_y = 1;
   int64_t m_bin_x0 = 0, m_bin_y0 = 0, m_bin_step_x = 1, m_bin_step_y = 1;
 };

@@ -39,9 +39,10 @@ struct Edge {
 inline bool edge_behind(const Edge& e, const Triangle& t) { return e.z_min > t.z_max; }
 
 // The bounding boxes at most touch: the segment cannot meet the triangle's interior (test 2's cheap form).
-inline bool boxes_apart(const Edge& e, const Triangle& t) {
-  return e.bbox.x1 <= t.bbox.x0 || e.bbox.x0 >= t.bbox.x1 || e.bbox.y1 <= t.bbox.y0 || e.bbox.y0 >= t.bbox.y1;
+inline bool boxes_apart(const geom::Rect& e, const geom::Rect& t) {
+  return e.x1 <= t.x0 || e.x0 >= t.x1 || e.y1 <= t.y0 || e.y0 >= t.y1;
 }
+inline bool boxes_apart(const Edge& e, const Triangle& t) { return boxes_apart(e.bbox, t.bbox); }
 
 // Test 4: the silhouette edge is one of the triangle's own edges.
 bool shares_edge(const Edge& e, const geom::Triangle& t);

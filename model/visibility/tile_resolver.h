@@ -117,9 +117,10 @@ inline constexpr int kPerPixelBudget = 3;            // over the on-chip lists o
 inline constexpr int kPerPixelMode = 4;              // the per_pixel mode: every tile
 
 struct ResolverOptions {
-  // analytic: finer occlusion bins (SVGPU §4.1) of this many pixels (0: one bin per tile).
-  // Only the scanning of occluders shrinks; results and counters are those of one bin.
-  uint32_t occlusion_bin_w = 0, occlusion_bin_h = 0;
+  // analytic: finer occlusion bins (SVGPU §4.1) of this many pixels, at most the tile (0: one
+  // bin per tile). Only the scanning of occluders shrinks; results and counters are those of
+  // one bin. 8: the host's fastest on the built-in scenes (million golden 1.44 -> 1.05 s of CPU).
+  uint32_t occlusion_bin_w = 8, occlusion_bin_h = 8;
   bool keep_pieces = false;  // analytic: collect visible pieces (SVG)
   // hybrid: a tile whose triangles x edges exceed this goes per pixel (0: no budget).
   uint64_t pair_budget = 0;

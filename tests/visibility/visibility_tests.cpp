@@ -349,6 +349,7 @@ TEST(Golden, FinerOcclusionBinsChangeNothingButTheScan) {
     auto s = vis::primitive_setup(f, {});
     vis::GoldenConfig base;
     base.tile_w = base.tile_h = 32;
+    base.options.occlusion_bin_w = base.options.occlusion_bin_h = 0;  // one bin per tile
     const auto ref = vis::golden_visibility(s, base);
     ASSERT_GT(ref.occlusion_tests, 0u);
     for (auto [bw, bh] : {std::pair{1u, 1u}, {4u, 4u}, {5u, 7u}, {8u, 32u}, {31u, 31u}, {32u, 32u}}) {
