@@ -17,13 +17,14 @@ using geom::Point;
 using geom::Rect;
 
 class AnalyticResolver final : public TileResolver {
-  // An occluder as the occlusion test's scan reads it: 48 bytes, no pointer (FrontTriangle
-  // is wide and its id sits behind a pointer: the scan was bound by those loads).
+  // The scans read compact per-tile copies: FrontTriangle and Edge are wide, and a triangle's
+  // id sits behind a pointer (the occlusion scan was bound by those loads).
   // A silhouette edge as the pair tests' scan reads it (tests 6 and 2), 24 bytes.
   struct PairEdge {
     uint32_t z_min, index;  // index into TileFrame::edges()
     geom::Rect bbox;
   };
+  // An occluder as the occlusion test's scan reads it, 48 bytes.
   struct Occluder {
     uint32_t z_min, id, index;  // index into TileFrame::triangles()
     double x0, x1, y0, y1;      // the bounding box widened by the test's margin (int -+ 1: exact)
@@ -74,7 +75,7 @@ class AnalyticResolver final : public TileResolver {
     // Candidate edges (tests 1–6 against the triangle's tile polygon), in ascending id.
     m_candidates.clear();
     for (const PairEdge& pe : m_sorted_edges) {
-      if (pe.z_min > tt.z_max) {  // test 6 (svgpu::edge_behind): and so is every later edge
+      if (svgpu::edge_behind(pe.z_min, tt)) {  // test 6: and so is every later edge
         m_shape.test6_stop = 1;
         break;
       }
@@ -195,12 +196,9 @@ class AnalyticResolver final : public TileResolver {
 
   bool binned() const { return m_bin_occ.size() > 1; }
 
-  // The bin whose span holds v: floor((v - origin) / step), clamped to [0, n - 1]. Integer
-  // and double arguments give the same bin for the same value, and both are monotone in v.
-  static uint32_t bin_index(int64_t v, int64_t origin, int64_t step, uint32_t n) {
-    const int64_t k = v < origin ? 0 : (v - origin) / step;
-    return uint32_t(std::min<int64_t>(k, int64_t(n) - 1));
-  }
+  // The bin whose span holds v: floor((v - origin) / step), clamped to [0, n - 1]; monotone
+  // in v, and exact for an integer v (a quotient short of an integer by at least 1 / step,
+  // step < 2^17, does not round up to it).
   static uint32_t bin_index(double v, int64_t origin, int64_t step, uint32_t n) {
     const double k = std::floor((v - double(origin)) / double(step));
     return uint32_t(std::clamp<double>(k, 0.0, double(n - 1)));
@@ -217,12 +215,11 @@ class AnalyticResolver final : public TileResolver {
     m_bin_x0 = rect.x0;
     m_bin_y0 = rect.y0;
     for (auto& b : m_bin_occ) b.clear();
-    for (const Occluder& o : m_occ) {
-      const Rect& b = f.triangles()[o.index].bbox;
-      const uint32_t bx0 = bin_index(int64_t(b.x0) - 1, m_bin_x0, m_bin_step_x, m_bins_x);
-      const uint32_t bx1 = bin_index(int64_t(b.x1) + 1, m_bin_x0, m_bin_step_x, m_bins_x);
-      const uint32_t by0 = bin_index(int64_t(b.y0) - 1, m_bin_y0, m_bin_step_y, m_bins_y);
-      const uint32_t by1 = bin_index(int64_t(b.y1) + 1, m_bin_y0, m_bin_step_y, m_bins_y);
+    for (const Occluder& o : m_occ) {  // the widened box: integers, so the double bins are exact
+      const uint32_t bx0 = bin_index(o.x0, m_bin_x0, m_bin_step_x, m_bins_x);
+      const uint32_t bx1 = bin_index(o.x1, m_bin_x0, m_bin_step_x, m_bins_x);
+      const uint32_t by0 = bin_index(o.y0, m_bin_y0, m_bin_step_y, m_bins_y);
+      const uint32_t by1 = bin_index(o.y1, m_bin_y0, m_bin_step_y, m_bins_y);
       for (uint32_t by = by0; by <= by1; ++by)
         for (uint32_t bx = bx0; bx <= bx1; ++bx) m_bin_occ[size_t(by) * m_bins_x + bx].push_back(o);
     }

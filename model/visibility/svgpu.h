@@ -36,7 +36,8 @@ struct Edge {
 
 // Test 6 (§3.2.1): the triangle's farthest depth is nearer than the edge's nearest, so the
 // edge cannot split it (nor can any edge that is farther still).
-inline bool edge_behind(const Edge& e, const Triangle& t) { return e.z_min > t.z_max; }
+inline bool edge_behind(uint32_t edge_z_min, const Triangle& t) { return edge_z_min > t.z_max; }
+inline bool edge_behind(const Edge& e, const Triangle& t) { return edge_behind(e.z_min, t); }
 
 // The bounding boxes at most touch: the segment cannot meet the triangle's interior (test 2's cheap form).
 inline bool boxes_apart(const geom::Rect& e, const geom::Rect& t) {
