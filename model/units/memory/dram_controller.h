@@ -108,15 +108,22 @@ class DramController {
     uint64_t end, address;
     int source;
   };
+  static constexpr size_t kKeyBits = 10, kKeys = size_t(1) << kKeyBits;
   struct Channel {
     std::vector<Write> pending;      // arrival order
     std::deque<uint64_t> sent;       // data times of sent writes not yet on the bus (ascending)
     std::deque<Read> reads;          // reads in the queue, by data end (ascending)
     // How many of each are in a slot keyed by the burst's address (a counting filter: a
     // zero spares the search for a burst to combine, forward or merge with).
-    std::array<uint32_t, 256> pending_keys{}, read_keys{};
+    std::array<uint32_t, kKeys> pending_keys{}, read_keys{};
   };
-  size_t key(uint64_t address) const { return size_t(address / m_burst_bytes) & 255; }
+  // The burst's index, Fibonacci-hashed over all its bits: the regions and the tiles'
+  // control streams (traffic.h) lie at power-of-two strides, so the index's low 8 bits
+  // alone sent half of million's read bursts (auto, 32x32) to search the pending writes
+  // in vain; hashed into 1,024 slots, 3 %.
+  size_t key(uint64_t address) const {
+    return size_t(((address / m_burst_bytes) * 0x9E3779B97F4A7C15ull) >> (64 - kKeyBits));
+  }
   void advance(uint32_t c, uint64_t at);     // idle-gap drains before `at`
   size_t pick(uint32_t c) const;             // FR-FCFS among pending writes
   uint64_t send(uint32_t c, size_t index, uint64_t at);  // one write to the bus; its data time
