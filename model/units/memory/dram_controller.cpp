@@ -9,7 +9,6 @@ DramController::DramController(const DramConfig& dram, const ControllerConfig& c
     : m_dram(dram),
       m_cfg(config),
       m_wl_ps(uint64_t(dram.wl) * dram.tck_ps),
-      m_burst_bytes(dram.burst_bytes),
       m_ch(dram.channels) {
   if (!config.read_queue || !config.write_buffer || !config.frfcfs_window)
     throw std::invalid_argument("DRAM controller: queue depths and the FR-FCFS window must be positive");

@@ -117,13 +117,11 @@ class DramController {
     // zero spares the search for a burst to combine, forward or merge with).
     std::array<uint32_t, kKeys> pending_keys{}, read_keys{};
   };
-  // The burst's index, Fibonacci-hashed over all its bits: the regions and the tiles'
-  // control streams (traffic.h) lie at power-of-two strides, so the index's low 8 bits
-  // alone sent half of million's read bursts (auto, 32x32) to search the pending writes
-  // in vain; hashed into 1,024 slots, 3 %.
-  size_t key(uint64_t address) const {
-    return size_t(((address / m_burst_bytes) * 0x9E3779B97F4A7C15ull) >> (64 - kKeyBits));
-  }
+  // The burst's address (burst-aligned), Fibonacci-hashed over all its bits: the regions
+  // and the tiles' control streams (traffic.h) lie at power-of-two strides, so the burst
+  // index's low 8 bits alone sent half of million's read bursts (auto, 32x32) to search the
+  // pending writes in vain; hashed into 1,024 slots, 3 %.
+  static size_t key(uint64_t address) { return size_t((address * 0x9E3779B97F4A7C15ull) >> (64 - kKeyBits)); }
   void advance(uint32_t c, uint64_t at);     // idle-gap drains before `at`
   size_t pick(uint32_t c) const;             // FR-FCFS among pending writes
   uint64_t send(uint32_t c, size_t index, uint64_t at);  // one write to the bus; its data time
@@ -135,7 +133,7 @@ class DramController {
 
   Dram m_dram;
   ControllerConfig m_cfg;
-  uint64_t m_wl_ps, m_burst_bytes;
+  uint64_t m_wl_ps;
   std::vector<Channel> m_ch;
   ControllerCounters m_n;
 };

@@ -15,20 +15,20 @@ struct EdgeUse {
 };
 
 // Numbers the distinct (lo, hi) pairs of `uses` densely and returns how many there are: a
-// counting sort by lo, then each bucket (a vertex's edges: a few, or a fan's many) sorted by
-// hi. No hash.
-uint32_t dense_edge_ids(std::vector<EdgeUse>& uses, size_t vertices, std::vector<uint32_t>& scratch) {
+// counting sort by lo into (hi, use) words, then each bucket (a vertex's edges: a few, or a
+// fan's many) sorted as plain integers, in place. No hash.
+uint32_t dense_edge_ids(std::vector<EdgeUse>& uses, size_t vertices, std::vector<uint64_t>& scratch) {
   std::vector<uint32_t> begin(vertices + 1, 0);
   for (const EdgeUse& u : uses) ++begin[u.lo + 1];
   for (size_t v = 1; v < begin.size(); ++v) begin[v] += begin[v - 1];
   scratch.resize(uses.size());
   std::vector<uint32_t> fill(begin.begin(), begin.end() - 1);
-  for (uint32_t i = 0; i < uses.size(); ++i) scratch[fill[uses[i].lo]++] = i;
+  for (uint32_t i = 0; i < uses.size(); ++i) scratch[fill[uses[i].lo]++] = uint64_t(uses[i].hi) << 32 | i;
   uint32_t next = 0;
   for (size_t v = 0; v < vertices; ++v) {
     const auto b = scratch.begin() + begin[v], e = scratch.begin() + begin[v + 1];
-    if (e - b > 1) std::sort(b, e, [&](uint32_t x, uint32_t y) { return uses[x].hi < uses[y].hi; });
-    for (auto i = b; i != e; ++i) uses[*i].id = (i != b && uses[*i].hi == uses[*(i - 1)].hi) ? next - 1 : next++;
+    if (e - b > 1) std::sort(b, e);
+    for (auto i = b; i != e; ++i) uses[uint32_t(*i)].id = (i != b && *i >> 32 == *(i - 1) >> 32) ? next - 1 : next++;
   }
   return next;
 }
@@ -57,8 +57,9 @@ void SilhouetteUnit::prepare() {
   std::vector<uint64_t> ops(n, 0), wr(n, 0), rd(n, 0);
   const bool on = uses_evu(m_work.mode());
   std::vector<EdgeUse> uses;
-  std::vector<uint32_t> scratch;
+  std::vector<uint64_t> scratch;
   std::vector<uint8_t> state;
+  uint64_t lookups = 0, paired = 0, spills = 0, probes = 0, readback = 0, peak = 0;
   uint32_t id = 0;
   for (const trace::Draw& d : f.draws) {
     const uint32_t first = id;
@@ -92,19 +93,19 @@ void SilhouetteUnit::prepare() {
     uint64_t on_chip = 0, spilled = 0;
     std::deque<uint32_t> order;  // insertion order on chip, for FIFO eviction (lazily pruned)
     for (const EdgeUse& u : uses) {
-      m_lookups.value += 1;
+      ++lookups;
       uint8_t& st = state[u.id];
       if (st == 1) {
         st = 0, --on_chip;
-        m_paired.value += 1;
+        ++paired;
         continue;
       }
       if (spilled) {
         ++rd[u.triangle];  // the miss must look in memory
-        m_probes.value += 1;
+        ++probes;
         if (st == 2) {
           st = 0, --spilled;
-          m_paired.value += 1;
+          ++paired;
           continue;
         }
       }
@@ -114,16 +115,22 @@ void SilhouetteUnit::prepare() {
         order.pop_front();
         --on_chip, ++spilled;
         ++wr[u.triangle];
-        m_spills.value += 1;
+        ++spills;
       }
       st = 1, ++on_chip;
       order.push_back(u.id);
-      m_peak.value = std::max(m_peak.value, double(on_chip + spilled));
+      peak = std::max(peak, on_chip + spilled);
     }
     // End of draw: what stays open is a boundary; spilled entries come back to be emitted.
     rd[id - 1] += spilled;
-    m_readback.value += double(spilled);
+    readback += spilled;
   }
+  m_lookups.value = double(lookups);
+  m_paired.value = double(paired);
+  m_spills.value = double(spills);
+  m_probes.value = double(probes);
+  m_readback.value = double(readback);
+  m_peak.value = double(peak);
   m_cycles.assign(size_t(n) + 1, 0);
   m_spill_write.assign(size_t(n) + 1, 0);
   m_spill_read.assign(size_t(n) + 1, 0);
