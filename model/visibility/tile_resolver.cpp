@@ -55,6 +55,16 @@ void TileFrame::occluders(uint32_t tile, std::vector<uint32_t>& out) const {
   std::stable_sort(out.begin(), out.end(), [&](uint32_t a, uint32_t b) { return m_tris[a].z_min < m_tris[b].z_min; });
 }
 
+uint64_t TileFrame::pair_tests(uint32_t tile) const {
+  std::vector<uint32_t> z;
+  z.reserve(m_tile_edges[tile].size());
+  for (uint32_t e : m_tile_edges[tile]) z.push_back(m_edges[e].z_min);
+  std::sort(z.begin(), z.end());
+  uint64_t n = 0;
+  for (uint32_t i : m_tile_tris[tile]) n += uint64_t(std::upper_bound(z.begin(), z.end(), m_tris[i].z_max) - z.begin());
+  return n;
+}
+
 namespace {
 
 struct Registration {

@@ -53,6 +53,10 @@ class TileFrame {
   const std::vector<uint32_t>& tile_edges(uint32_t tile) const { return m_tile_edges[tile]; }
   // The tile's opaque triangles (its possible occluders), nearest z_min first, ties in index order.
   void occluders(uint32_t tile, std::vector<uint32_t>& out) const;
+  // The tile's triangle-edge pairs that test 6 lets through: per triangle, the edges whose
+  // z_min is not beyond its z_max. From the binning alone: the analytic resolver's pair_tests
+  // for the tile but for a triangle whose clipped polygon is empty (it tests none).
+  uint64_t pair_tests(uint32_t tile) const;
 
  private:
   const Setup& m_s;

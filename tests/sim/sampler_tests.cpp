@@ -317,3 +317,48 @@ TEST(Allocate, ATargetBeyondReachTakesEverything) {
   EXPECT_EQ(n[0], 273u);
   EXPECT_EQ(n[1], 72u);
 }
+
+// Extra regressors (the render's triangles and pair rows): where the occupancy is a linear
+// function of size, auxiliary and an extra regressor, a sample of clusters gives the exact
+// total; a regressor the others span (here the auxiliary again) is left out of the fit and
+// changes nothing; a wrong number of sums is refused.
+TEST(Sampler, ExtraRegressorsFitExactlyAndASpannedOneIsLeftOut) {
+  const size_t n = 640;
+  std::vector<double> work(n), pairs(n), occ(n);
+  std::mt19937_64 rng(21);
+  for (size_t i = 0; i < n; ++i) {
+    work[i] = double(rng() % 60);
+    pairs[i] = double(rng() % 900);
+    occ[i] = 200.0 + 2.0 * work[i] + 0.75 * pairs[i];
+  }
+  double sum_work = 0, sum_pairs = 0;
+  for (size_t i = 0; i < n; ++i) sum_work += work[i], sum_pairs += pairs[i];
+  const double share = double(n - 1) / double(n);
+  for (const bool spanned : {false, true}) {
+    std::vector<std::vector<double>> extra = {pairs};
+    if (spanned) extra.push_back(work);
+    TileSampler s(work, config(8, 4), 0, {}, extra);
+    bool first = true;
+    double fill = 0;
+    for (uint64_t c : s.next_round(12)) {
+      double y = 0, m = 0, x = 0;
+      std::vector<double> z(extra.size(), 0.0);
+      for (uint64_t p = s.cluster_begin(c); p < s.cluster_end(c); ++p) {
+        if (first) {
+          s.observe_fill(fill = occ[p]);
+          first = false;
+          continue;
+        }
+        y += occ[p], m += 1.0, x += work[p];
+        for (size_t k = 0; k < extra.size(); ++k) z[k] += extra[k][p];
+      }
+      s.observe_cluster(c, y, m, x, z);
+    }
+    const double expect = fill + (200.0 * double(n) + 2.0 * sum_work + 0.75 * sum_pairs) * share;
+    const RenderEstimate e = s.estimate(1);
+    EXPECT_NEAR(e.cycles, expect, 1e-7 * expect) << "spanned " << spanned;
+    EXPECT_LT(e.half_width, 1e-6 * expect) << "spanned " << spanned;
+    EXPECT_THROW(s.observe_cluster(0, 1.0, 1.0, 1.0, {}), std::invalid_argument);
+  }
+  EXPECT_THROW(TileSampler(work, config(8, 4), 0, {}, {std::vector<double>(n - 1, 0.0)}), std::invalid_argument);
+}

@@ -191,3 +191,24 @@ TEST(TileCounters, ColumnsFollowTheFieldsAndRowsRoundTrip) {
   EXPECT_EQ(twice - c, c);
   EXPECT_THROW(vis::TileCounters::read(std::vector<int64_t>(3)), std::invalid_argument);
 }
+
+// TileFrame::pair_tests, from the binning alone, is the analytic resolver's pair_tests for
+// every tile (the sampled render's regressor: model/units/tile_scheduler/tile_sampler.h).
+TEST(TileResolver, PairTestsFollowFromTheBinning) {
+  const trace::Frame f = testsupport::frame_of("mixed", kMixed, 1);
+  const vis::Setup s = vis::primitive_setup(f, {});
+  for (uint32_t tile_size : {8u, 16u, 32u}) {
+    SCOPED_TRACE("tile " + std::to_string(tile_size));
+    vis::GoldenResult r;
+    vis::GoldenTiler tiler(s, config("analytic", tile_size), r);
+    tiler.bin();
+    uint64_t pairs = 0;
+    for (uint32_t tile = 0; tile < tiler.tile_count(); ++tile) {
+      tiler.process_tile(tile, nullptr);
+      const vis::TileCounters row = vis::TileCounters::read(r.tiles.rows[tile]);
+      EXPECT_EQ(uint64_t(row.pair_tests), tiler.frame().pair_tests(tile)) << "tile " << tile;
+      pairs += tiler.frame().pair_tests(tile);
+    }
+    EXPECT_GT(pairs, 0u);
+  }
+}

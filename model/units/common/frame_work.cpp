@@ -346,6 +346,10 @@ uint32_t FrameWork::tile_edge_count(uint32_t tile) const {
   return uses_evu(m_cfg.mode) ? uint32_t(m_seg->golden->frame().tile_edges(tile).size()) : 0;
 }
 
+uint64_t FrameWork::tile_pair_tests(uint32_t tile) const {
+  return uses_evu(m_cfg.mode) ? m_seg->golden->frame().pair_tests(tile) : 0;
+}
+
 TileWork* FrameWork::open_tile(uint32_t tile) {
   Segment& sg = *m_seg;
   auto w = std::make_unique<TileWork>();

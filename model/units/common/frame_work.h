@@ -103,6 +103,7 @@ class FrameWork {
   const std::vector<uint32_t>& segment_tiles() const { return m_seg_tiles; }  // non-empty, row-major
   uint32_t tile_triangle_count(uint32_t tile) const;        // binned in the open segment (before open_tile)
   uint32_t tile_edge_count(uint32_t tile) const;            // silhouette edges binned likewise (0: per-pixel modes)
+  uint64_t tile_pair_tests(uint32_t tile) const;            // pairs test 6 lets through, likewise (vis::TileFrame::pair_tests)
   TileWork* open_tile(uint32_t tile);                        // TileFetch
   // Tiles of the open segment about to be opened, in about that order: their visibility is
   // resolved meanwhile on the host's other threads (the EVU modes; the same results).

@@ -22,11 +22,16 @@ double student_quantile(double confidence, double dof) {
 }
 
 TileSampler::TileSampler(std::vector<double> aux, const SamplingConfig& config, uint64_t stream,
-                         const std::vector<double>& size)
+                         const std::vector<double>& size, const std::vector<std::vector<double>>& extra)
     : m_tiles(aux.size()), m_cfg(config), m_z(normal_quantile(config.confidence)) {
   if (config.cluster_tiles == 0) throw std::invalid_argument("sampling: cluster_tiles must be at least 1");
   if (!size.empty() && size.size() != aux.size()) throw std::invalid_argument("sampling: one size per unit");
   for (double t : aux) m_aux_total += t;
+  for (const std::vector<double>& z : extra) {
+    if (z.size() != aux.size()) throw std::invalid_argument("sampling: one value of each extra regressor per unit");
+    m_extra_total.push_back(0.0);
+    for (double t : z) m_extra_total.back() += t;
+  }
   m_size_total = double(m_tiles);
   if (!size.empty()) {
     m_size_total = 0;
@@ -116,10 +121,12 @@ std::vector<uint64_t> TileSampler::next_round(uint64_t count) {
   return r;
 }
 
-void TileSampler::observe_cluster(uint64_t c, double occupancy_sum, double size, double aux) {
+void TileSampler::observe_cluster(uint64_t c, double occupancy_sum, double size, double aux,
+                                  const std::vector<double>& extra) {
+  if (extra.size() != m_extra_total.size()) throw std::invalid_argument("sampling: one sum per extra regressor");
   m_y.push_back(occupancy_sum);
-  m_m.push_back(size);
-  m_x.push_back(aux);
+  m_reg.push_back({size, aux});
+  m_reg.back().insert(m_reg.back().end(), extra.begin(), extra.end());
   m_h.push_back(m_stratum_of.at(c));
 }
 
@@ -139,34 +146,70 @@ TileSampler::Fit TileSampler::fit(uint32_t cores) const {
   // Design weights K_h / n_h.
   std::vector<double> d(hn, 0.0);
   for (size_t h = 0; h < hn; ++h) d[h] = f.n[h] ? double(m_strata[h].order.size()) / double(f.n[h]) : 0.0;
-  double mm = 0, mx = 0, xx = 0, my = 0, xy = 0;
+  // Weighted least squares on the regressors in order (size, auxiliary, extras), at most one
+  // fewer than the clusters observed; a regressor is left out where the ones before it span
+  // it (its Cholesky pivot under 1e-9 of its own weight: proportional auxiliaries, per-pixel
+  // modes' work = triangles, a column of zeros).
+  const size_t p_all = 2 + m_extra_total.size();
+  const size_t p = n >= 2 ? std::min(p_all, n - 1) : 1;
+  std::vector<std::vector<double>> g(p, std::vector<double>(p, 0.0));
+  std::vector<double> r(p, 0.0);
   for (size_t j = 0; j < n; ++j) {
     const double wj = d[m_h[j]];
-    mm += wj * m_m[j] * m_m[j];
-    mx += wj * m_m[j] * m_x[j];
-    xx += wj * m_x[j] * m_x[j];
-    my += wj * m_m[j] * m_y[j];
-    xy += wj * m_x[j] * m_y[j];
+    for (size_t k = 0; k < p; ++k) {
+      r[k] += wj * m_reg[j][k] * m_y[j];
+      for (size_t l = 0; l < p; ++l) g[k][l] += wj * m_reg[j][k] * m_reg[j][l];
+    }
   }
-  const double det = mm * xx - mx * mx;
-  if (n >= 3 && det > 1e-9 * mm * xx) {
-    f.a = (my * xx - xy * mx) / det;
-    f.b = (xy * mm - my * mx) / det;
-  } else {  // the auxiliaries are proportional (or too few clusters): a ratio to the tile count
-    f.a = mm > 0 ? my / mm : 0.0;
+  std::vector<size_t> used;
+  std::vector<std::vector<double>> chol;  // lower-triangular rows over `used`
+  for (size_t k = 0; k < p; ++k) {
+    std::vector<double> row(used.size() + 1, 0.0);
+    double pivot = g[k][k];
+    for (size_t i = 0; i < used.size(); ++i) {
+      double v = g[k][used[i]];
+      for (size_t q = 0; q < i; ++q) v -= row[q] * chol[i][q];
+      row[i] = v / chol[i][i];
+      pivot -= row[i] * row[i];
+    }
+    if (!(g[k][k] > 0) || !(pivot > 1e-9 * g[k][k])) continue;
+    row.back() = std::sqrt(pivot);
+    chol.push_back(std::move(row));
+    used.push_back(k);
   }
+  std::vector<double> u(used.size());
+  for (size_t i = 0; i < used.size(); ++i) {  // L u = r
+    double v = r[used[i]];
+    for (size_t q = 0; q < i; ++q) v -= chol[i][q] * u[q];
+    u[i] = v / chol[i][i];
+  }
+  f.coef.assign(p_all, 0.0);
+  for (size_t i = used.size(); i-- > 0;) {  // L^T beta = u
+    double v = u[i];
+    for (size_t q = i + 1; q < used.size(); ++q) v -= chol[q][i] * f.coef[used[q]];
+    f.coef[used[i]] = v / chol[i][i];
+  }
+  f.fitted = used.size();
+  auto residual = [&](size_t j) {
+    double e = m_y[j];
+    for (size_t k = 0; k < p_all; ++k) e -= f.coef[k] * m_reg[j][k];
+    return e;
+  };
   // Per stratum: the residuals' variance about their stratum mean.
   std::vector<double> sum(hn, 0.0), sum2(hn, 0.0);
   double pooled = 0;
   uint64_t pooled_dof = 0;
   for (size_t j = 0; j < n; ++j) {
-    const double e = m_y[j] - f.a * m_m[j] - f.b * m_x[j];
+    const double e = residual(j);
     sum[m_h[j]] += e;
     sum2[m_h[j]] += e * e;
   }
+  // Each regressor fitted beyond size and auxiliary takes a degree of freedom from the
+  // residuals: their variances are scaled by (n - 2) / (n - fitted).
+  const double inflate = f.fitted > 2 && n > f.fitted ? double(n - 2) / double(n - f.fitted) : 1.0;
   for (size_t h = 0; h < hn; ++h)
     if (f.n[h] >= 2) {
-      const double ss = std::max(0.0, sum2[h] - sum[h] * sum[h] / double(f.n[h]));
+      const double ss = std::max(0.0, sum2[h] - sum[h] * sum[h] / double(f.n[h])) * inflate;
       f.s2[h] = ss / double(f.n[h] - 1);
       pooled += ss;
       pooled_dof += f.n[h] - 1;
@@ -182,13 +225,14 @@ TileSampler::Fit TileSampler::fit(uint32_t cores) const {
   // cost is the fill).
   const double c = std::min<double>(std::max<uint32_t>(cores, 1), double(m_tiles));
   const double share = m_tiles ? (double(m_tiles) - c) / double(m_tiles) : 0.0;
-  const double tiles = m_size_total * share;
-  const double aux = m_aux_total * share;
+  std::vector<double> totals = {m_size_total, m_aux_total};
+  totals.insert(totals.end(), m_extra_total.begin(), m_extra_total.end());
   // The generalised regression estimator: the fit's prediction plus the residuals expanded
   // by their design weights (zero where the model holds; it corrects a misspecified model).
   double residual_total = 0;
-  for (size_t j = 0; j < n; ++j) residual_total += d[m_h[j]] * (m_y[j] - f.a * m_m[j] - f.b * m_x[j]);
-  f.total = f.a * tiles + f.b * aux + residual_total;
+  for (size_t j = 0; j < n; ++j) residual_total += d[m_h[j]] * residual(j);
+  f.total = residual_total;
+  for (size_t k = 0; k < p_all; ++k) f.total += f.coef[k] * totals[k] * share;
   return f;
 }
 
@@ -216,7 +260,7 @@ RenderEstimate TileSampler::estimate(uint32_t cores) const {
   if (!e.complete && m_y.size() >= 3 && f.variance_known) {
     // Student's t on the residuals' degrees of freedom: two to four clusters a stratum
     // estimate its variance loosely (the normal quantile covered 85 % at 95 % nominal).
-    const double dof = std::max(1.0, double(m_y.size()) - double(m_strata.size()));
+    const double dof = std::max(1.0, double(m_y.size()) - double(m_strata.size()) - double(f.fitted > 2 ? f.fitted - 2 : 0));
     e.half_width = student_quantile(m_cfg.confidence, dof) * per_core * std::sqrt(variance(f));
   } else if (!e.complete) {
     e.half_width = e.cycles;  // too few observations to bound anything

@@ -14,14 +14,19 @@
 // its first tile's fill plus the occupancies of the others, so a segment's render on C
 // cores is estimated as
 //     R = mean fill + Y / C,   Y = the occupancies of all but the C first tiles,
-// Y by a regression estimator over clusters with two auxiliaries known for every tile
-// before any is simulated: the tiles' size (in full tiles: a tile cut by the screen's right
-// or bottom edge counts its share of pixels, and its fixed per-pixel work, clear and write-back,
-// with it) and their binned work (tile_work: triangles, weighted by the EVU's all-pairs rows
-// where a tile has many silhouette edges),
-//     y_j = a m_j + b x_j + e_j   (cluster j: occupancy sum y, size m, work x),
-//     Y = a M + b X,
-// with M and X the population's totals less C average tiles. (With the tile count for m, a
+// Y by a regression estimator over clusters with auxiliaries known for every tile before any
+// is simulated: the tiles' size (in full tiles: a tile cut by the screen's right or bottom
+// edge counts its share of pixels, and its fixed per-pixel work, clear and write-back, with
+// it), their binned work (tile_work: triangles, weighted by the EVU's all-pairs rows where a
+// tile has many silhouette edges), and any further regressors the caller gives (the render:
+// its binned triangles and the EVU's exact reject rows, TileFrame::pair_tests),
+//     y_j = a m_j + b x_j + sum_k c_k z_jk + e_j   (cluster j: occupancy sum y, size m, work x),
+//     Y = a M + b X + sum_k c_k Z_k,
+// with M, X and Z_k the population's totals less C average tiles. Work alone leaves a tile's
+// triangles and its pairs confounded: with both beside it the residuals' spread fell by 12 to
+// 49 % (million, bunny, dragon_bunnies, elephant, glass, armadillo; one core, 32x32 tiles).
+// A regressor that the others already span (per-pixel modes: work = triangles, no pairs) is
+// left out of the fit. (With the tile count for m, a
 // sample without bottom-row tiles, whose 24 of 32 rows cost 200 cycles against 264, put
 // decals +1.09 % off inside a zero-width interval.) The clusters are stratified by
 // their work (equal-sized strata of the sorted clusters) and drawn within each stratum
@@ -135,8 +140,9 @@ class TileSampler {
   // `aux`: per unit (tile, or trace triangle) in order, the auxiliary known before any is
   // simulated (tile_work; a geometry's bytes). `size`: per unit, its size regressor (a tile's
   // pixels over a full tile's); empty: 1 each.
+  // `extra`: further regressors, each one value per unit (none: size and aux alone).
   TileSampler(std::vector<double> aux, const SamplingConfig& config, uint64_t stream,
-              const std::vector<double>& size = {});
+              const std::vector<double>& size = {}, const std::vector<std::vector<double>>& extra = {});
 
   uint64_t tiles() const { return m_tiles; }
   uint64_t clusters() const { return m_clusters; }
@@ -154,8 +160,9 @@ class TileSampler {
 
   // Observations: the occupancies of cluster c's tiles that were measured (not their core's
   // first in their round, not warm-up; their sum, and their size summed); each core's first
-  // tile of a round as a fill. `aux`: the auxiliary summed over the same tiles.
-  void observe_cluster(uint64_t c, double occupancy_sum, double size, double aux);
+  // tile of a round as a fill. `aux` and `extra` (one per extra regressor): the auxiliary and
+  // the extra regressors summed over the same tiles.
+  void observe_cluster(uint64_t c, double occupancy_sum, double size, double aux, const std::vector<double>& extra = {});
   void observe_fill(double cycles);
   // A take-all tile's occupancy (not its core's first): added as it is, not estimated.
   void observe_exact(double cycles);
@@ -180,13 +187,16 @@ class TileSampler {
   std::vector<Stratum> m_strata;
   std::vector<uint32_t> m_stratum_of;  // per cluster
   uint64_t m_clusters = 0, m_taken = 0;
-  std::vector<double> m_y, m_m, m_x;  // per observed cluster: occupancy sum, size, auxiliary
+  std::vector<double> m_extra_total;  // per extra regressor: the population's total
+  std::vector<double> m_y;             // per observed cluster: occupancy sum
+  std::vector<std::vector<double>> m_reg;  // per observed cluster: size, auxiliary, extra regressors
   std::vector<uint32_t> m_h;          // per observed cluster: its stratum
   double m_fill_sum = 0, m_exact_sum = 0;
   uint64_t m_fills = 0;
 
   struct Fit {
-    double a = 0, b = 0;      // y = a m + b x (m: size)
+    std::vector<double> coef; // y = coef . (m, x, z...) (m: size); 0 for a regressor left out
+    size_t fitted = 0;        // regressors in the fit
     std::vector<double> s2;   // per stratum: the residuals' variance per cluster
     std::vector<uint64_t> n;  // per stratum: clusters observed
     bool variance_known = true;  // every stratum not fully observed has a variance

@@ -123,8 +123,16 @@ void TileScheduler::dispatch_sampled(uint32_t segment, const std::vector<uint32_
     const vis::zbuffer::PixelRect r = vis::zbuffer::tile_pixels(grid, tiles[i]);
     size[i] = double(r.x1 - r.x0) * double(r.y1 - r.y0) / (double(grid.tile_w) * double(grid.tile_h));
   }
+  // The regressors beside size and work (tile_sampler.h): the binned triangles and the pairs
+  // test 6 lets through.
+  std::vector<std::vector<double>> extra(2, std::vector<double>(tiles.size()));
+  for (size_t i = 0; i < tiles.size(); ++i) {
+    extra[0][i] = double(m_work.tile_triangle_count(tiles[i]));
+    extra[1][i] = double(m_work.tile_pair_tests(tiles[i]));
+  }
   std::vector<size_t> sampled_pos, certain_pos;
   std::vector<double> sampled_work, sampled_size;
+  std::vector<std::vector<double>> sampled_extra(extra.size());
   for (size_t i = 0; i < tiles.size(); ++i) {
     if (certain_cluster[i / ct]) {
       certain_pos.push_back(i);
@@ -132,9 +140,10 @@ void TileScheduler::dispatch_sampled(uint32_t segment, const std::vector<uint32_
       sampled_pos.push_back(i);
       sampled_work.push_back(work[i]);
       sampled_size.push_back(size[i]);
+      for (size_t k = 0; k < extra.size(); ++k) sampled_extra[k].push_back(extra[k][i]);
     }
   }
-  TileSampler sampler(sampled_work, m_cfg.sampling, segment, sampled_size);
+  TileSampler sampler(sampled_work, m_cfg.sampling, segment, sampled_size, sampled_extra);
   SegmentSample rec;
   rec.segment = segment;
   rec.certain_tiles = certain_pos.size();
@@ -194,8 +203,12 @@ void TileScheduler::dispatch_sampled(uint32_t segment, const std::vector<uint32_
       // Occupancies: a core's tiles end in the order it got them.
       std::vector<uint64_t> last(m_cfg.cores, round_start);
       std::vector<bool> started(m_cfg.cores, false);
-      std::map<uint64_t, std::tuple<double, double, double>> clusters;  // y, m (size), x per sampled cluster
-      for (uint64_t c : round) clusters[c] = {0.0, 0.0, 0.0};
+      struct Sums {
+        double y = 0, m = 0, x = 0;  // occupancy, size, work
+        std::vector<double> z;       // the extra regressors
+      };
+      std::map<uint64_t, Sums> clusters;
+      for (uint64_t c : round) clusters[c].z.assign(extra.size(), 0.0);
       for (const Sent& s : sent) {
         const uint64_t end = m_work.tile_end_cycle(s.tile);
         const double occupancy = double(end - last[s.core]);
@@ -208,13 +221,14 @@ void TileScheduler::dispatch_sampled(uint32_t segment, const std::vector<uint32_
         } else if (s.cluster == kCertain) {
           sampler.observe_exact(occupancy);
         } else {
-          auto& [y, m, x] = clusters[s.cluster];
-          y += occupancy;
-          m += size[s.pos];
-          x += work[s.pos];
+          Sums& v = clusters[s.cluster];
+          v.y += occupancy;
+          v.m += size[s.pos];
+          v.x += work[s.pos];
+          for (size_t k = 0; k < extra.size(); ++k) v.z[k] += extra[k][s.pos];
         }
       }
-      for (const auto& [c, v] : clusters) sampler.observe_cluster(c, std::get<0>(v), std::get<1>(v), std::get<2>(v));
+      for (const auto& [c, v] : clusters) sampler.observe_cluster(c, v.y, v.m, v.x, v.z);
       rec.estimate = sampler.estimate(m_cfg.cores);
       rec.estimate.tiles += certain_pos.size();
       rec.estimate.tiles_observed += certain_pos.size();
