@@ -61,7 +61,9 @@ uint64_t TileFrame::pair_tests(uint32_t tile) const {
   for (uint32_t e : m_tile_edges[tile]) z.push_back(m_edges[e].z_min);
   std::sort(z.begin(), z.end());
   uint64_t n = 0;
-  for (uint32_t i : m_tile_tris[tile]) n += uint64_t(std::upper_bound(z.begin(), z.end(), m_tris[i].z_max) - z.begin());
+  for (uint32_t i : m_tile_tris[tile])
+    n += uint64_t(std::partition_point(z.begin(), z.end(), [&](uint32_t z_min) { return !svgpu::edge_behind(z_min, m_tris[i]); }) -
+                  z.begin());
   return n;
 }
 

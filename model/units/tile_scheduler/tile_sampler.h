@@ -17,7 +17,8 @@
 // Y by a regression estimator over clusters with auxiliaries known for every tile before any
 // is simulated: the tiles' size (in full tiles: a tile cut by the screen's right or bottom
 // edge counts its share of pixels, and its fixed per-pixel work, clear and write-back, with
-// it), their binned work (tile_work: triangles, weighted by the EVU's all-pairs rows where a
+// it; with the tile count instead, a sample without bottom-row tiles, whose 24 of 32 rows cost
+// 200 cycles against 264, put decals +1.09 % off inside a zero-width interval), their binned work (tile_work: triangles, weighted by the EVU's all-pairs rows where a
 // tile has many silhouette edges), and any further regressors the caller gives (the render:
 // its binned triangles and the EVU's exact reject rows, TileFrame::pair_tests),
 //     y_j = a m_j + b x_j + sum_k c_k z_jk + e_j   (cluster j: occupancy sum y, size m, work x),
@@ -26,9 +27,7 @@
 // triangles and its pairs confounded: with both beside it the residuals' spread fell by 12 to
 // 49 % (million, bunny, dragon_bunnies, elephant, glass, armadillo; one core, 32x32 tiles).
 // A regressor that the others already span (per-pixel modes: work = triangles, no pairs) is
-// left out of the fit. (With the tile count for m, a
-// sample without bottom-row tiles, whose 24 of 32 rows cost 200 cycles against 264, put
-// decals +1.09 % off inside a zero-width interval.) The clusters are stratified by
+// left out of the fit. The clusters are stratified by
 // their work (equal-sized strata of the sorted clusters) and drawn within each stratum
 // at random, at least two per stratum, then in Neyman allocation (K_h s_h): a skewed scene's
 // heavier clusters are always represented, and a sample of light clusters alone can no longer
