@@ -43,6 +43,8 @@ struct HybArgs {
   uint8_t* flag;     // per occluder position: in some crossing pair (count_all)
   uint32_t* zmax;    // per occluder position: its z_max and id, contiguous for the pair loop
   uint32_t* ids_at;
+  uint32_t* active;  // per occluder position: a detection bin's active members (scratch)
+  uint64_t* batch;   // per tile, 64 words: the pairs waiting for the exact test (scratch)
   // Per-pixel tiles.
   const uint32_t* sample_xy;
   uint32_t n_samples, width, height;
@@ -109,6 +111,22 @@ TV_HD inline bool planes_cross(const PEdge<ExactP>* region, uint32_t n, const XT
   return nearer && farther;
 }
 
+// A filter before planes_cross, exact: z_u - z_t is affine, so where it takes no two strict
+// signs at a triangle's vertices it takes none over the triangle, which holds the overlap (the
+// overlap's vertices are judged by the same sign function, depth_at, at w > 0).
+TV_HD inline bool signs_differ_at(const XTri& v, const XTri& t, const XTri& u) {
+  bool nearer = false, farther = false;
+  for (int i = 0; i < 3; ++i) {
+    const int o = depth_at(u.plane, t.plane, exact::IPoint::of(v.v[i].xy()));
+    nearer = nearer || o < 0;
+    farther = farther || o > 0;
+  }
+  return nearer && farther;
+}
+TV_HD inline bool planes_may_cross(const XTri& t, const XTri& u) {
+  return signs_differ_at(u, t, u) && signs_differ_at(t, t, u);
+}
+
 TV_HD inline uint32_t lowest_bit(uint32_t v) {
 #if defined(__CUDA_ARCH__)
   return uint32_t(__ffs(int(v)) - 1);
@@ -129,9 +147,12 @@ struct Bins {
 // hybrid_resolver.cpp crossing_pairs, by a team of lanes: 1 at the first crossing pair
 // (counting screens and tests up to it), or with count_all the triangles in some crossing pair.
 // Golden's sweep visits, in each bin (row-major), each member k in list order against the
-// active members a < k, in list order; since z_min never decreases along the list, a is still
-// active at k exactly when z_max[a] > z_min[k]. So the visited pairs are known in advance and
-// in order: the lanes take 32 consecutive a at a time, and a ballot finds the first crossing.
+// active members a < k, in list order, after dropping those whose z_max is not past k's z_min
+// (they never come back: z_min does not decrease along the list). The team keeps the same
+// active list (scratch in `active`, the tile's positions): the lanes take 32 of its entries
+// at a time, drop and compact them as golden does, and a ballot finds the first crossing. The
+// bin's members are found 32 positions at a time and visited in list order, so a tile costs
+// its bins' members and their active lists, not every pair of its triangles in every bin.
 template <class P, class Team>
 TV_HD uint32_t crossing_pairs(const HybArgs<P>& a, uint32_t tile, bool count_all, uint64_t& screens, uint64_t& tests,
                               Team team) {
@@ -163,55 +184,112 @@ TV_HD uint32_t crossing_pairs(const HybArgs<P>& a, uint32_t tile, bool count_all
   team.sync();
   const uint32_t* zmax = a.zmax + base;
   const uint32_t* idk = a.ids_at + base;
+  uint32_t* act = a.active + base;  // the bin's active members, in list order
   auto in_bin = [](uint32_t r, uint32_t bx, uint32_t by) {
     return r != ~0u && bx >= (r & 0xff) && by >= (r >> 8 & 0xff) && bx <= (r >> 16 & 0xff) && by <= (r >> 24);
   };
-  bool any = false;
+  const uint32_t below = (1u << lane) - 1u;  // the lanes before this one
+  // Pairs to test wait in a batch (the tile's scratch in `batch`: position k << 32 | q, then
+  // the screens counted through the pair), so that a round of the exact test takes up to
+  // kSize pairs in parallel, whatever member they belong to; the first crossing in visiting
+  // order decides, with the screens and tests counted up to it, as golden counts them.
+  uint64_t* bpair = a.batch + uint64_t(tile) * 2 * Team::kSize;
+  uint64_t* bscreens = bpair + Team::kSize;
+  uint32_t nb = 0;
+  uint64_t s_cnt = 0, t_cnt = 0;
+  // The batch's tests; true at a crossing that ends the search (not with count_all).
+  auto flush = [&]() -> bool {
+    team.sync();  // the batch's entries, written by any lane
+    bool cross = false;
+    uint32_t k = 0, q = 0;
+    if (lane < nb) {
+      k = uint32_t(bpair[lane] >> 32);
+      q = uint32_t(bpair[lane]);
+      const XTri xt = exact_of(a.tris[occ[k].tri]), xu = exact_of(a.tris[occ[q].tri]);
+      if (planes_may_cross(xt, xu)) {
+        PEdge<ExactP> poly[kTileCap];
+        bool overflow = false;
+        const uint32_t np = tile_polygon<ExactP>(xt, rect, poly, overflow);
+        cross = planes_cross(poly, np, xt, xu);
+      }
+    }
+    const uint32_t cm = team.ballot(cross);
+    if (count_all) {
+      if (cross) flag[q] = flag[k] = 1;
+    } else if (cm != 0) {
+      const uint32_t first = lowest_bit(cm);
+      s_cnt = bscreens[first];
+      t_cnt += first + 1;
+      return true;
+    }
+    t_cnt += nb;
+    nb = 0;
+    team.sync();  // every entry read before the next ones are written
+    return false;
+  };
   for (uint32_t by = 0; by < g.y; ++by)
-    for (uint32_t bx = 0; bx < g.x; ++bx)
-      for (uint32_t k = 0; k < n; ++k) {
-        const uint32_t rk = range[k];
-        if (!in_bin(rk, bx, by)) continue;
-        const TileTri<P>& t = a.tris[occ[k].tri];
-        for (uint32_t a0 = 0; a0 < k; a0 += Team::kSize) {
-          const uint32_t q = a0 + lane;
-          bool screen = false, test = false, cross = false;
-          if (q < k && in_bin(range[q], bx, by) && zmax[q] > t.z_min && idk[q] != t.id) {
-            screen = true;
-            const uint32_t rq = range[q];
-            const uint32_t x0 = tmax(rk & 0xff, rq & 0xff), y0 = tmax(rk >> 8 & 0xff, rq >> 8 & 0xff);
-            if (x0 == bx && y0 == by) {
-              const TileTri<P>& u = a.tris[occ[q].tri];
-              if (may_cross(t, u) && !opposite_neighbours(t, u)) {
-                test = true;
-                const XTri xt = exact_of(t);
-                PEdge<ExactP> poly[kTileCap];
-                bool overflow = false;
-                const uint32_t np = tile_polygon<ExactP>(xt, rect, poly, overflow);
-                cross = planes_cross(poly, np, xt, exact_of(u));
-              }
+    for (uint32_t bx = 0; bx < g.x; ++bx) {
+      uint32_t na = 0;
+      for (uint32_t k0 = 0; k0 < n; k0 += Team::kSize) {
+        // The bin's members among the next kSize positions, then each in list order.
+        for (uint32_t mk = team.ballot(k0 + lane < n && in_bin(range[k0 + lane], bx, by)); mk != 0; mk &= mk - 1) {
+          const uint32_t k = k0 + lowest_bit(mk), rk = range[k];
+          const TileTri<P>& t = a.tris[occ[k].tri];
+          uint32_t kept = 0;
+          for (uint32_t j0 = 0; j0 < na; j0 += Team::kSize) {
+            const uint32_t j = j0 + lane;
+            uint32_t q = 0;
+            bool keep = false, screen = false, test = false;
+            if (j < na) {
+              q = act[j];
+              keep = zmax[q] > t.z_min;
             }
+            if (keep && idk[q] != t.id) {
+              screen = true;
+              const uint32_t rq = range[q];
+              const uint32_t x0 = tmax(rk & 0xff, rq & 0xff), y0 = tmax(rk >> 8 & 0xff, rq >> 8 & 0xff);
+              // Decided in the first bin the two share, and only if they may cross.
+              test = x0 == bx && y0 == by && may_cross(t, a.tris[occ[q].tri]) &&
+                     !opposite_neighbours(t, a.tris[occ[q].tri]);
+            }
+            const uint32_t km = team.ballot(keep), sm = team.ballot(screen), tm = team.ballot(test);
+            // Golden's erase: a member whose z_max is not past this one's z_min never comes
+            // back (z_min does not decrease along the list). Every lane has read its entry
+            // (the ballots order them), and no write goes past the entries already read.
+            if (keep) act[kept + popc(km & below)] = q;
+            kept += popc(km);
+            if (tm != 0) {
+              if (nb + popc(tm) > Team::kSize && flush()) {
+                screens += s_cnt;
+                tests += t_cnt;
+                return 1;
+              }
+              if (test) {
+                const uint32_t at = nb + popc(tm & below);
+                bpair[at] = uint64_t(k) << 32 | q;
+                bscreens[at] = s_cnt + popc(sm & (below << 1 | 1u));
+              }
+              nb += popc(tm);
+            }
+            s_cnt += popc(sm);
           }
-          const uint32_t sm = team.ballot(screen), tm = team.ballot(test), cm = team.ballot(cross);
-          if (count_all) {
-            if (cross) flag[q] = flag[k] = 1;
-            any = any || cm != 0;
-            continue;
-          }
-          if (cm == 0) {
-            screens += popc(sm);
-            tests += popc(tm);
-            continue;
-          }
-          // The first crossing lane ends the search: the pairs before it and it were visited.
-          const uint32_t first = lowest_bit(cm);
-          const uint32_t upto = first == 31 ? ~0u : (2u << first) - 1u;
-          screens += popc(sm & upto);
-          tests += popc(tm & upto);
-          return 1;
+          team.sync();
+          if (lane == 0) act[kept] = k;
+          na = kept + 1;
+          team.sync();
         }
       }
-  if (!count_all) return 0;
+    }
+  if (nb != 0 && flush()) {
+    screens += s_cnt;
+    tests += t_cnt;
+    return 1;
+  }
+  if (!count_all) {
+    screens += s_cnt;
+    tests += t_cnt;
+    return 0;
+  }
   team.sync();
   uint32_t found = 0;
   for (uint32_t k = lane; k < n; k += Team::kSize) found += flag[k];
@@ -239,6 +317,13 @@ TV_HD void verdict(const HybArgs<P>& a, uint64_t tile, Team team) {
     a.screens[tile] = screens;
     a.tests[tile] = tests;
     a.crossing[tile] = crossing;
+    if (cause != 0) {  // a per-pixel tile: its parts add their samples (k_per_pixel)
+      int64_t* r = a.rows + tile * kTileColumns;
+      for (int c : {kColPairTests, kColCandidates, kColClips, kColPieces, kColVisiblePieces, kColOcclusionTests,
+                    kColSamplesCovered, kColFragments})
+        r[c] = 0;
+      a.shaded[tile] = 0;
+    }
   }
   team.sync();
 }
@@ -369,72 +454,72 @@ TV_HD void per_pixel_tile(const HybArgs<P>& a, uint64_t tile) {
 
 constexpr uint32_t kPixBlock = 256, kPixChunk = 32;
 
+// A block per kPixBlock samples of a per-pixel tile (its parts spread over the SMs: a few
+// tiles of thousands of triangles must not wait on one SM each). The tile's counters were set
+// to 0 by its verdict; the parts add to them (integers: the order does not matter).
 template <class P>
-__global__ void __launch_bounds__(kPixBlock) k_per_pixel(HybArgs<P> a, uint64_t n_tiles) {
+__global__ void __launch_bounds__(kPixBlock) k_per_pixel(HybArgs<P> a, uint64_t n_tiles, uint32_t parts) {
   __shared__ PTri staged[kPixChunk];
   __shared__ unsigned long long sums[3];
-  for (uint64_t tile = blockIdx.x; tile < n_tiles; tile += gridDim.x) {
+  for (uint64_t job = blockIdx.x; job < n_tiles * parts; job += gridDim.x) {
+    const uint64_t tile = job / parts;
     if (a.cause[tile] == 0) continue;  // uniform over the block
     int64_t* row = a.rows + tile * kTileColumns;
     const uint32_t begin = a.item_begin[tile], n = uint32_t(row[kColTriangles]);
     if (threadIdx.x == 0) sums[0] = sums[1] = sums[2] = 0;
     uint32_t covered = 0, generated = 0, shaded = 0;
-    const uint32_t tw = a.grid.tile_w, th = a.grid.tile_h;
-    const uint32_t total = tw * th * a.n_samples;
-    for (uint32_t r = 0; r < total; r += kPixBlock) {
-      int64_t px = 0, py = 0;
-      uint32_t k = 0;
-      const bool mine = tile_sample(a, uint32_t(tile), r + threadIdx.x, px, py, k);
-      Pt s{0, 0};
-      if (mine) {
-        const uint32_t sxy = a.sample_xy[k];
-        s = {int32_t((px << a.grid.sb) + (sxy & 0xffffu)), int32_t((py << a.grid.sb) + (sxy >> 16))};
-      }
-      POwner o;
-      exact::Plane owner_plane{};
+    int64_t px = 0, py = 0;
+    uint32_t k = 0;
+    const bool mine = tile_sample(a, uint32_t(tile), uint32_t(job % parts) * kPixBlock + threadIdx.x, px, py, k);
+    Pt s{0, 0};
+    if (mine) {
+      const uint32_t sxy = a.sample_xy[k];
+      s = {int32_t((px << a.grid.sb) + (sxy & 0xffffu)), int32_t((py << a.grid.sb) + (sxy >> 16))};
+    }
+    POwner o;
+    exact::Plane owner_plane{};
+    for (uint32_t c = 0; c < n; c += kPixChunk) {
+      const uint32_t m = tmin(kPixChunk, n - c);
+      __syncthreads();
+      if (threadIdx.x < m) staged[threadIdx.x] = ptri_of(a, begin + c + threadIdx.x);
+      __syncthreads();
+      if (mine)
+        for (uint32_t j = 0; j < m; ++j) {
+          const int64_t before = o.item;
+          test(staged[j], s, o, generated);
+          if (o.item != before) {
+            owner_plane = staged[j].plane;
+            o.plane = &owner_plane;
+          }
+        }
+    }
+    // Non-opaque triangles (cause 2: the tile has some) are shaded where they cover the sample
+    // in front of its owner (per_pixel_resolver.cpp; at 1 sample a pixel is a sample).
+    if (a.cause[tile] == 2)
       for (uint32_t c = 0; c < n; c += kPixChunk) {
         const uint32_t m = tmin(kPixChunk, n - c);
         __syncthreads();
         if (threadIdx.x < m) staged[threadIdx.x] = ptri_of(a, begin + c + threadIdx.x);
         __syncthreads();
         if (mine)
-          for (uint32_t j = 0; j < m; ++j) {
-            const int64_t before = o.item;
-            test(staged[j], s, o, generated);
-            if (o.item != before) {
-              owner_plane = staged[j].plane;
-              o.plane = &owner_plane;
-            }
-          }
+          for (uint32_t j = 0; j < m; ++j)
+            if (!staged[j].opaque && covers(staged[j], s) &&
+                (o.item < 0 || sample_depth_order(staged[j].plane, owner_plane, s) < 0))
+              ++shaded;
       }
-      // Non-opaque triangles (cause 2: the tile has some) are shaded where they cover the sample
-      // in front of its owner (per_pixel_resolver.cpp; at 1 sample a pixel is a sample).
-      if (a.cause[tile] == 2)
-        for (uint32_t c = 0; c < n; c += kPixChunk) {
-          const uint32_t m = tmin(kPixChunk, n - c);
-          __syncthreads();
-          if (threadIdx.x < m) staged[threadIdx.x] = ptri_of(a, begin + c + threadIdx.x);
-          __syncthreads();
-          if (mine)
-            for (uint32_t j = 0; j < m; ++j)
-              if (!staged[j].opaque && covers(staged[j], s) &&
-                  (o.item < 0 || sample_depth_order(staged[j].plane, owner_plane, s) < 0))
-                ++shaded;
-        }
-      if (mine) {
-        covered += o.item >= 0 ? 1 : 0;
-        finish_sample(a, px, py, k, o);
-      }
+    if (mine) {
+      covered += o.item >= 0 ? 1 : 0;
+      finish_sample(a, px, py, k, o);
     }
+    __syncthreads();  // sums zeroed before any adds
     atomicAdd(&sums[0], static_cast<unsigned long long>(covered));
     atomicAdd(&sums[1], static_cast<unsigned long long>(generated));
     atomicAdd(&sums[2], static_cast<unsigned long long>(shaded));
     __syncthreads();
     if (threadIdx.x == 0) {
-      a.shaded[tile] = sums[0] + sums[2];
-      for (int c : {kColPairTests, kColCandidates, kColClips, kColPieces, kColVisiblePieces, kColOcclusionTests}) row[c] = 0;
-      row[kColSamplesCovered] = int64_t(sums[0]);
-      row[kColFragments] = int64_t(sums[1]);
+      atomicAdd(reinterpret_cast<unsigned long long*>(&a.shaded[tile]), sums[0] + sums[2]);
+      atomicAdd(reinterpret_cast<unsigned long long*>(&row[kColSamplesCovered]), sums[0]);
+      atomicAdd(reinterpret_cast<unsigned long long*>(&row[kColFragments]), sums[1]);
     }
     __syncthreads();
   }
@@ -524,6 +609,8 @@ void stage_hybrid(Pipeline<P>& p) {
   a.flag = p.hyb_flag.need(ni + 1);
   a.zmax = p.hyb_zmax.need(ni + 1);
   a.ids_at = p.hyb_id.need(ni + 1);
+  a.active = p.hyb_active.need(ni + 1);
+  a.batch = p.hyb_batch.need(nt * 2 * WarpTeam::kSize + 1);
   a.sample_xy = p.sample_xy.get();
   a.n_samples = p.f.n_samples;
   a.width = p.f.width;
@@ -542,8 +629,9 @@ void stage_hybrid(Pipeline<P>& p) {
   if (ex.where == Where::cpu) {
     for (uint64_t t = 0; t < nt; ++t) per_pixel_tile<P>(a, ex.host_index(t, nt));
   } else {
-    const uint32_t blocks = uint32_t(tmin<uint64_t>(nt, uint64_t(ex.grid_blocks) * 8));
-    k_per_pixel<P><<<blocks, kPixBlock, 0, ex.stream>>>(a, nt);
+    const uint32_t parts = (p.grid.tile_w * p.grid.tile_h * p.f.n_samples + kPixBlock - 1) / kPixBlock;
+    const uint32_t blocks = uint32_t(tmin<uint64_t>(nt * parts, uint64_t(ex.grid_blocks) * 8));
+    k_per_pixel<P><<<blocks, kPixBlock, 0, ex.stream>>>(a, nt, parts);
     TV_CUDA(cudaGetLastError());
     ++ex.queued;
   }
