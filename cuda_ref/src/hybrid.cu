@@ -346,6 +346,7 @@ __global__ void k_verdict(HybArgs<P> a, uint64_t n) {
 struct PTri {
   exact::Line e[3];
   exact::Plane plane;
+  Rect bbox;  // closed: a sample outside it is not covered (three edge functions spared)
   uint32_t opaque, item;
 };
 
@@ -355,6 +356,7 @@ struct POwner {
 };
 
 TV_HD inline bool covers(const PTri& t, Pt s) {
+  if (s.x < t.bbox.x0 || s.x > t.bbox.x1 || s.y < t.bbox.y0 || s.y > t.bbox.y1) return false;
   for (int k = 0; k < 3; ++k) {
     const int64_t e = t.e[k].eval(s);
     if (e < 0 || (e == 0 && !t.e[k].owns_boundary())) return false;
@@ -368,6 +370,7 @@ TV_HD inline PTri ptri_of(const HybArgs<P>& a, uint32_t item) {
   PTri t;
   for (int k = 0; k < 3; ++k) t.e[k] = x.edge[k];
   t.plane = x.plane;
+  t.bbox = x.bbox;
   t.opaque = x.opaque;
   t.item = item;
   return t;
@@ -558,7 +561,7 @@ TV_HD void hybrid_fold(const HFoldArgs<P>& a, uint64_t q) {
   for (uint64_t r = q; a.area_key[r] == id; ++r) {
     const uint32_t j = a.area_item[r];
     if (a.cause[a.item_key[j]] != 0) {
-      for (uint32_t s = 0; s < a.owned[j]; ++s) sum = dadd(sum, a.sample_area);
+      sum = add_repeated(sum, a.sample_area, a.owned[j]);  // a sample's share at a time
       continue;
     }
     const uint32_t n = a.piece_count[j];

@@ -57,6 +57,36 @@ TV_HD inline double dadd(double a, double b) {
   return a + b;
 #endif
 }
+
+// What m dadd(x, a) in a row give, in a few steps per binade crossed: a is a power of two (a
+// sample's share of a pixel), x >= 0. In x's binade [2^(e-1), 2^e) every double is a multiple
+// of the ulp u = 2^(e-53); a >= u is a multiple of u too, so the additions are exact until the
+// sum reaches 2^e, where one rounded addition crosses over. With a < u an addition gives x
+// again (stuck from then on), or once x + u (a = u / 2, ties to even).
+TV_HD inline double add_repeated(double x, double a, uint64_t m) {
+  while (m != 0) {
+    if (!(x > 0)) {  // 0 (a negative sum cannot occur: one addition at a time)
+      x = dadd(x, a);
+      --m;
+      continue;
+    }
+    int e = 0;
+    frexp(x, &e);
+    const double top = ldexp(1.0, e), u = ldexp(1.0, e - 53);
+    if (a < u) {
+      const double y = dadd(x, a);
+      --m;
+      if (y == x) return x;
+      x = y;
+      continue;
+    }
+    const uint64_t below = uint64_t(ceil((top - x) / a)) - 1;  // additions that stay under top
+    if (below >= m) return dadd(x, double(m) * a);
+    x = dadd(dadd(x, double(below) * a), a);  // exact, then the one that crosses top
+    m -= below + 1;
+  }
+  return x;
+}
 TV_HD inline double dsub(double a, double b) {
 #if defined(__CUDA_ARCH__)
   return __dsub_rn(a, b);

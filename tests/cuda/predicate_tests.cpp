@@ -2,6 +2,7 @@
 // implementations of the same predicates, so any decision (or rounding) they disagree on is
 // a bug in one of them. Random inputs over the whole coordinate range, plus the adversarial
 // ones where filters must fall back to exact arithmetic (points on lines, coplanar planes).
+#include <cstring>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -173,3 +174,26 @@ TEST(CudaPredicates, SplitKeepsGeomsCanonicalOrderAndRepresentation) {
 }
 
 }  // namespace
+
+// add_repeated (the hybrid fold's per-pixel areas) against the additions one at a time, bit for
+// bit: sums with low bits set, sums at and beyond 2^52 where a sample's share is below the ulp
+// (ties to even included), zero, and counts that cross several binades.
+TEST(CudaPredicates, RepeatedAdditionIsTheLoopsBitForBit) {
+  std::mt19937_64 rng(7);
+  std::vector<double> starts = {0.0, 0.5, 1.0, 3.0, 0x1p52 - 1.0, 0x1p52, 0x1p52 + 1.0, 0x1p53 - 1.0, 0x1p53,
+                                0x1p53 + 2.0, 0x1p54 + 2.0, 0x1p51 + 0.5, 0x1p50 + 0.25};
+  for (int k = 0; k < 200; ++k) {
+    const double mant = std::uniform_real_distribution<double>(1.0, 2.0)(rng);
+    starts.push_back(std::ldexp(mant, int(rng() % 70) - 8));
+  }
+  const uint64_t counts[] = {0, 1, 2, 3, 7, 64, 1000, 4097, 100000};
+  for (const double x : starts)
+    for (const double a : {1.0, 0.5, 0.25, 0.125, 0.0625})
+      for (const uint64_t m : counts) {
+        double loop = x;
+        for (uint64_t i = 0; i < m; ++i) loop = c::dadd(loop, a);
+        const double fast = c::add_repeated(x, a, m);
+        ASSERT_EQ(std::memcmp(&loop, &fast, sizeof(double)), 0)
+            << std::hexfloat << "x " << x << " a " << a << " m " << m << ": " << loop << " vs " << fast;
+      }
+}
