@@ -43,7 +43,7 @@ struct HybArgs {
   uint8_t* flag;     // per occluder position: in some crossing pair (count_all)
   uint32_t* zmax;    // per occluder position: its z_max and id, contiguous for the pair loop
   uint32_t* ids_at;
-  uint32_t* active;  // per occluder position: a detection bin's active members (scratch)
+  uint4* active;     // per occluder position: a detection bin's active members (scratch)
   uint64_t* batch;   // per tile, 64 words: the pairs waiting for the exact test (scratch)
   // Per-pixel tiles.
   const uint32_t* sample_xy;
@@ -184,7 +184,8 @@ TV_HD uint32_t crossing_pairs(const HybArgs<P>& a, uint32_t tile, bool count_all
   team.sync();
   const uint32_t* zmax = a.zmax + base;
   const uint32_t* idk = a.ids_at + base;
-  uint32_t* act = a.active + base;  // the bin's active members, in list order
+  // The bin's active members in list order, each as position, z_max, id and bins (one load).
+  uint4* act = a.active + base;
   auto in_bin = [](uint32_t r, uint32_t bx, uint32_t by) {
     return r != ~0u && bx >= (r & 0xff) && by >= (r >> 8 & 0xff) && bx <= (r >> 16 & 0xff) && by <= (r >> 24);
   };
@@ -238,15 +239,14 @@ TV_HD uint32_t crossing_pairs(const HybArgs<P>& a, uint32_t tile, bool count_all
           uint32_t kept = 0;
           for (uint32_t j0 = 0; j0 < na; j0 += Team::kSize) {
             const uint32_t j = j0 + lane;
-            uint32_t q = 0;
-            bool keep = false, screen = false, test = false;
-            if (j < na) {
-              q = act[j];
-              keep = zmax[q] > t.z_min;
-            }
-            if (keep && idk[q] != t.id) {
+            uint4 e{0, 0, 0, 0};
+            if (j < na) e = act[j];
+            const uint32_t q = e.x;
+            const bool keep = j < na && e.y > t.z_min;
+            bool screen = false, test = false;
+            if (keep && e.z != t.id) {
               screen = true;
-              const uint32_t rq = range[q];
+              const uint32_t rq = e.w;
               const uint32_t x0 = tmax(rk & 0xff, rq & 0xff), y0 = tmax(rk >> 8 & 0xff, rq >> 8 & 0xff);
               // Decided in the first bin the two share, and only if they may cross.
               test = x0 == bx && y0 == by && may_cross(t, a.tris[occ[q].tri]) &&
@@ -256,7 +256,7 @@ TV_HD uint32_t crossing_pairs(const HybArgs<P>& a, uint32_t tile, bool count_all
             // Golden's erase: a member whose z_max is not past this one's z_min never comes
             // back (z_min does not decrease along the list). Every lane has read its entry
             // (the ballots order them), and no write goes past the entries already read.
-            if (keep) act[kept + popc(km & below)] = q;
+            if (keep) act[kept + popc(km & below)] = e;
             kept += popc(km);
             if (tm != 0) {
               if (nb + popc(tm) > Team::kSize && flush()) {
@@ -274,7 +274,7 @@ TV_HD uint32_t crossing_pairs(const HybArgs<P>& a, uint32_t tile, bool count_all
             s_cnt += popc(sm);
           }
           team.sync();
-          if (lane == 0) act[kept] = k;
+          if (lane == 0) act[kept] = make_uint4(k, zmax[k], idk[k], rk);
           na = kept + 1;
           team.sync();
         }
