@@ -535,7 +535,6 @@ __global__ void __launch_bounds__(kPixBlock) k_per_pixel(HybArgs<P> a, uint64_t 
 // them (FrameOutput: "per-pixel tiles: none"), while the analytic stages ran on every tile.
 template <class P>
 struct HFoldArgs {
-  PieceSource<P> src;
   uint64_t* counters;
   const uint64_t* area_key;
   const uint32_t* area_item;
@@ -547,9 +546,12 @@ struct HFoldArgs {
   const uint32_t* item_slot;
   uint64_t n_items;
   const uint8_t* visible;
+  const uint16_t* edges;  // per piece: its edge count (occlusion wrote it)
   const double* piece_area;
   double sample_area;
   double* area;
+  uint32_t* long_runs;    // GPU: first entries of runs longer than kHybridFoldLong items
+  uint64_t* long_count;
 };
 
 template <class P>
@@ -572,8 +574,7 @@ TV_HD void hybrid_fold(const HFoldArgs<P>& a, uint64_t q) {
       const uint64_t p = clipped ? a.n_items + a.item_slot[j] + k : j;
       if (!a.visible[p]) continue;
       sum = dadd(sum, a.piece_area[p]);
-      PEdge<P> local[kTileCap];
-      vis_tris += piece_at<P>(a.src, p, local).n - 2;  // as occ_finish counts a visible piece
+      vis_tris += a.edges[p] - 2u;  // as occ_finish counts a visible piece
     }
   }
   a.area[id] = sum;
@@ -581,10 +582,105 @@ TV_HD void hybrid_fold(const HFoldArgs<P>& a, uint64_t q) {
   count_max(&a.counters[kMaxTilePieces], most_pieces);
 }
 
+// As raster.cu's fold: on the GPU a run of more than kHybridFoldLong items (a big triangle, one
+// item per tile) goes to a warp, whose lanes load 32 items' values at once; the additions stay
+// one left fold in canonical order (every lane adds the same values in the same order), and the
+// counts are sums and maxima, in any order.
+inline constexpr uint32_t kHybridFoldLong = 16;
+
 template <class P>
 __global__ void k_hybrid_fold(HFoldArgs<P> a, uint64_t n) {
-  TV_GRID_LOOP(i, n) hybrid_fold<P>(a, i);
+  TV_GRID_LOOP(q, n) {
+    const uint64_t id = a.area_key[q];
+    if (q > 0 && a.area_key[q - 1] == id) continue;
+    if (q + kHybridFoldLong < a.n_items && a.area_key[q + kHybridFoldLong] == id) {
+      a.long_runs[bump_one(a.long_count, ~uint64_t{0})] = uint32_t(q);
+      continue;
+    }
+    hybrid_fold<P>(a, q);
+  }
 }
+
+template <class P>
+__device__ void hybrid_fold_warp(const HFoldArgs<P>& a, uint64_t q0) {
+  const uint32_t lane = threadIdx.x & 31u;
+  const unsigned full = 0xffffffffu;
+  const uint64_t id = a.area_key[q0];
+  double sum = 0;
+  uint32_t vis_tris = 0, most_pieces = 0;  // this lane's share
+  for (uint64_t r0 = q0;; r0 += 32) {
+    const uint64_t r = r0 + lane;
+    const bool in_run = r <= a.n_items && a.area_key[r] == id;  // the key list ends with a sentinel
+    const unsigned run = __ballot_sync(full, in_run);
+    const uint32_t m = run == full ? 32u : uint32_t(__ffs(~run) - 1);  // the run's entries in this chunk
+    uint32_t j = 0, cnt = 0, owned = 0;
+    bool per_pixel = false, clipped = false, vis = false;
+    double x = 0;
+    if (lane < m) {
+      j = a.area_item[r];
+      per_pixel = a.cause[a.item_key[j]] != 0;
+      if (per_pixel) {
+        owned = a.owned[j];
+      } else {
+        cnt = a.piece_count[j];
+        clipped = a.cand_count[j] != 0;
+        most_pieces = tmax(most_pieces, clipped ? cnt : cnt != 0 ? 1u : 0u);
+        if (!clipped && cnt && a.visible[j]) {
+          vis = true;
+          x = a.piece_area[j];
+          vis_tris += a.edges[j] - 2u;
+        }
+      }
+    }
+    for (uint32_t l = 0; l < m; ++l) {
+      if (__shfl_sync(full, per_pixel, l)) {
+        sum = add_repeated(sum, a.sample_area, __shfl_sync(full, owned, l));
+        continue;
+      }
+      if (!__shfl_sync(full, clipped, l)) {
+        const bool v = __shfl_sync(full, vis, l);
+        const double xl = __shfl_sync(full, x, l);
+        if (v) sum = dadd(sum, xl);
+        continue;
+      }
+      const uint32_t jl = __shfl_sync(full, j, l), nl = __shfl_sync(full, cnt, l);
+      const uint64_t base = a.n_items + a.item_slot[jl];
+      for (uint32_t k0 = 0; k0 < nl; k0 += 32) {
+        bool pv = false;
+        double px = 0;
+        if (k0 + lane < nl && a.visible[base + k0 + lane]) {
+          pv = true;
+          px = a.piece_area[base + k0 + lane];
+          vis_tris += a.edges[base + k0 + lane] - 2u;
+        }
+        const uint32_t mm = nl - k0 < 32 ? nl - k0 : 32;
+        for (uint32_t t = 0; t < mm; ++t) {
+          const bool v = __shfl_sync(full, pv, t);
+          const double xt = __shfl_sync(full, px, t);
+          if (v) sum = dadd(sum, xt);
+        }
+      }
+    }
+    if (m < 32) break;
+  }
+  for (int d = 16; d > 0; d >>= 1) {
+    vis_tris += __shfl_xor_sync(full, vis_tris, d);
+    most_pieces = tmax(most_pieces, __shfl_xor_sync(full, most_pieces, d));
+  }
+  if (lane == 0) {
+    a.area[id] = sum;
+    count_add(&a.counters[kVisibleTriangles], vis_tris);
+    count_max(&a.counters[kMaxTilePieces], most_pieces);
+  }
+}
+
+template <class P>
+__global__ void k_hybrid_fold_long(HFoldArgs<P> a, const uint64_t* count, uint64_t cap) {
+  const uint64_t n = *count < cap ? *count : cap;
+  TV_WARP_LOOP(w, n) hybrid_fold_warp<P>(a, a.long_runs[w]);
+}
+template <class P>
+void hybrid_fold_long_host(const HFoldArgs<P>&, uint64_t) {}  // the host's hybrid_fold folds every run
 
 }  // namespace
 
@@ -639,7 +735,6 @@ void stage_hybrid(Pipeline<P>& p) {
     ++ex.queued;
   }
   HFoldArgs<P> f{};
-  f.src = piece_source(p);
   f.counters = p.counters.get();
   // The two totals are counted again by the fold over the analytic tiles only.
   static_assert(kMaxTilePieces == kVisibleTriangles + 1, "adjacent counters");
@@ -654,10 +749,15 @@ void stage_hybrid(Pipeline<P>& p) {
   f.item_slot = p.item_slot.get();
   f.n_items = ni;
   f.visible = p.piece_visible.get();
+  f.edges = p.piece_edges.get();
   f.piece_area = p.piece_area.get();
   f.sample_area = 1.0 / double(p.f.n_samples);
   f.area = p.area.get();
+  f.long_runs = p.hyb_long_folds.need(ni + 1);
+  f.long_count = p.counters.get() + kHybridLongFolds;
+  ex.zero(f.long_count, 8);
   ex.launch(k_hybrid_fold<P>, hybrid_fold<P>, p.N(kSzItems, ni), f);
+  ex.launch_dyn(k_hybrid_fold_long<P>, hybrid_fold_long_host<P>, f.long_count, ni, f);
 }
 
 template void stage_hybrid<ExactP>(Pipeline<ExactP>&);

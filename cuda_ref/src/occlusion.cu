@@ -48,6 +48,7 @@ struct OccArgs {
   const uint32_t* occ_count;   // per tile, opaque entries
   int64_t* rows;
   uint8_t* visible;
+  uint16_t* edges;             // per piece: its polygon's edge count
   double* area;
   uint64_t* counters;
   double area_scale;  // 2 * 2^sb * 2^sb
@@ -143,6 +144,7 @@ TV_HD void occ_finish(const OccArgs<P>& a, uint64_t p, const PieceView<P>& v, bo
   bool unproven = false;
   if constexpr (!P::kExact) unproven = !hidden && !certified_convex(v.e, v.n);
   a.visible[p] = hidden ? 0 : unproven ? 2 : 1;
+  a.edges[p] = uint16_t(v.n);
   count_add(&row[kColVisiblePieces], hidden ? 0 : 1);
   count_add(&a.counters[kVisibleTriangles], hidden ? 0 : v.n - 2);
   if (!hidden) {
@@ -380,6 +382,7 @@ void stage_occlusion(Pipeline<P>& p, Pass pass) {
   a.rows = p.tile_rows.get();
   a.visible = p.piece_visible.need(p.n_items + p.caps.clip_slots + 1);
   a.area = p.piece_area.need(p.n_items + p.caps.clip_slots + 1);
+  a.edges = p.piece_edges.need(p.n_items + p.caps.clip_slots + 1);
   a.counters = p.counters.get();
   const double s = double(1u << p.f.subpixel_bits);
   a.area_scale = 2.0 * s * s;

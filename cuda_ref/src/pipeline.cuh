@@ -50,6 +50,7 @@ enum Counter : uint32_t {
   kFloatExactAreas,     // float: visible pieces whose area sign was not proven: the exact region's area
   kBigTris, kBigEdges,  // binning: primitives of wide spans queued for a block each
   kLongFolds,           // visible-area fold: runs of items queued for a warp each
+  kHybridLongFolds,     // hybrid's second fold: likewise
   kCounterCount
 };
 
@@ -286,6 +287,7 @@ struct Pipeline {
   // Pieces (pieces.cuh): per piece id, n_items + clip_slots of them.
   Buf<uint32_t> slot_item;         // per piece slot, its item (kNone: unused)
   Buf<uint8_t> piece_visible;
+  Buf<uint16_t> piece_edges;       // a judged piece's edge count (occlusion; hybrid's fold counts with it)
   Buf<uint64_t> heavy;             // occlusion (unclipped, finer bins): pieces queued for a warp each
   Buf<uint32_t> occ_cells;         // occlusion (finer bins off): the occluder lists' cell masks
   Buf<double> piece_area;
@@ -296,6 +298,7 @@ struct Pipeline {
   Buf<uint32_t> hyb_cause, hyb_crossing, hyb_range, hyb_owned, hyb_zmax, hyb_id;
   Buf<uint4> hyb_active;
   Buf<uint64_t> hyb_screens, hyb_tests, hyb_shaded, hyb_batch;
+  Buf<uint32_t> hyb_long_folds;  // the hybrid fold's long runs (first entry of each)
   Buf<uint8_t> hyb_flag;
 
   // Outputs.
@@ -330,6 +333,8 @@ struct Pipeline {
     clip_edges.bind(&e);
     piece_visible.bind(&e);
     piece_area.bind(&e);
+    piece_edges.bind(&e);
+    hyb_long_folds.bind(&e);
     ids.bind(&e);
     area.bind(&e);
     for (auto* b : {&hyb_cause, &hyb_crossing, &hyb_range, &hyb_owned, &hyb_zmax, &hyb_id}) b->bind(&e);
