@@ -10,8 +10,8 @@
 // `detection_bin` pixels in row-major order, in each a sweep keeping the triangles whose depth
 // range reaches the current one's nearest depth, a pair screened (may_cross, opposite mesh
 // neighbours) and tested (planes_cross) in the first bin it shares; the first crossing ends
-// the tile's search. A warp per tile: the pairs the walk visits are known in order (see
-// crossing_pairs), so its lanes take them 32 at a time.
+// the tile's search. A block per tile, its warps taking the bins (bins are independent
+// sweeps: see bin_sweep), a warp's lanes the pairs of a bin 32 at a time.
 //
 // Per-pixel tiles: ids and the tile's samples_covered / fragments_generated from the tile's
 // z-buffer (the other per-tile counters are 0, as golden's per_pixel resolver leaves them);
@@ -43,8 +43,11 @@ struct HybArgs {
   uint8_t* flag;     // per occluder position: in some crossing pair (count_all)
   uint32_t* zmax;    // per occluder position: its z_max and id, contiguous for the pair loop
   uint32_t* ids_at;
-  uint4* active;     // per occluder position: a detection bin's active members (scratch)
-  uint64_t* batch;   // per tile, 64 words: the pairs waiting for the exact test (scratch)
+  uint4* active;     // per warp and occluder position: a detection bin's active members (scratch)
+  uint64_t active_stride;  // positions per warp's share of `active`
+  uint64_t* batch;   // per tile and warp, 64 words: the pairs waiting for the exact test (scratch)
+  uint64_t* bin_counts;    // per tile and detection bin: screens and tests (GPU scratch)
+  uint32_t bins_per_tile;
   // Per-pixel tiles.
   const uint32_t* sample_xy;
   uint32_t n_samples, width, height;
@@ -144,58 +147,85 @@ struct Bins {
   }
 };
 
-// hybrid_resolver.cpp crossing_pairs, by a team of lanes: 1 at the first crossing pair
-// (counting screens and tests up to it), or with count_all the triangles in some crossing pair.
-// Golden's sweep visits, in each bin (row-major), each member k in list order against the
-// active members a < k, in list order, after dropping those whose z_max is not past k's z_min
-// (they never come back: z_min does not decrease along the list). The team keeps the same
-// active list (scratch in `active`, the tile's positions): the lanes take 32 of its entries
-// at a time, drop and compact them as golden does, and a ballot finds the first crossing. The
-// bin's members are found 32 positions at a time and visited in list order, so a tile costs
-// its bins' members and their active lists, not every pair of its triangles in every bin.
-template <class P, class Team>
-TV_HD uint32_t crossing_pairs(const HybArgs<P>& a, uint32_t tile, bool count_all, uint64_t& screens, uint64_t& tests,
-                              Team team) {
-  const uint32_t base = a.item_begin[tile], n = a.occ_count[tile];
-  const OccRec* occ = a.occ + base;
-  uint32_t* range = a.range + base;
-  uint8_t* flag = a.flag + base;
-  const Rect rect = a.grid.rect(tile);
+// hybrid_resolver.cpp crossing_pairs, split by detection bin. Golden's sweep visits, in each bin
+// (row-major), each member k in list order against the active members a < k, in list order,
+// after dropping those whose z_max is not past k's z_min (they never come back: z_min does not
+// decrease along the list); the first crossing ends the tile's search. A bin's sweep starts
+// from an empty active list, so bins are independent: the tile's counts are the whole counts
+// of the bins before the first that has a crossing, plus that bin's counts through it. On the
+// GPU a block takes a tile and its warps take the bins (bin_sweep, below); the host sweeps
+// them in order.
+
+inline constexpr uint32_t kDetWarps = 4;  // warps of a tile's block on the GPU (the bins shared out)
+
+// A tile as the detector sees it: its occluder list (nearest z_min first) and its bins.
+template <class P>
+struct DetTile {
+  uint32_t base, n;
+  const OccRec* occ;
+  Rect rect;
   Bins g;
+};
+
+template <class P>
+TV_HD DetTile<P> det_tile(const HybArgs<P>& a, uint32_t tile) {
+  DetTile<P> d;
+  d.base = a.item_begin[tile];
+  d.n = a.occ_count[tile];
+  d.occ = a.occ + d.base;
+  d.rect = a.grid.rect(tile);
   const uint32_t tw = a.grid.tile_w, th = a.grid.tile_h;
-  g.step = int64_t(a.detection_bin ? a.detection_bin : (tw > th ? tw : th)) << a.grid.sb;
-  g.x = uint32_t((int64_t(rect.x1) - rect.x0 + g.step - 1) / g.step);
-  g.y = uint32_t((int64_t(rect.y1) - rect.y0 + g.step - 1) / g.step);
-  const uint32_t lane = team.lane();
-  for (uint32_t k = lane; k < n; k += Team::kSize) {
-    const TileTri<P>& t = a.tris[occ[k].tri];
+  d.g.step = int64_t(a.detection_bin ? a.detection_bin : (tw > th ? tw : th)) << a.grid.sb;
+  d.g.x = uint32_t((int64_t(d.rect.x1) - d.rect.x0 + d.g.step - 1) / d.g.step);
+  d.g.y = uint32_t((int64_t(d.rect.y1) - d.rect.y0 + d.g.step - 1) / d.g.step);
+  return d;
+}
+
+// Positions i0, i0 + stride, ...: their bins (~0: the triangle misses the tile), z_max and id
+// side by side for the sweeps, and the crossing flags cleared.
+template <class P>
+TV_HD void det_positions(const HybArgs<P>& a, const DetTile<P>& d, uint32_t i0, uint32_t stride) {
+  for (uint32_t k = i0; k < d.n; k += stride) {
+    const TileTri<P>& t = a.tris[d.occ[k].tri];
     PEdge<ExactP> poly[kTileCap];
     bool overflow = false;
+    const Bins& g = d.g;
+    const Rect& rect = d.rect;
     if (tile_polygon<ExactP>(exact_of(t), rect, poly, overflow) == 0) {
-      range[k] = ~0u;
+      a.range[d.base + k] = ~0u;
     } else {
-      range[k] = g.of(t.bbox.x0, rect.x0, g.x) | g.of(t.bbox.y0, rect.y0, g.y) << 8 | g.of(t.bbox.x1, rect.x0, g.x) << 16 |
-                 g.of(t.bbox.y1, rect.y0, g.y) << 24;
+      a.range[d.base + k] = g.of(t.bbox.x0, rect.x0, g.x) | g.of(t.bbox.y0, rect.y0, g.y) << 8 |
+                            g.of(t.bbox.x1, rect.x0, g.x) << 16 | g.of(t.bbox.y1, rect.y0, g.y) << 24;
     }
-    flag[k] = 0;
-    a.zmax[base + k] = t.z_max;
-    a.ids_at[base + k] = t.id;
+    a.flag[d.base + k] = 0;
+    a.zmax[d.base + k] = t.z_max;
+    a.ids_at[d.base + k] = t.id;
   }
-  team.sync();
-  const uint32_t* zmax = a.zmax + base;
-  const uint32_t* idk = a.ids_at + base;
-  // The bin's active members in list order, each as position, z_max, id and bins (one load).
-  uint4* act = a.active + base;
+}
+
+// Bin (bx, by)'s sweep by a team, with its own active list `act` (the tile's n entries) and
+// batch `bpair` (2 kSize words). The team keeps golden's active list: the lanes take 32 of its
+// entries at a time, drop and compact them as golden does (an entry carries position, z_max, id
+// and bins in one 16-byte word). Pairs to test wait in the batch, so that a round of the exact
+// test takes up to kSize pairs in parallel, whatever member they belong to. Returns true at the
+// first crossing (not with count_all: then it marks the crossing triangles' flags), with
+// `screens` and `tests` counted through it; else the bin's whole counts.
+template <class P, class Team>
+TV_HD bool bin_sweep(const HybArgs<P>& a, const DetTile<P>& d, uint32_t bx, uint32_t by, bool count_all, uint4* act,
+                     uint64_t* bpair, uint64_t& screens, uint64_t& tests, Team team) {
+  const uint32_t n = d.n;
+  const OccRec* occ = d.occ;
+  const Rect rect = d.rect;
+  const uint32_t* range = a.range + d.base;
+  const uint32_t* zmax = a.zmax + d.base;
+  const uint32_t* idk = a.ids_at + d.base;
+  uint8_t* flag = a.flag + d.base;
+  const uint32_t lane = team.lane();
   auto in_bin = [](uint32_t r, uint32_t bx, uint32_t by) {
     return r != ~0u && bx >= (r & 0xff) && by >= (r >> 8 & 0xff) && bx <= (r >> 16 & 0xff) && by <= (r >> 24);
   };
   const uint32_t below = (1u << lane) - 1u;  // the lanes before this one
-  // Pairs to test wait in a batch (the tile's scratch in `batch`: position k << 32 | q, then
-  // the screens counted through the pair), so that a round of the exact test takes up to
-  // kSize pairs in parallel, whatever member they belong to; the first crossing in visiting
-  // order decides, with the screens and tests counted up to it, as golden counts them.
-  uint64_t* bpair = a.batch + uint64_t(tile) * 2 * Team::kSize;
-  uint64_t* bscreens = bpair + Team::kSize;
+  uint64_t* bscreens = bpair + Team::kSize;  // per batch entry: the screens counted through it
   uint32_t nb = 0;
   uint64_t s_cnt = 0, t_cnt = 0;
   // The batch's tests; true at a crossing that ends the search (not with count_all).
@@ -228,116 +258,174 @@ TV_HD uint32_t crossing_pairs(const HybArgs<P>& a, uint32_t tile, bool count_all
     team.sync();  // every entry read before the next ones are written
     return false;
   };
-  for (uint32_t by = 0; by < g.y; ++by)
-    for (uint32_t bx = 0; bx < g.x; ++bx) {
-      uint32_t na = 0;
-      for (uint32_t k0 = 0; k0 < n; k0 += Team::kSize) {
-        // The bin's members among the next kSize positions, then each in list order.
-        for (uint32_t mk = team.ballot(k0 + lane < n && in_bin(range[k0 + lane], bx, by)); mk != 0; mk &= mk - 1) {
-          const uint32_t k = k0 + lowest_bit(mk), rk = range[k];
-          const TileTri<P>& t = a.tris[occ[k].tri];
-          uint32_t kept = 0;
-          for (uint32_t j0 = 0; j0 < na; j0 += Team::kSize) {
-            const uint32_t j = j0 + lane;
-            uint4 e{0, 0, 0, 0};
-            if (j < na) e = act[j];
-            const uint32_t q = e.x;
-            const bool keep = j < na && e.y > t.z_min;
-            bool screen = false, test = false;
-            if (keep && e.z != t.id) {
-              screen = true;
-              const uint32_t rq = e.w;
-              const uint32_t x0 = tmax(rk & 0xff, rq & 0xff), y0 = tmax(rk >> 8 & 0xff, rq >> 8 & 0xff);
-              // Decided in the first bin the two share, and only if they may cross.
-              test = x0 == bx && y0 == by && may_cross(t, a.tris[occ[q].tri]) &&
-                     !opposite_neighbours(t, a.tris[occ[q].tri]);
-            }
-            const uint32_t km = team.ballot(keep), sm = team.ballot(screen), tm = team.ballot(test);
-            // Golden's erase: a member whose z_max is not past this one's z_min never comes
-            // back (z_min does not decrease along the list). Every lane has read its entry
-            // (the ballots order them), and no write goes past the entries already read.
-            if (keep) act[kept + popc(km & below)] = e;
-            kept += popc(km);
-            if (tm != 0) {
-              if (nb + popc(tm) > Team::kSize && flush()) {
-                screens += s_cnt;
-                tests += t_cnt;
-                return 1;
-              }
-              if (test) {
-                const uint32_t at = nb + popc(tm & below);
-                bpair[at] = uint64_t(k) << 32 | q;
-                bscreens[at] = s_cnt + popc(sm & (below << 1 | 1u));
-              }
-              nb += popc(tm);
-            }
-            s_cnt += popc(sm);
-          }
-          team.sync();
-          if (lane == 0) act[kept] = make_uint4(k, zmax[k], idk[k], rk);
-          na = kept + 1;
-          team.sync();
+  uint32_t na = 0;
+  for (uint32_t k0 = 0; k0 < n; k0 += Team::kSize) {
+    // The bin's members among the next kSize positions, then each in list order.
+    for (uint32_t mk = team.ballot(k0 + lane < n && in_bin(range[k0 + lane], bx, by)); mk != 0; mk &= mk - 1) {
+      const uint32_t k = k0 + lowest_bit(mk), rk = range[k];
+      const TileTri<P>& t = a.tris[occ[k].tri];
+      uint32_t kept = 0;
+      for (uint32_t j0 = 0; j0 < na; j0 += Team::kSize) {
+        const uint32_t j = j0 + lane;
+        uint4 e{0, 0, 0, 0};
+        if (j < na) e = act[j];
+        const uint32_t q = e.x;
+        const bool keep = j < na && e.y > t.z_min;
+        bool screen = false, test = false;
+        if (keep && e.z != t.id) {
+          screen = true;
+          const uint32_t rq = e.w;
+          const uint32_t x0 = tmax(rk & 0xff, rq & 0xff), y0 = tmax(rk >> 8 & 0xff, rq >> 8 & 0xff);
+          // Decided in the first bin the two share, and only if they may cross.
+          test = x0 == bx && y0 == by && may_cross(t, a.tris[occ[q].tri]) && !opposite_neighbours(t, a.tris[occ[q].tri]);
         }
+        const uint32_t km = team.ballot(keep), sm = team.ballot(screen), tm = team.ballot(test);
+        // Golden's erase. Every lane has read its entry (the ballots order them), and no write
+        // goes past the entries already read.
+        if (keep) act[kept + popc(km & below)] = e;
+        kept += popc(km);
+        if (tm != 0) {
+          if (nb + popc(tm) > Team::kSize && flush()) {
+            screens = s_cnt;
+            tests = t_cnt;
+            return true;
+          }
+          if (test) {
+            const uint32_t at = nb + popc(tm & below);
+            bpair[at] = uint64_t(k) << 32 | q;
+            bscreens[at] = s_cnt + popc(sm & (below << 1 | 1u));
+          }
+          nb += popc(tm);
+        }
+        s_cnt += popc(sm);
       }
+      team.sync();
+      if (lane == 0) act[kept] = make_uint4(k, zmax[k], idk[k], rk);
+      na = kept + 1;
+      team.sync();
     }
-  if (nb != 0 && flush()) {
-    screens += s_cnt;
-    tests += t_cnt;
-    return 1;
   }
-  if (!count_all) {
-    screens += s_cnt;
-    tests += t_cnt;
-    return 0;
-  }
-  team.sync();
-  uint32_t found = 0;
-  for (uint32_t k = lane; k < n; k += Team::kSize) found += flag[k];
-  return uint32_t(team.sum(found));
+  const bool crossed = nb != 0 && flush();
+  screens = s_cnt;
+  tests = t_cnt;
+  return crossed;
 }
 
-template <class P, class Team>
-TV_HD void verdict(const HybArgs<P>& a, uint64_t tile, Team team) {
+// The causes decided without the detector: 2 (non-opaque content), 3 (budget), else 0.
+template <class P>
+TV_HD uint32_t cause_of(const HybArgs<P>& a, uint64_t tile) {
   const int64_t* row = a.rows + tile * kTileColumns;
   const uint64_t tris = uint64_t(row[kColTriangles]), edges = uint64_t(row[kColEdges]);
-  uint64_t screens = 0, tests = 0;
-  uint32_t cause = 0, crossing = 0;
-  if (tris > a.occ_count[tile]) cause = 2;  // a non-opaque triangle
-  else if ((a.pair_budget && tris * edges > a.pair_budget) || (a.list_triangles && tris > a.list_triangles) ||
-           (a.list_edges && edges > a.list_edges))
-    cause = 3;
-  else if (crossing_pairs(a, uint32_t(tile), false, screens, tests, team)) {
-    cause = 1;
-    uint64_t s2 = 0, t2 = 0;
-    team.sync();
-    crossing = crossing_pairs(a, uint32_t(tile), true, s2, t2, team);
+  if (tris > a.occ_count[tile]) return 2;  // a non-opaque triangle
+  if ((a.pair_budget && tris * edges > a.pair_budget) || (a.list_triangles && tris > a.list_triangles) ||
+      (a.list_edges && edges > a.list_edges))
+    return 3;
+  return 0;
+}
+
+template <class P>
+TV_HD void write_verdict(const HybArgs<P>& a, uint64_t tile, uint32_t cause, uint64_t screens, uint64_t tests,
+                         uint32_t crossing) {
+  a.cause[tile] = cause;
+  a.screens[tile] = screens;
+  a.tests[tile] = tests;
+  a.crossing[tile] = crossing;
+  if (cause != 0) {  // a per-pixel tile: its parts add their samples (k_per_pixel)
+    int64_t* r = a.rows + tile * kTileColumns;
+    for (int c : {kColPairTests, kColCandidates, kColClips, kColPieces, kColVisiblePieces, kColOcclusionTests,
+                  kColSamplesCovered, kColFragments})
+      r[c] = 0;
+    a.shaded[tile] = 0;
   }
-  if (team.lane() == 0) {
-    a.cause[tile] = cause;
-    a.screens[tile] = screens;
-    a.tests[tile] = tests;
-    a.crossing[tile] = crossing;
-    if (cause != 0) {  // a per-pixel tile: its parts add their samples (k_per_pixel)
-      int64_t* r = a.rows + tile * kTileColumns;
-      for (int c : {kColPairTests, kColCandidates, kColClips, kColPieces, kColVisiblePieces, kColOcclusionTests,
-                    kColSamplesCovered, kColFragments})
-        r[c] = 0;
-      a.shaded[tile] = 0;
-    }
-  }
-  team.sync();
 }
 
 template <class P>
 TV_HD void verdict_host(const HybArgs<P>& a, uint64_t tile) {
-  verdict<P>(a, tile, HostTeam{});
+  uint32_t cause = cause_of(a, tile), crossing = 0;
+  uint64_t screens = 0, tests = 0;
+  if (cause == 0) {
+    const DetTile<P> d = det_tile(a, uint32_t(tile));
+    det_positions(a, d, 0, 1);
+    uint4* act = a.active + d.base;
+    uint64_t* bpair = a.batch + tile * kDetWarps * 2 * WarpTeam::kSize;
+    for (uint32_t b = 0; b < d.g.x * d.g.y && cause == 0; ++b) {
+      uint64_t s = 0, t = 0;
+      if (bin_sweep(a, d, b % d.g.x, b / d.g.x, false, act, bpair, s, t, HostTeam{})) cause = 1;
+      screens += s;
+      tests += t;
+    }
+    if (cause == 1) {
+      for (uint32_t b = 0; b < d.g.x * d.g.y; ++b) {
+        uint64_t s = 0, t = 0;
+        bin_sweep(a, d, b % d.g.x, b / d.g.x, true, act, bpair, s, t, HostTeam{});
+      }
+      for (uint32_t k = 0; k < d.n; ++k) crossing += a.flag[d.base + k];
+    }
+  }
+  write_verdict(a, tile, cause, screens, tests, crossing);
 }
 
+// A block per tile; its warps take the tile's bins w, w + kDetWarps, ..., each with its own
+// active list and batch. A warp stops at its first crossing bin, or when another warp has
+// found one in an earlier bin (the bins after the first crossing one are not counted); the
+// bins' counts are summed up to the first crossing bin once every warp is done.
 template <class P>
-__global__ void k_verdict(HybArgs<P> a, uint64_t n) {
-  const uint64_t warps = uint64_t(gridDim.x) * (blockDim.x / 32);
-  for (uint64_t t = uint64_t(blockIdx.x) * (blockDim.x / 32) + threadIdx.x / 32; t < n; t += warps)
-    verdict<P>(a, t, WarpTeam{});
+__global__ void __launch_bounds__(kDetWarps * 32) k_verdict(HybArgs<P> a, uint64_t n_tiles) {
+  __shared__ uint32_t first;  // the first bin (row-major) with a crossing; ~0: none
+  __shared__ uint32_t found;
+  const uint32_t w = threadIdx.x / 32, lane = threadIdx.x & 31u;
+  for (uint64_t tile = blockIdx.x; tile < n_tiles; tile += gridDim.x) {
+    const uint32_t cause = cause_of(a, tile);
+    if (cause != 0) {
+      if (threadIdx.x == 0) write_verdict(a, tile, cause, 0, 0, 0);
+      continue;  // uniform over the block
+    }
+    const DetTile<P> d = det_tile(a, uint32_t(tile));
+    const uint32_t nbins = d.g.x * d.g.y;
+    if (threadIdx.x == 0) {
+      first = ~0u;
+      found = 0;
+    }
+    det_positions(a, d, threadIdx.x, blockDim.x);
+    __syncthreads();
+    uint4* act = a.active + uint64_t(w) * a.active_stride + d.base;
+    uint64_t* bpair = a.batch + (tile * kDetWarps + w) * 2 * WarpTeam::kSize;
+    uint64_t* counts = a.bin_counts + tile * a.bins_per_tile * 2;
+    for (uint32_t b = w; b < nbins; b += kDetWarps) {
+      const uint32_t seen = __shfl_sync(0xffffffffu, lane == 0 ? atomicAdd(&first, 0u) : 0u, 0);
+      if (b > seen) break;  // an earlier bin has a crossing (one value for the whole warp)
+      uint64_t s = 0, t = 0;
+      const bool crossed = bin_sweep(a, d, b % d.g.x, b / d.g.x, false, act, bpair, s, t, WarpTeam{});
+      if (lane == 0) {
+        counts[2 * b] = s;
+        counts[2 * b + 1] = t;
+        if (crossed) atomicMin(&first, b);
+      }
+      if (crossed) break;
+    }
+    __syncthreads();
+    const uint32_t f = first;
+    if (f != ~0u) {  // the crossing triangles, over every bin
+      for (uint32_t b = w; b < nbins; b += kDetWarps) {
+        uint64_t s = 0, t = 0;
+        bin_sweep(a, d, b % d.g.x, b / d.g.x, true, act, bpair, s, t, WarpTeam{});
+      }
+      __syncthreads();
+      uint32_t mine = 0;
+      for (uint32_t k = threadIdx.x; k < d.n; k += blockDim.x) mine += a.flag[d.base + k];
+      atomicAdd(&found, mine);
+    }
+    __syncthreads();
+    if (threadIdx.x == 0) {
+      uint64_t screens = 0, tests = 0;
+      for (uint32_t b = 0; b < nbins && b <= f; ++b) {
+        screens += counts[2 * b];
+        tests += counts[2 * b + 1];
+      }
+      write_verdict(a, tile, f != ~0u ? 1u : 0u, screens, tests, f != ~0u ? found : 0u);
+    }
+    __syncthreads();
+  }
 }
 
 // ---- per-pixel tiles ------------------------------------------------------------------------
@@ -708,8 +796,14 @@ void stage_hybrid(Pipeline<P>& p) {
   a.flag = p.hyb_flag.need(ni + 1);
   a.zmax = p.hyb_zmax.need(ni + 1);
   a.ids_at = p.hyb_id.need(ni + 1);
-  a.active = p.hyb_active.need(ni + 1);
-  a.batch = p.hyb_batch.need(nt * 2 * WarpTeam::kSize + 1);
+  a.active_stride = ni + 1;
+  a.active = p.hyb_active.need(kDetWarps * a.active_stride);
+  a.batch = p.hyb_batch.need(nt * kDetWarps * 2 * WarpTeam::kSize + 1);
+  {
+    const uint32_t tw = p.grid.tile_w, th = p.grid.tile_h, bin = a.detection_bin ? a.detection_bin : tmax(tw, th);
+    a.bins_per_tile = ((tw + bin - 1) / bin) * ((th + bin - 1) / bin);
+  }
+  a.bin_counts = p.hyb_bin_counts.need(nt * a.bins_per_tile * 2 + 1);
   a.sample_xy = p.sample_xy.get();
   a.n_samples = p.f.n_samples;
   a.width = p.f.width;
@@ -721,7 +815,7 @@ void stage_hybrid(Pipeline<P>& p) {
   if (ex.where == Where::cpu) {
     for (uint64_t t = 0; t < nt; ++t) verdict_host<P>(a, ex.host_index(t, nt));
   } else {
-    k_verdict<P><<<uint32_t(tmin<uint64_t>((nt + 3) / 4, uint64_t(ex.grid_blocks) * 8)), 128, 0, ex.stream>>>(a, nt);
+    k_verdict<P><<<uint32_t(tmin<uint64_t>(nt, uint64_t(ex.grid_blocks) * 8)), kDetWarps * 32, 0, ex.stream>>>(a, nt);
     TV_CUDA(cudaGetLastError());
     ++ex.queued;
   }

@@ -297,7 +297,7 @@ struct Pipeline {
   // in a per-pixel tile.
   Buf<uint32_t> hyb_cause, hyb_crossing, hyb_range, hyb_owned, hyb_zmax, hyb_id;
   Buf<uint4> hyb_active;
-  Buf<uint64_t> hyb_screens, hyb_tests, hyb_shaded, hyb_batch;
+  Buf<uint64_t> hyb_screens, hyb_tests, hyb_shaded, hyb_batch, hyb_bin_counts;
   Buf<uint32_t> hyb_long_folds;  // the hybrid fold's long runs (first entry of each)
   Buf<uint8_t> hyb_flag;
 
@@ -342,6 +342,7 @@ struct Pipeline {
     hyb_screens.bind(&e);
     hyb_tests.bind(&e);
     hyb_batch.bind(&e);
+    hyb_bin_counts.bind(&e);
     hyb_shaded.bind(&e);
     hyb_flag.bind(&e);
   }
