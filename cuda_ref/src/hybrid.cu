@@ -679,13 +679,7 @@ inline constexpr uint32_t kHybridFoldLong = 16;
 template <class P>
 __global__ void k_hybrid_fold(HFoldArgs<P> a, uint64_t n) {
   TV_GRID_LOOP(q, n) {
-    const uint64_t id = a.area_key[q];
-    if (q > 0 && a.area_key[q - 1] == id) continue;
-    if (q + kHybridFoldLong < a.n_items && a.area_key[q + kHybridFoldLong] == id) {
-      a.long_runs[bump_one(a.long_count, ~uint64_t{0})] = uint32_t(q);
-      continue;
-    }
-    hybrid_fold<P>(a, q);
+    if (fold_run_start(a.area_key, q, a.n_items, kHybridFoldLong, a.long_runs, a.long_count) == 1) hybrid_fold<P>(a, q);
   }
 }
 
@@ -698,9 +692,7 @@ __device__ void hybrid_fold_warp(const HFoldArgs<P>& a, uint64_t q0) {
   uint32_t vis_tris = 0, most_pieces = 0;  // this lane's share
   for (uint64_t r0 = q0;; r0 += 32) {
     const uint64_t r = r0 + lane;
-    const bool in_run = r <= a.n_items && a.area_key[r] == id;  // the key list ends with a sentinel
-    const unsigned run = __ballot_sync(full, in_run);
-    const uint32_t m = run == full ? 32u : uint32_t(__ffs(~run) - 1);  // the run's entries in this chunk
+    const uint32_t m = fold_run_chunk(a.area_key, r0, a.n_items, id);  // the run's entries in this chunk
     uint32_t j = 0, cnt = 0, owned = 0;
     bool per_pixel = false, clipped = false, vis = false;
     double x = 0;
@@ -732,22 +724,7 @@ __device__ void hybrid_fold_warp(const HFoldArgs<P>& a, uint64_t q0) {
         continue;
       }
       const uint32_t jl = __shfl_sync(full, j, l), nl = __shfl_sync(full, cnt, l);
-      const uint64_t base = a.n_items + a.item_slot[jl];
-      for (uint32_t k0 = 0; k0 < nl; k0 += 32) {
-        bool pv = false;
-        double px = 0;
-        if (k0 + lane < nl && a.visible[base + k0 + lane]) {
-          pv = true;
-          px = a.piece_area[base + k0 + lane];
-          vis_tris += a.edges[base + k0 + lane] - 2u;
-        }
-        const uint32_t mm = nl - k0 < 32 ? nl - k0 : 32;
-        for (uint32_t t = 0; t < mm; ++t) {
-          const bool v = __shfl_sync(full, pv, t);
-          const double xt = __shfl_sync(full, px, t);
-          if (v) sum = dadd(sum, xt);
-        }
-      }
+      warp_fold_pieces(a.visible, a.piece_area, a.edges, a.n_items + a.item_slot[jl], nl, sum, vis_tris);
     }
     if (m < 32) break;
   }

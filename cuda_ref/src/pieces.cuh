@@ -89,4 +89,58 @@ PassRange pass_range(Pipeline<P>& p, Pass pass) {
   return {p.n_items, p.counters.get() + kSlotsUsed, p.caps.clip_slots};
 }
 
+// The visible-area folds (raster.cu's, and hybrid.cu's second one): a thread per original
+// triangle's run of items (area_key sorted, ending with a sentinel), except runs of more than
+// `longer` items, which the GPU queues for a warp. At q: 0 not the start of a run, 1 a run for
+// the thread, 2 a run queued (its first entry appended to `runs`).
+TV_HD inline int fold_run_start(const uint64_t* area_key, uint64_t q, uint64_t n_items, uint32_t longer,
+                                uint32_t* runs, uint64_t* run_count) {
+  const uint64_t id = area_key[q];
+  if (q > 0 && area_key[q - 1] == id) return 0;
+  if (q + longer < n_items && area_key[q + longer] == id) {
+    runs[bump_one(run_count, ~uint64_t{0})] = uint32_t(q);
+    return 2;
+  }
+  return 1;
+}
+
+#if defined(__CUDACC__)
+// A warp's share of a queued run: the run's entries among r0 .. r0 + 31 (the list ends with a
+// sentinel, so r <= n_items is inside it).
+__device__ inline uint32_t fold_run_chunk(const uint64_t* area_key, uint64_t r0, uint64_t n_items, uint64_t id) {
+  const uint64_t r = r0 + (threadIdx.x & 31u);
+  const unsigned run = __ballot_sync(0xffffffffu, r <= n_items && area_key[r] == id);
+  return run == 0xffffffffu ? 32u : uint32_t(__ffs(~run) - 1);
+}
+
+// A warp's fold of a clipped item's pieces [base, base + n): the lanes load 32 pieces at a
+// time and every lane adds the visible ones' areas to `sum` in canonical order (one left fold:
+// every lane's sum is the same double). Returns whether one was visible; with `edges`, each
+// lane adds its visible pieces' triangles (edges - 2) to `tris`.
+__device__ inline bool warp_fold_pieces(const uint8_t* visible, const double* piece_area, const uint16_t* edges,
+                                        uint64_t base, uint32_t n, double& sum, uint32_t& tris) {
+  const uint32_t lane = threadIdx.x & 31u;
+  bool any = false;
+  for (uint32_t k0 = 0; k0 < n; k0 += 32) {
+    bool pv = false;
+    double px = 0;
+    if (k0 + lane < n && visible[base + k0 + lane]) {
+      pv = true;
+      px = piece_area[base + k0 + lane];
+      if (edges) tris += edges[base + k0 + lane] - 2u;
+    }
+    const uint32_t mm = n - k0 < 32 ? n - k0 : 32;
+    for (uint32_t t = 0; t < mm; ++t) {
+      const bool v = __shfl_sync(0xffffffffu, pv, t);
+      const double xt = __shfl_sync(0xffffffffu, px, t);
+      if (v) {
+        sum = dadd(sum, xt);
+        any = true;
+      }
+    }
+  }
+  return any;
+}
+#endif
+
 }  // namespace tilevis::cuda

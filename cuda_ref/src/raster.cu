@@ -309,13 +309,7 @@ inline constexpr uint32_t kFoldLong = 16;
 template <class P>
 __global__ void k_fold_area(OutArgs<P> a, uint64_t n) {
   TV_GRID_LOOP(q, n) {
-    const uint64_t id = a.area_key[q];
-    if (q > 0 && a.area_key[q - 1] == id) continue;
-    if (q + kFoldLong < a.n_items && a.area_key[q + kFoldLong] == id) {
-      a.long_runs[bump_one(a.long_count, ~uint64_t{0})] = uint32_t(q);
-      continue;
-    }
-    fold_area<P>(a, q);
+    if (fold_run_start(a.area_key, q, a.n_items, kFoldLong, a.long_runs, a.long_count) == 1) fold_area<P>(a, q);
   }
 }
 
@@ -328,10 +322,7 @@ __device__ void fold_run_warp(const OutArgs<P>& a, uint64_t q0) {
   bool any = false;
   for (uint64_t r0 = q0;; r0 += 32) {
     const uint64_t r = r0 + lane;
-    // The key list ends with a sentinel (binning): r <= n_items is inside it.
-    const bool in_run = r <= a.n_items && a.area_key[r] == id;
-    const unsigned run = __ballot_sync(full, in_run);
-    const uint32_t m = run == full ? 32u : uint32_t(__ffs(~run) - 1);  // the run's entries in this chunk
+    const uint32_t m = fold_run_chunk(a.area_key, r0, a.n_items, id);  // the run's entries in this chunk
     uint32_t j = 0, cnt = 0;
     bool clipped = false, vis = false;
     double x = 0;
@@ -355,24 +346,8 @@ __device__ void fold_run_warp(const OutArgs<P>& a, uint64_t q0) {
         continue;
       }
       const uint32_t jl = __shfl_sync(full, j, l), nl = __shfl_sync(full, cnt, l);
-      const uint64_t base = a.n_items + a.item_slot[jl];
-      for (uint32_t k0 = 0; k0 < nl; k0 += 32) {
-        bool pv = false;
-        double px = 0;
-        if (k0 + lane < nl) {
-          pv = a.visible[base + k0 + lane] != 0;
-          if (pv) px = a.piece_area[base + k0 + lane];
-        }
-        const uint32_t mm = nl - k0 < 32 ? nl - k0 : 32;
-        for (uint32_t t = 0; t < mm; ++t) {
-          const bool v = __shfl_sync(full, pv, t);
-          const double xt = __shfl_sync(full, px, t);
-          if (v) {
-            sum = dadd(sum, xt);
-            any = true;
-          }
-        }
-      }
+      uint32_t unused = 0;
+      any = warp_fold_pieces(a.visible, a.piece_area, nullptr, a.n_items + a.item_slot[jl], nl, sum, unused) || any;
     }
     if (m < 32) break;
   }
