@@ -41,8 +41,6 @@ struct HybArgs {
   uint32_t* crossing;
   uint32_t* range;   // per occluder position: bins x0, y0, x1, y1 (8 bits each); ~0: empty in the tile
   uint8_t* flag;     // per occluder position: in some crossing pair (count_all)
-  uint32_t* zmax;    // per occluder position: its z_max and id, contiguous for the pair loop
-  uint32_t* ids_at;
   uint4* active;     // per warp and occluder position: a detection bin's active members (scratch)
   uint64_t active_stride;  // positions per warp's share of `active`
   uint64_t* batch;   // per tile and warp, 64 words: the pairs waiting for the exact test (scratch)
@@ -167,6 +165,17 @@ struct DetTile {
   Bins g;
 };
 
+// The detection bins over a tile's rectangle (the first tile's are the most any tile has).
+template <class P>
+TV_HD Bins bins_of(const HybArgs<P>& a, const Rect& rect) {
+  Bins g;
+  const uint32_t tw = a.grid.tile_w, th = a.grid.tile_h;
+  g.step = int64_t(a.detection_bin ? a.detection_bin : (tw > th ? tw : th)) << a.grid.sb;
+  g.x = uint32_t((int64_t(rect.x1) - rect.x0 + g.step - 1) / g.step);
+  g.y = uint32_t((int64_t(rect.y1) - rect.y0 + g.step - 1) / g.step);
+  return g;
+}
+
 template <class P>
 TV_HD DetTile<P> det_tile(const HybArgs<P>& a, uint32_t tile) {
   DetTile<P> d;
@@ -174,15 +183,12 @@ TV_HD DetTile<P> det_tile(const HybArgs<P>& a, uint32_t tile) {
   d.n = a.occ_count[tile];
   d.occ = a.occ + d.base;
   d.rect = a.grid.rect(tile);
-  const uint32_t tw = a.grid.tile_w, th = a.grid.tile_h;
-  d.g.step = int64_t(a.detection_bin ? a.detection_bin : (tw > th ? tw : th)) << a.grid.sb;
-  d.g.x = uint32_t((int64_t(d.rect.x1) - d.rect.x0 + d.g.step - 1) / d.g.step);
-  d.g.y = uint32_t((int64_t(d.rect.y1) - d.rect.y0 + d.g.step - 1) / d.g.step);
+  d.g = bins_of(a, d.rect);
   return d;
 }
 
-// Positions i0, i0 + stride, ...: their bins (~0: the triangle misses the tile), z_max and id
-// side by side for the sweeps, and the crossing flags cleared.
+// Positions i0, i0 + stride, ...: their bins (~0: the triangle misses the tile), and the
+// crossing flags cleared.
 template <class P>
 TV_HD void det_positions(const HybArgs<P>& a, const DetTile<P>& d, uint32_t i0, uint32_t stride) {
   for (uint32_t k = i0; k < d.n; k += stride) {
@@ -198,8 +204,6 @@ TV_HD void det_positions(const HybArgs<P>& a, const DetTile<P>& d, uint32_t i0, 
                             g.of(t.bbox.x1, rect.x0, g.x) << 16 | g.of(t.bbox.y1, rect.y0, g.y) << 24;
     }
     a.flag[d.base + k] = 0;
-    a.zmax[d.base + k] = t.z_max;
-    a.ids_at[d.base + k] = t.id;
   }
 }
 
@@ -217,8 +221,6 @@ TV_HD bool bin_sweep(const HybArgs<P>& a, const DetTile<P>& d, uint32_t bx, uint
   const OccRec* occ = d.occ;
   const Rect rect = d.rect;
   const uint32_t* range = a.range + d.base;
-  const uint32_t* zmax = a.zmax + d.base;
-  const uint32_t* idk = a.ids_at + d.base;
   uint8_t* flag = a.flag + d.base;
   const uint32_t lane = team.lane();
   auto in_bin = [](uint32_t r, uint32_t bx, uint32_t by) {
@@ -300,7 +302,7 @@ TV_HD bool bin_sweep(const HybArgs<P>& a, const DetTile<P>& d, uint32_t bx, uint
         s_cnt += popc(sm);
       }
       team.sync();
-      if (lane == 0) act[kept] = make_uint4(k, zmax[k], idk[k], rk);
+      if (lane == 0) act[kept] = make_uint4(k, t.z_max, t.id, rk);
       na = kept + 1;
       team.sync();
     }
@@ -537,7 +539,6 @@ TV_HD void per_pixel_tile(const HybArgs<P>& a, uint64_t tile) {
     }
     finish_sample(a, px, py, k, o);
   }
-  for (int c : {kColPairTests, kColCandidates, kColClips, kColPieces, kColVisiblePieces, kColOcclusionTests}) row[c] = 0;
   row[kColSamplesCovered] = int64_t(covered);
   row[kColFragments] = int64_t(generated);
   a.shaded[tile] = covered + shaded;
@@ -771,14 +772,12 @@ void stage_hybrid(Pipeline<P>& p) {
   a.crossing = p.hyb_crossing.need(nt + 1);
   a.range = p.hyb_range.need(ni + 1);
   a.flag = p.hyb_flag.need(ni + 1);
-  a.zmax = p.hyb_zmax.need(ni + 1);
-  a.ids_at = p.hyb_id.need(ni + 1);
   a.active_stride = ni + 1;
   a.active = p.hyb_active.need(kDetWarps * a.active_stride);
   a.batch = p.hyb_batch.need(nt * kDetWarps * 2 * WarpTeam::kSize + 1);
   {
-    const uint32_t tw = p.grid.tile_w, th = p.grid.tile_h, bin = a.detection_bin ? a.detection_bin : tmax(tw, th);
-    a.bins_per_tile = ((tw + bin - 1) / bin) * ((th + bin - 1) / bin);
+    const Bins g = bins_of(a, a.grid.rect(0));
+    a.bins_per_tile = g.x * g.y;
   }
   a.bin_counts = p.hyb_bin_counts.need(nt * a.bins_per_tile * 2 + 1);
   a.sample_xy = p.sample_xy.get();
