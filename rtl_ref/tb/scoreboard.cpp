@@ -1,9 +1,45 @@
 #include "scoreboard.h"
 
 #include <algorithm>
+#include <cstdio>
+#include <cstdlib>
 #include <sstream>
 
 namespace tilevis::rtl {
+
+TbOptions parse_tb_options(int argc, char** argv, unsigned extra) {
+  TbOptions o;
+  auto usage = [&] {
+    std::fprintf(stderr, "usage: %s [--random N --seed S] [--jobs FILE [--job-stride K]%s]...%s\n", argv[0],
+                 extra & kTbMaxJobs ? " [--max-jobs M]" : "", extra & kTbCsv ? " [--csv FILE]" : "");
+    std::exit(2);
+  };
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto val = [&]() -> std::string {
+      if (i + 1 >= argc) {
+        std::fprintf(stderr, "%s needs a value\n", a.c_str());
+        std::exit(2);
+      }
+      return argv[++i];
+    };
+    if (a == "--random")
+      o.random = std::stoull(val());
+    else if (a == "--seed")
+      o.seed = std::stoull(val());
+    else if (a == "--jobs")
+      o.jobs.push_back(val());
+    else if (a == "--job-stride")
+      o.job_stride = std::max<uint64_t>(1, std::stoull(val()));
+    else if (a == "--csv" && (extra & kTbCsv))
+      o.csv = val();
+    else if (a == "--max-jobs" && (extra & kTbMaxJobs))
+      o.max_jobs = std::stoull(val());
+    else
+      usage();
+  }
+  return o;
+}
 
 using geom::Point;
 using geom::Vertex;

@@ -87,6 +87,18 @@ struct ReplayedJob {
   std::vector<ReplayedTriangle> triangles;
   int64_t clips = 0;
 };
+// A testbench's command line: --random N --seed S (N constrained-random vectors from seed S),
+// --jobs FILE (again for more files) [--job-stride K: every K-th tile job], and where the
+// testbench takes them (`extra`, kTb* bits) --csv FILE and --max-jobs M. Anything else, or an
+// option without its value, prints the usage and exits with status 2.
+enum TbExtra : unsigned { kTbCsv = 1, kTbMaxJobs = 2 };
+struct TbOptions {
+  uint64_t random = 0, seed = 1, job_stride = 1, max_jobs = ~uint64_t{0};
+  std::vector<std::string> jobs;
+  std::string csv;
+};
+TbOptions parse_tb_options(int argc, char** argv, unsigned extra);
+
 }  // namespace tilevis::rtl
 
 #include <functional>

@@ -79,33 +79,10 @@ class Bench {
 
 namespace {
 int bench(int argc, char** argv) {
-  uint64_t random = 0, seed = 1, job_stride = 1;
-  std::vector<std::string> jobs;
-  std::string csv;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto val = [&]() -> std::string {
-      if (i + 1 >= argc) {
-        std::fprintf(stderr, "%s needs a value\n", a.c_str());
-        std::exit(2);
-      }
-      return argv[++i];
-    };
-    if (a == "--random")
-      random = std::stoull(val());
-    else if (a == "--seed")
-      seed = std::stoull(val());
-    else if (a == "--jobs")
-      jobs.push_back(val());
-    else if (a == "--csv")
-      csv = val();
-    else if (a == "--job-stride")
-      job_stride = std::max<uint64_t>(1, std::stoull(val()));
-    else {
-      std::fprintf(stderr, "usage: %s [--random N --seed S] [--jobs FILE [--job-stride K]] [--csv FILE]\n", argv[0]);
-      return 2;
-    }
-  }
+  const TbOptions opt = parse_tb_options(argc, argv, kTbCsv);
+  const uint64_t random = opt.random, seed = opt.seed, job_stride = opt.job_stride;
+  const std::vector<std::string>& jobs = opt.jobs;
+  const std::string& csv = opt.csv;
   uint64_t bad = 0;
   if (random) {
     Bench b;
