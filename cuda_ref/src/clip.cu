@@ -171,11 +171,12 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team, uint64_t* stag
       bool flag = false;
       uint64_t sp = 0;
       PEdge<P> copy[kCopyEdges];
+      int8_t sides[kSideCap];
       const PEdge<P>* poly = nullptr;
       if (k < n) {
         sp = slots[k];
         poly = load_piece<P>(a.pool, sp, copy);
-        flag = survives<P>(poly, uint32_t(sp), tt, e);
+        flag = survives<P>(poly, uint32_t(sp), tt, e, sides);
       }
       const uint32_t mask = team.ballot(flag);
       const uint32_t rank = popc(mask & ((1u << lane) - 1u));
@@ -191,7 +192,7 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team, uint64_t* stag
         const uint64_t at = step_at + incl - need;
         PolyOut<P> in{a.pool + at, 0, m + 1, false}, out{a.pool + at + m + 1, 0, m + 1, false};
         bool regular = false;
-        split<P>(poly, m, e.line, in, out, &regular);
+        split<P>(poly, m, e.line, in, out, &regular, sides);
         regularized += regular ? 1 : 0;
         if (in.overflow || out.overflow) {
           ++anomalies;  // only float arithmetic can break convexity

@@ -186,10 +186,9 @@ inline constexpr uint32_t kTileCap = 8;  // edges of a tile polygon (tile_polygo
 // split would then emit a non-convex part with more edges than its bound. Keeps the first run
 // of positive vertices (cyclically) and a zero at either end of it; every other vertex counts
 // as negative. Returns whether a sign was changed. Exact polygons are convex: never called.
+// regular_sides: the sides given (sg[0..n)), made convex in place; convex_sides: computed too.
 inline constexpr uint32_t kSideCap = 32;
-template <class P>
-TV_HD inline bool convex_sides(const PEdge<P>* poly, uint32_t n, const typename P::Line& l, int8_t* sg) {
-  for (uint32_t i = 0; i < n; ++i) sg[i] = int8_t(P::side(l, poly[i].start));
+TV_HD inline bool regular_sides(int8_t* sg, uint32_t n) {
   uint32_t start = n;
   for (uint32_t i = 0; i < n && start == n; ++i)
     if (sg[i] > 0 && sg[i == 0 ? n - 1 : i - 1] <= 0) start = i;
@@ -207,6 +206,12 @@ TV_HD inline bool convex_sides(const PEdge<P>* poly, uint32_t n, const typename 
     }
   }
   return changed;
+}
+
+template <class P>
+TV_HD inline bool convex_sides(const PEdge<P>* poly, uint32_t n, const typename P::Line& l, int8_t* sg) {
+  for (uint32_t i = 0; i < n; ++i) sg[i] = int8_t(P::side(l, poly[i].start));
+  return regular_sides(sg, n);
 }
 
 // The triangle's polygon (positive order, vertex 0 = v0) clipped to the tile rectangle by
@@ -288,9 +293,13 @@ TV_HD inline void line_sides(const PEdge<P>* poly, uint32_t n, const typename P:
 }
 
 // SVGPU §3.2.1 tests 1-3 of a silhouette edge against a (piece of a) triangle. true: the
-// pair survives and the piece must be split by the edge's line.
+// pair survives and the piece must be split by the edge's line. Where `sides` is given (and
+// n <= kSideCap), the vertices' sides of AB's line are computed once, for tests 1 and 3 and
+// for split() to take over: a surviving pair's split needs them again. (Not given: computed
+// where each needs them, with no array: exact's k_clip_long spilled 444 bytes with it.)
 template <class P>
-TV_HD inline bool survives(const PEdge<P>* poly, uint32_t n, const TileTri<P>& tt, const SilEdge<P>& e) {
+TV_HD inline bool survives(const PEdge<P>* poly, uint32_t n, const TileTri<P>& tt, const SilEdge<P>& e,
+                           int8_t* sides = nullptr) {
   if (n == 0) return false;
   // The pair survives only if tests 1, 2 and 3 all pass, so they may run in any order: the
   // cheap one first.
@@ -302,17 +311,27 @@ TV_HD inline bool survives(const PEdge<P>* poly, uint32_t n, const TileTri<P>& t
   for (uint32_t i = 0; i < n; ++i)
     if (P::eval(poly[i].line, a) <= 0 && P::eval(poly[i].line, b) <= 0) return false;
   // Test 1: the polygon lies on one side of the line (touching counts as one side).
-  bool pos, neg;
-  line_sides<P>(poly, n, e.line, pos, neg);
+  const bool kept = sides && n <= kSideCap;
+  bool pos = false, neg = false;
+  if (kept) {
+    for (uint32_t i = 0; i < n; ++i) {
+      sides[i] = int8_t(P::side(e.line, poly[i].start));
+      pos |= sides[i] > 0;
+      neg |= sides[i] < 0;
+    }
+  } else {
+    line_sides<P>(poly, n, e.line, pos, neg);
+  }
   if (!pos || !neg) return false;
+  auto side_at = [&](uint32_t k) { return kept ? int(sides[k]) : P::side(e.line, poly[k].start); };
   // Test 3: the chord of AB's line through the polygon: `first` where the line's edge of the
   // inside part starts, `second` where it ends.
   typename P::V first = poly[0].start, second = poly[0].start;
-  const int s0 = P::side(e.line, poly[0].start);
+  const int s0 = side_at(0);
   int si = s0;
   for (uint32_t i = 0; i < n; ++i) {
     const uint32_t j = i + 1 == n ? 0 : i + 1;
-    const int sn = j == 0 ? s0 : P::side(e.line, poly[j].start);
+    const int sn = j == 0 ? s0 : side_at(j);
     if (si > 0 && sn <= 0) first = sn == 0 ? poly[j].start : P::meet(poly[i].line, e.line);
     if (si <= 0 && sn > 0) second = si == 0 ? poly[i].start : P::meet(e.line, poly[i].line);
     si = sn;
@@ -352,7 +371,16 @@ TV_HD inline void split_sides(const PEdge<P>* poly, uint32_t n, const typename P
 // Float: the signs made convex first (convex_sides; `regularized` says whether they changed).
 template <class P>
 TV_HD inline void split(const PEdge<P>* poly, uint32_t n, const typename P::Line& l, PolyOut<P>& in, PolyOut<P>& out,
-                        bool* regularized = nullptr) {
+                        bool* regularized = nullptr, int8_t* sides = nullptr) {
+  // The sides survives() left (of the same vertices against the same line), consumed here.
+  if (sides && n <= kSideCap) {
+    if constexpr (!P::kExact) {
+      const bool changed = regular_sides(sides, n);
+      if (regularized) *regularized = changed;
+    }
+    split_sides<P>(poly, n, l, sides, in, out);
+    return;
+  }
   if constexpr (!P::kExact) {
     if (n <= kSideCap) {
       int8_t sg[kSideCap];
