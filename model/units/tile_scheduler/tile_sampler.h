@@ -34,7 +34,9 @@
 // claim a zero-width interval. The fit is weighted by the design weights K_h / n_h (the
 // combined regression estimator: Cochran, Sampling Techniques, ch. 7) and
 //     Var(Y) = sum_h K_h^2 (1 - n_h/K_h) s_eh^2 / n_h   (K_h clusters, n_h observed),
-// s_eh^2 the residuals' variance within stratum h. Pure arithmetic: no SystemC.
+// s_eh^2 the residuals' variance within stratum h, and no less than the pooled one (over all
+// strata) while h has clusters unobserved: two or three draws alike (empty tiles) would claim
+// none. Pure arithmetic: no SystemC.
 #pragma once
 
 #include <cstdint>
