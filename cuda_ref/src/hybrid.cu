@@ -639,7 +639,7 @@ struct HFoldArgs {
   const double* piece_area;
   double sample_area;
   double* area;
-  uint32_t* long_runs;    // GPU: first entries of runs longer than kHybridFoldLong items
+  uint32_t* long_runs;    // GPU: first entries of runs longer than kFoldLong items
   uint64_t* long_count;
 };
 
@@ -671,16 +671,15 @@ TV_HD void hybrid_fold(const HFoldArgs<P>& a, uint64_t q) {
   count_max(&a.counters[kMaxTilePieces], most_pieces);
 }
 
-// As raster.cu's fold: on the GPU a run of more than kHybridFoldLong items (a big triangle, one
+// As raster.cu's fold: on the GPU a run of more than kFoldLong items (a big triangle, one
 // item per tile) goes to a warp, whose lanes load 32 items' values at once; the additions stay
 // one left fold in canonical order (every lane adds the same values in the same order), and the
 // counts are sums and maxima, in any order.
-inline constexpr uint32_t kHybridFoldLong = 16;
 
 template <class P>
 __global__ void k_hybrid_fold(HFoldArgs<P> a, uint64_t n) {
   TV_GRID_LOOP(q, n) {
-    if (fold_run_start(a.area_key, q, a.n_items, kHybridFoldLong, a.long_runs, a.long_count) == 1) hybrid_fold<P>(a, q);
+    if (fold_run_start(a.area_key, q, a.n_items, kFoldLong, a.long_runs, a.long_count) == 1) hybrid_fold<P>(a, q);
   }
 }
 

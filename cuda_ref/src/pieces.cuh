@@ -89,9 +89,12 @@ PassRange pass_range(Pipeline<P>& p, Pass pass) {
   return {p.n_items, p.counters.get() + kSlotsUsed, p.caps.clip_slots};
 }
 
+// Runs of more than kFoldLong items go to a warp in both folds (raster.cu says why 16).
+inline constexpr uint32_t kFoldLong = 16;
+
 // The visible-area folds (raster.cu's, and hybrid.cu's second one): a thread per original
 // triangle's run of items (area_key sorted, ending with a sentinel), except runs of more than
-// `longer` items, which the GPU queues for a warp. At q: 0 not the start of a run, 1 a run for
+// `longer` items (kFoldLong), which the GPU queues for a warp. At q: 0 not the start of a run, 1 a run for
 // the thread, 2 a run queued (its first entry appended to `runs`).
 TV_HD inline int fold_run_start(const uint64_t* area_key, uint64_t q, uint64_t n_items, uint32_t longer,
                                 uint32_t* runs, uint64_t* run_count) {

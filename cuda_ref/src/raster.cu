@@ -303,8 +303,7 @@ TV_HD void fold_area(const OutArgs<P>& a, uint64_t q) {
 // loads was the end of those frames (hot_tile float: k_fold_area 1.95 ms beside a 0.16 ms
 // raster; at 64, broken_mesh's runs of up to 64 items still took k_fold_area 28 us). The warp's lanes load 32 items' values at once; the additions stay one left fold in
 // canonical order (every lane adds the same values in the same order), so the area is the same
-// double.
-inline constexpr uint32_t kFoldLong = 16;
+// double. (kFoldLong: pieces.cuh.)
 
 template <class P>
 __global__ void k_fold_area(OutArgs<P> a, uint64_t n) {
