@@ -7,7 +7,11 @@
 # bench: `tilevis cuda` at 32x32 tiles, TILEVIS_QUICK_RUNS runs (default 10), on the scenes of
 # TILEVIS_QUICK_SCENES (default "bunny million slivers"), exact and float, with both CUDA
 # z-buffers timed in the same process; a table of new frame (device-sized graph), stream (sizes
-# read on the host), presized, graph and the ratios to the z-buffers, last. With .gpu carried
+# read on the host), presized, graph and the ratios to the z-buffers, last. A/B of environment
+# switches: TILEVIS_QUICK_VARIANTS="off:TILEVIS_CUDA_PDL=off exit:TILEVIS_CUDA_PDL=exit" runs every
+# scene and precision under each NAME:VAR=VALUE in turn (interleaved, TILEVIS_QUICK_PASSES times,
+# default 1), checks that ids.exr, tiles.csv and visible_area.bin are the same bytes under every
+# variant, and tables each variant's times. With .gpu carried
 # (prepare_gpu_run.sh) and the commit in .gpu/commit_src.txt (the sender writes it). $OUT gets
 # bench.json (every stats.json), prebuilt.tar.xz (pack) and gpu_run.sh's logs.tar.xz.
 set -uo pipefail
@@ -39,10 +43,33 @@ for ph in "${phases[@]}"; do
       say "sanitizers: $(cat "$BUILD/work/meta/sanitizer.txt" 2>/dev/null)" ;;
     bench)
       rm -rf /tmp/quick && mkdir -p /tmp/quick
-      for s in ${TILEVIS_QUICK_SCENES:-bunny million slivers}; do
-        for p in ${TILEVIS_QUICK_PRECISIONS:-float exact}; do
-          "$BIN" cuda "$BUILD/gpu_traces/$s.tvt" --tile 32 --precision "$p" --runs "${TILEVIS_QUICK_RUNS:-10}" \
-            -o "/tmp/quick/${s}_$p" >"/tmp/quick/${s}_$p.log" 2>&1 || say "cuda $s $p failed: $(tail -n 2 "/tmp/quick/${s}_$p.log")"
+      variants=(${TILEVIS_QUICK_VARIANTS:-})
+      [ ${#variants[@]} -gt 0 ] || variants=("")
+      run_name() { # scene precision variant pass
+        local n="$1_$2"
+        [ -n "$3" ] && n="${n}_${3%%:*}"
+        [ "$4" = 1 ] || n="${n}_pass$4"
+        echo "$n"
+      }
+      for pass in $(seq 1 "${TILEVIS_QUICK_PASSES:-1}"); do
+        for s in ${TILEVIS_QUICK_SCENES:-bunny million slivers}; do
+          for p in ${TILEVIS_QUICK_PRECISIONS:-float exact}; do
+            for v in "${variants[@]}"; do
+              name="$(run_name "$s" "$p" "$v" "$pass")"
+              env ${v:+"${v#*:}"} "$BIN" cuda "$BUILD/gpu_traces/$s.tvt" --tile 32 --precision "$p" \
+                --runs "${TILEVIS_QUICK_RUNS:-10}" ${TILEVIS_QUICK_ARGS:-} -o "/tmp/quick/$name" >"/tmp/quick/$name.log" 2>&1 ||
+                say "cuda $name failed: $(tail -n 2 "/tmp/quick/$name.log")"
+            done
+            # Every variant's outputs against the first's, byte for byte.
+            first="$(run_name "$s" "$p" "${variants[0]}" "$pass")"
+            for v in "${variants[@]:1}"; do
+              other="$(run_name "$s" "$p" "$v" "$pass")"
+              for f in ids.exr tiles.csv visible_area.bin; do
+                [ -f "/tmp/quick/$first/$f" ] || continue
+                cmp -s "/tmp/quick/$first/$f" "/tmp/quick/$other/$f" || say "OUTPUT DIFFERS: $other/$f against $first/$f"
+              done
+            done
+          done
         done
       done
       python3 - "$OUT/bench.json" <<'PY'

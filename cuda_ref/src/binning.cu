@@ -221,12 +221,15 @@ struct ObinGatherArgs {
 TV_HD void obin_gather(const ObinGatherArgs& a, uint64_t q) { a.out[q] = a.rec[a.val[q]]; }
 
 __global__ void k_obin_count(ObinArgs a, uint64_t n) {
+  TV_KERNEL_WAIT();
   TV_GRID_LOOP(i, n) obin_count(a, i);
 }
 __global__ void k_obin_emit(ObinArgs a, uint64_t n) {
+  TV_KERNEL_WAIT();
   TV_GRID_LOOP(i, n) obin_emit(a, i);
 }
 __global__ void k_obin_gather(ObinGatherArgs a, uint64_t n) {
+  TV_KERNEL_WAIT();
   TV_GRID_LOOP(i, n) obin_gather(a, i);
 }
 
@@ -321,6 +324,7 @@ __device__ void bin_block(const BinArgs<P>& a, uint32_t i, uint32_t* warp_tot) {
 // k_bin_big.
 template <class P, bool Edge, bool Emit>
 __global__ void k_bin(BinArgs<P> a, uint64_t n) {
+  TV_KERNEL_WAIT();
   TV_GRID_LOOP(i, n) {
     const Rect& box = Edge ? a.edges[i].bbox : a.tris[i].bbox;
     if (tile_span(a, box).count() > kBigSpan) {
@@ -338,6 +342,7 @@ __global__ void k_bin(BinArgs<P> a, uint64_t n) {
 
 template <class P, bool Edge, bool Emit>
 __global__ void __launch_bounds__(kBinBlock) k_bin_big(BinArgs<P> a, const uint64_t* count, uint64_t cap) {
+  TV_KERNEL_WAIT();
   __shared__ uint32_t warp_tot[kBinBlock / 32];
   if (Emit && count_of(a.emit_gate) == 0) return;  // a frame past its bounds emits nothing
   const uint64_t n = *count < cap ? *count : cap;
@@ -348,18 +353,22 @@ template <class P>
 void bin_big_host(const BinArgs<P>&, uint64_t) {}  // the host's thread bodies bin every primitive
 
 __global__ void k_tile_begin(RangeArgs a, uint64_t n) {
+  TV_KERNEL_WAIT();
   TV_GRID_LOOP(i, n) tile_begin(a, i);
 }
 template <class P>
 __global__ void k_gather_box(BoxArgs<P> a, uint64_t n) {
+  TV_KERNEL_WAIT();
   TV_GRID_LOOP(i, n) gather_box<P>(a, i);
 }
 template <class P>
 __global__ void k_gather_occ(OccGatherArgs<P> a, uint64_t n) {
+  TV_KERNEL_WAIT();
   TV_GRID_LOOP(i, n) gather_occ<P>(a, i);
 }
 template <class P>
 __global__ void k_area_key(AreaKeyArgs<P> a, uint64_t n) {
+  TV_KERNEL_WAIT();
   TV_GRID_LOOP(i, n) area_key<P>(a, i);
 }
 

@@ -587,6 +587,7 @@ static_assert(kTreeSmem >= kLongStage * 8, "the rounds' stage lives in the same 
 
 template <class P>
 __global__ void __launch_bounds__(kLongBlockOf<P>, 1) k_clip_long(ClipArgs<P> a, const uint64_t* count, uint64_t cap) {
+  TV_KERNEL_WAIT();
   extern __shared__ __align__(16) uint8_t smem[];
   __shared__ LongShared sh;
   __shared__ TreeShared ts;
@@ -609,6 +610,7 @@ TV_HD void clip_item_host(const ClipArgs<P>& a, uint64_t w) {
 
 template <class P>
 __global__ void k_cand_scatter(ClipArgs<P> a, const uint64_t* count, uint64_t cap) {
+  TV_KERNEL_WAIT();
   const uint64_t n = *count < cap ? *count : cap;
   TV_GRID_LOOP(i, n) cand_scatter<P>(a, i);
 }
@@ -622,6 +624,7 @@ inline constexpr uint32_t kSmallMinItems = 16384;
 
 template <class P>
 __global__ void k_clip_items(ClipArgs<P> a, const uint64_t* count, uint64_t cap) {
+  TV_KERNEL_WAIT();
   const uint64_t n = *count < cap ? *count : cap;
   const uint64_t warp = (uint64_t(blockIdx.x) * blockDim.x + threadIdx.x) / 32;
   const uint64_t warps = uint64_t(gridDim.x) * blockDim.x / 32;

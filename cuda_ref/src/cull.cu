@@ -111,10 +111,12 @@ TV_HD void cull_exact(const CullArgs<P>& a, uint64_t k) {
 
 template <class P>
 __global__ void k_cull_item(CullArgs<P> a, uint64_t n) {
+  TV_KERNEL_WAIT();
   TV_GRID_LOOP(i, n) cull_item<P>(a, i);
 }
 template <class P>
 __global__ void k_cull_exact(CullArgs<P> a, const uint64_t* count, uint64_t cap) {
+  TV_KERNEL_WAIT();
   const uint64_t n = *count < cap ? *count : cap;
   TV_GRID_LOOP(i, n) cull_exact<P>(a, i);
 }

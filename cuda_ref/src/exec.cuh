@@ -44,6 +44,16 @@ inline uint64_t dev_count_bound(uint64_t n) {  // 2^bits >= the bound the tag wa
   return b >= 63 ? ~uint64_t{0} : uint64_t{1} << b;
 }
 
+// Every kernel of this library starts with this: in a graph whose edge into the kernel is
+// programmatic (pipeline.cu's programmatic_edges), the kernel is launched before the one it
+// depends on has finished and waits here for it to complete with its memory visible; launched
+// any other way it does nothing. Nothing before it may touch memory.
+#if defined(__CUDA_ARCH__) && __CUDA_ARCH__ >= 900
+#define TV_KERNEL_WAIT() asm volatile("griddepcontrol.wait;" ::: "memory")
+#else
+#define TV_KERNEL_WAIT() ((void)0)
+#endif
+
 // Grid-stride loop over [0, n) (64-bit safe; n a value or a tagged device count, read once).
 #define TV_GRID_LOOP(i, n)                                                                      \
   for (uint64_t i = uint64_t(blockIdx.x) * blockDim.x + threadIdx.x,                             \

@@ -373,6 +373,7 @@ TV_HD void verdict_host(const HybArgs<P>& a, uint64_t tile) {
 // bins' counts are summed up to the first crossing bin once every warp is done.
 template <class P>
 __global__ void __launch_bounds__(kDetWarps * 32) k_verdict(HybArgs<P> a, uint64_t n_tiles) {
+  TV_KERNEL_WAIT();
   __shared__ uint32_t first;  // the first bin (row-major) with a crossing; ~0: none
   __shared__ uint32_t found;
   const uint32_t w = threadIdx.x / 32, lane = threadIdx.x & 31u;
@@ -551,6 +552,7 @@ constexpr uint32_t kPixBlock = 256, kPixChunk = 32;
 // to 0 by its verdict; the parts add to them (integers: the order does not matter).
 template <class P>
 __global__ void __launch_bounds__(kPixBlock) k_per_pixel(HybArgs<P> a, uint64_t n_tiles, uint32_t parts) {
+  TV_KERNEL_WAIT();
   __shared__ PTri staged[kPixChunk];
   __shared__ unsigned long long sums[3];
   for (uint64_t job = blockIdx.x; job < n_tiles * parts; job += gridDim.x) {
@@ -678,6 +680,7 @@ TV_HD void hybrid_fold(const HFoldArgs<P>& a, uint64_t q) {
 
 template <class P>
 __global__ void k_hybrid_fold(HFoldArgs<P> a, uint64_t n) {
+  TV_KERNEL_WAIT();
   TV_GRID_LOOP(q, n) {
     if (fold_run_start(a.area_key, q, a.n_items, kFoldLong, a.long_runs, a.long_count) == 1) hybrid_fold<P>(a, q);
   }
@@ -741,6 +744,7 @@ __device__ void hybrid_fold_warp(const HFoldArgs<P>& a, uint64_t q0) {
 
 template <class P>
 __global__ void k_hybrid_fold_long(HFoldArgs<P> a, const uint64_t* count, uint64_t cap) {
+  TV_KERNEL_WAIT();
   const uint64_t n = *count < cap ? *count : cap;
   TV_WARP_LOOP(w, n) hybrid_fold_warp<P>(a, a.long_runs[w]);
 }

@@ -269,6 +269,7 @@ TV_HD void cell_words_host(const CellArgs& a, uint64_t i) {
 // Device: a lane per position, a warp per word group (the launch is a multiple of 32 elements,
 // so a warp's lanes stay together); lane c writes word c.
 __global__ void k_cell_words(CellArgs a, uint64_t n_lanes) {
+  TV_KERNEL_WAIT();
   const uint64_t n = *a.count;
   TV_GRID_LOOP(i, n_lanes) {
     const uint32_t lane = uint32_t(i & 31u);
@@ -329,6 +330,7 @@ TV_HD void occlude_cells(const OccArgs<P>& a, uint64_t i) {
 
 template <class P>
 __global__ void k_occlude_cells(OccArgs<P> a, const uint64_t* count, uint64_t cap) {
+  TV_KERNEL_WAIT();
   const uint64_t n = *count < cap ? *count : cap;
   TV_GRID_LOOP(i, n) occlude_cells<P>(a, i);
 }
@@ -342,6 +344,7 @@ inline constexpr uint64_t kWarpSlots = 65536;
 
 template <class P>
 __global__ void k_occlude_clipped_float(OccArgs<P> a, const uint64_t* count, uint64_t cap) {
+  TV_KERNEL_WAIT();
   const uint64_t n = *count < cap ? *count : cap;
   if (n < kWarpSlots) {
     TV_WARP_LOOP(w, n) occlude_team<P>(a, a.base + w, 0, WarpTeam{});
@@ -352,16 +355,19 @@ __global__ void k_occlude_clipped_float(OccArgs<P> a, const uint64_t* count, uin
 
 template <class P>
 __global__ void k_occlude(OccArgs<P> a, const uint64_t* count, uint64_t cap) {
+  TV_KERNEL_WAIT();
   const uint64_t n = *count < cap ? *count : cap;
   TV_GRID_LOOP(i, n) occlude_piece<P>(a, i);
 }
 template <class P>
 __global__ void k_occlude_heavy(OccArgs<P> a, const uint64_t* count, uint64_t cap) {
+  TV_KERNEL_WAIT();
   const uint64_t n = *count < cap ? *count : cap;
   TV_WARP_LOOP(w, n) occlude_team<P>(a, a.heavy[w], kSoloOccluders<P>, WarpTeam{});
 }
 template <class P>
 __global__ void k_occlude_clipped(OccArgs<P> a, const uint64_t* count, uint64_t cap) {
+  TV_KERNEL_WAIT();
   const uint64_t n = *count < cap ? *count : cap;
   if constexpr (P::kExact) {
     TV_GRID_LOOP(i, n) occlude_team<P>(a, a.base + i, 0, HostTeam{});

@@ -243,6 +243,7 @@ TV_HD void raster_group(const RasterArgs<P>& a, uint64_t first, uint64_t count, 
 // end of float's frame (its `raster` stage is the wait for it: 0.199 ms against exact's 0.072).
 template <class P>
 __global__ void __launch_bounds__(kRasterBlock) k_raster(RasterArgs<P> a, const uint64_t* count, uint64_t cap) {
+  TV_KERNEL_WAIT();
   __shared__ typename P::Line lines[kRasterBlock / 32][32][kStageEdges];
   __shared__ RasterMeta<P> meta[kRasterBlock / 32][32];
   const uint64_t n = *count < cap ? *count : cap;
@@ -307,6 +308,7 @@ TV_HD void fold_area(const OutArgs<P>& a, uint64_t q) {
 
 template <class P>
 __global__ void k_fold_area(OutArgs<P> a, uint64_t n) {
+  TV_KERNEL_WAIT();
   TV_GRID_LOOP(q, n) {
     if (fold_run_start(a.area_key, q, a.n_items, kFoldLong, a.long_runs, a.long_count) == 1) fold_area<P>(a, q);
   }
@@ -355,6 +357,7 @@ __device__ void fold_run_warp(const OutArgs<P>& a, uint64_t q0) {
 
 template <class P>
 __global__ void k_fold_long(OutArgs<P> a, const uint64_t* count, uint64_t cap) {
+  TV_KERNEL_WAIT();
   const uint64_t n = *count < cap ? *count : cap;
   TV_WARP_LOOP(w, n) fold_run_warp<P>(a, a.long_runs[w]);
 }
@@ -437,6 +440,7 @@ TV_HD void exact_area(const ExactAreaArgs<P>& a, uint64_t p) {
 
 template <class P>
 __global__ void k_exact_area(ExactAreaArgs<P> a, uint64_t n) {
+  TV_KERNEL_WAIT();
   TV_GRID_LOOP(i, n) exact_area<P>(a, i);
 }
 

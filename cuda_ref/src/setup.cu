@@ -143,12 +143,15 @@ TV_HD void setup_emit(const SetupArgs& a, uint64_t t) {
 }
 
 __global__ void k_setup_vertex(SetupArgs a, uint64_t n) {
+  TV_KERNEL_WAIT();
   TV_GRID_LOOP(i, n) setup_vertex(a, i);
 }
 __global__ void k_setup_count(SetupArgs a, uint64_t n) {
+  TV_KERNEL_WAIT();
   TV_GRID_LOOP(i, n) setup_count(a, i);
 }
 __global__ void k_setup_emit(SetupArgs a, uint64_t n) {
+  TV_KERNEL_WAIT();
   TV_GRID_LOOP(i, n) setup_emit(a, i);
 }
 
@@ -224,9 +227,11 @@ TV_HD void weld_resolve(const WeldArgs& a, uint64_t v) {
 }
 
 __global__ void k_weld_insert(WeldArgs a, uint64_t n) {
+  TV_KERNEL_WAIT();
   TV_GRID_LOOP(i, n) weld_insert(a, i);
 }
 __global__ void k_weld_resolve(WeldArgs a, uint64_t n) {
+  TV_KERNEL_WAIT();
   TV_GRID_LOOP(i, n) weld_resolve(a, i);
 }
 

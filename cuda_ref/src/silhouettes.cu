@@ -209,16 +209,20 @@ TV_HD void front_build(const FrontArgs<P>& a, uint64_t i) {
 }
 
 __global__ void k_hash_insert(HashArgs a, uint64_t n) {
+  TV_KERNEL_WAIT();
   TV_GRID_LOOP(i, n) hash_insert(a, i);
 }
 __global__ void k_hash_judge(HashArgs a, uint64_t n) {
+  TV_KERNEL_WAIT();
   TV_GRID_LOOP(i, n) hash_judge(a, i);
 }
 __global__ void k_sil_scatter(HashArgs a, uint64_t n) {
+  TV_KERNEL_WAIT();
   TV_GRID_LOOP(i, n) sil_scatter(a, i);
 }
 template <class P>
 __global__ void k_build_edge(EdgeArgs<P> a, uint64_t n) {
+  TV_KERNEL_WAIT();
   TV_GRID_LOOP(i, n) build_edge<P>(a, i);
 }
 
@@ -231,6 +235,7 @@ template <class P>
 inline constexpr uint32_t kFrontBlock = sizeof(TileTri<P>) <= 160 ? 256 : 128;
 template <class P>
 __global__ void __launch_bounds__(kFrontBlock<P>) k_front_build_block(FrontArgs<P> a, uint64_t n_tagged) {
+  TV_KERNEL_WAIT();
   constexpr uint32_t B = kFrontBlock<P>;
   static_assert(sizeof(TileTri<P>) % 4 == 0 && sizeof(SetupTri) % 4 == 0, "records of whole words");
   static_assert(sizeof(SetupTri) <= sizeof(TileTri<P>), "the staging holds either");

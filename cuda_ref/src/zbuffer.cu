@@ -331,6 +331,7 @@ void zb_trace_triangle_host(const ZArgs& a, uint64_t t) {
 // block gives each thread its first), so no counter is shared by every thread of the frame.
 constexpr uint32_t kTriBlock = 256;
 __global__ void __launch_bounds__(kTriBlock, 3) k_zb_triangles(ZArgs a, uint64_t n) {
+  TV_KERNEL_WAIT();
   __shared__ uint32_t warp_total[kTriBlock / 32];
   __shared__ uint64_t block_base;
   const uint32_t lane = threadIdx.x & 31u, w = threadIdx.x / 32;
@@ -691,6 +692,7 @@ __device__ inline void sm_clear(OwnerS* sm) {
 
 // A warp per tile of the non-empty list (the id buffer was set to -1 beside the vertices).
 __global__ void __launch_bounds__(kRasterBlock, 5) k_zb_tiles(ZArgs a) {
+  TV_KERNEL_WAIT();
   __shared__ OwnerS sm[kWarpsPerBlock][kTileSamples];
   __shared__ ZDer stage[kWarpsPerBlock][32];
   if (overflowed(a)) return;
@@ -719,6 +721,7 @@ __global__ void __launch_bounds__(kRasterBlock, 5) k_zb_tiles(ZArgs a) {
 }
 
 __global__ void __launch_bounds__(kRasterBlock, 5) k_zb_helpers(ZArgs a) {
+  TV_KERNEL_WAIT();
   __shared__ OwnerS sm[kWarpsPerBlock][kTileSamples];
   __shared__ ZDer stage[kWarpsPerBlock][32];
   if (overflowed(a)) return;
@@ -750,17 +753,20 @@ __global__ void __launch_bounds__(kRasterBlock, 5) k_zb_helpers(ZArgs a) {
 }
 
 __global__ void k_zb_rare(ZArgs a) {
+  TV_KERNEL_WAIT();
   if (a.ctr[kZRare] > a.rare_cap) return;
   TV_GRID_LOOP(r, a.ctr[kZRare]) zb_rare(a, r);
 }
 
 __global__ void k_zb_units(ZArgs a) {
+  TV_KERNEL_WAIT();
   if (overflowed(a)) return;
   const uint64_t n = a.ctr[kZBig] & kZUnitMask;
   TV_WARP_LOOP(u, n) zb_unit(a, u, threadIdx.x & 31u, 32);
 }
 
 __global__ void k_zb_scatter(ZArgs a) {
+  TV_KERNEL_WAIT();
   if (overflowed(a)) return;
   TV_GRID_LOOP(i, a.ctr[kZPairs]) zb_scatter(a, i);
 }
@@ -768,6 +774,7 @@ __global__ void k_zb_scatter(ZArgs a) {
 
 // The vertices, and the id buffer set to -1 (every sample no tile list touches keeps it).
 __global__ void k_zb_vertex(ZArgs a, uint64_t n) {
+  TV_KERNEL_WAIT();
   TV_GRID_LOOP(i, n) zb_vertex(a, i);
   int4* ids4 = reinterpret_cast<int4*>(a.ids);
   TV_GRID_LOOP(j, a.n_samples / 4) ids4[j] = make_int4(-1, -1, -1, -1);
@@ -868,8 +875,8 @@ TV_HD void naive_resolve(const NaiveArgs& a, uint64_t k) {
   a.ids[k] = key == ~0ull ? -1 : int32_t(uint32_t(key));
 }
 
-__global__ void k_naive_triangle(NaiveArgs a, uint64_t n) { TV_GRID_LOOP(i, n) naive_triangle(a, i); }
-__global__ void k_naive_resolve(NaiveArgs a, uint64_t n) { TV_GRID_LOOP(i, n) naive_resolve(a, i); }
+__global__ void k_naive_triangle(NaiveArgs a, uint64_t n) { TV_KERNEL_WAIT(); TV_GRID_LOOP(i, n) naive_triangle(a, i); }
+__global__ void k_naive_resolve(NaiveArgs a, uint64_t n) { TV_KERNEL_WAIT(); TV_GRID_LOOP(i, n) naive_resolve(a, i); }
 
 double median_of(std::vector<double> v) {
   if (v.empty()) return 0;

@@ -118,7 +118,8 @@ int main(int argc, char** argv) {
           e["total_ms"] = has_graph ? st["total_ms"] : st.value("stream_total_ms", json(nullptr));
           e["graph_total_ms"] = has_graph ? st["graph_total_ms"] : st["total_ms"];
           e["stage_ms"] = st["stage_ms"];
-          for (const char* k : {"probed_total_ms", "stream_total_ms", "stream_stage_ms", "graph_nodes", "presized_total_ms"})
+          for (const char* k : {"probed_total_ms", "stream_total_ms", "stream_stage_ms", "graph_nodes", "presized_total_ms",
+                              "graph_pdl", "device_graph_programmatic_edges"})
             e[k] = st.value(k, json(nullptr));
           // Every total against the reference's stats.json (golden, or golden hybrid): the names and
           // values that differ (per_pixel_fallback's too).

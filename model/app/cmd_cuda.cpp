@@ -233,6 +233,10 @@ int run(const CudaArgs& a, const trace::Frame& frame, uint32_t tw, uint32_t th) 
                {"presized_total_ms", r.presized_total_ms},
                {"probed_total_ms", r.probed_total_ms},
                {"graph_nodes", r.graph_nodes},
+               {"device_graph_nodes", r.device_graph_nodes},
+               {"graph_pdl", r.graph_pdl},
+               {"graph_programmatic_edges", r.graph_programmatic_edges},
+               {"device_graph_programmatic_edges", r.device_graph_programmatic_edges},
                {"timing", a.device == "gpu" ? "CUDA events, median of runs after warm-up. total_ms: a new frame, "
                                               "one launch of the device-sized graph (no size of any frame in it: "
                                               "grids, scans and sorts over bounds learned from earlier runs, counts "

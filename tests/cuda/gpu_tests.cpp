@@ -40,6 +40,13 @@ TEST_P(ExactGpu, BitIdenticalToGolden) {
   EXPECT_FALSE(r.device_name.empty());
   EXPECT_TRUE(r.device_sized);  // the results above are the device-sized graph's run
   EXPECT_GT(r.device_graph_nodes, 0u);
+  // Both graphs launch this library's kernels programmatically (the default; the results above
+  // are those of the device-sized graph with these edges).
+  if (!std::getenv("TILEVIS_CUDA_PDL")) {
+    EXPECT_EQ(r.graph_pdl, "exit");
+    EXPECT_GT(r.graph_programmatic_edges, 0u);
+    EXPECT_GT(r.device_graph_programmatic_edges, 0u);
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, ExactGpu,

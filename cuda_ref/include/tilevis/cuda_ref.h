@@ -101,6 +101,10 @@ struct CudaResult {
   uint32_t graph_nodes = 0;
   bool device_sized = false;         // total_ms is the device-sized graph's (above)
   uint32_t device_graph_nodes = 0;
+  // Programmatic dependent launch in both graphs (TILEVIS_CUDA_PDL: off, exit, launch): the
+  // mode and the kernel-to-kernel edges it made programmatic in each.
+  std::string graph_pdl = "off";
+  uint32_t graph_programmatic_edges = 0, device_graph_programmatic_edges = 0;
   double upload_ms = 0, download_ms = 0;
   uint32_t runs = 0;
   uint32_t retries = 0;             // grow-and-retry rounds (first run)
