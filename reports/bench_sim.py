@@ -109,8 +109,14 @@ def main():
                 failures[scene.stem] = wall[0]
                 continue
             s = json.loads((d / "stats.json").read_text())
+            # The model's seconds split: the functional model's (setup, binning, visibility,
+            # results: the same work at every level) and the rest, the timing model's (SystemC,
+            # the units, the memory system; the Verilated EVU at rtl).
+            functional = s.get("host_functional_seconds")
             per[level] = {"wall_seconds": wall, "host_seconds": s["host_seconds"],
-                          "prepare_seconds": s.get("host_prepare_seconds"), "cycles": s["totals"]["cycles"],
+                          "prepare_seconds": s.get("host_prepare_seconds"), "functional_seconds": functional,
+                          "timing_seconds": None if functional is None else s["host_seconds"] - functional,
+                          "rtl_seconds": s.get("host_rtl_seconds"), "cycles": s["totals"]["cycles"],
                           "triangles": s["totals"]["triangles_in"], "tiles": s["totals"]["tiles_rendered"],
                           "geometry_end_cycles": s["totals"].get("geometry_end_cycles")}
             if s.get("sampling"):
@@ -150,7 +156,10 @@ def main():
                 continue
             r = {"scene": scene.stem, "level": level, "reference": reference, **per[level],
                  "cycles_vs_reference": abs(per[level]["cycles"] - ref) / ref if ref else 0.0,
-                 "speedup_vs_reference": per[reference]["host_seconds"] / max(per[level]["host_seconds"], 1e-9)}
+                 "speedup_vs_reference": per[reference]["host_seconds"] / max(per[level]["host_seconds"], 1e-9),
+                 "timing_speedup_vs_reference": None if per[level]["timing_seconds"] is None
+                 or per[reference]["timing_seconds"] is None
+                 else per[reference]["timing_seconds"] / max(per[level]["timing_seconds"], 1e-9)}
             if "interval" in r:
                 r["reference_in_interval"] = r["interval"][0] <= ref <= r["interval"][1]
             target = TARGETS.get((scene.stem, level))
@@ -167,13 +176,18 @@ def main():
              f"Machine: {machine}. Commit: {commit}. Command: `python3 reports/bench_sim.py --bin {a.bin} --out {a.out}"
              f" --mode {a.mode} --tile {a.tile} --auto-seeds {a.auto_seeds}`. Wall = the whole `tilevis sim` process (trace read, setup, "
              "functional work, simulation, outputs); model = elaboration to results, of which prepare = elaboration "
-             "and the functional prepare that every level shares (setup, binning, the units' tables). Cycles are the frame's; "
+             "and the functional prepare that every level shares (setup, binning, the units' tables); functional = the "
+             "simulation thread's seconds in the functional model (setup, binning, every tile's visibility and results: the "
+             "same work at every level, stats.json `host_functional_seconds`), timing = model - functional (elaboration, "
+             "SystemC, the units' cost functions, the memory system, and at rtl the Verilated EVU), 'timing faster' = the "
+             "reference's timing seconds / the level's. Cycles are the frame's; "
              "'error' is their deviation from the reference level's (rtl; primitive where a build has no "
              "Verilator); 'faster' = the reference's model seconds / the level's. auto: interval = its 95 % "
              "confidence interval, tiles = simulated / in the frame.", "",
              "![speed against accuracy](sim_bench.png)", "",
-             "| scene | triangles | level | wall s | model s | prepare s | faster | frame cycles | error | auto: interval, tiles |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
+             "| scene | triangles | level | wall s | model s | prepare s | functional s | timing s | faster | timing faster "
+             "| frame cycles | error | auto: interval, tiles |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         extra = ""
         if "interval" in r:
@@ -182,15 +196,18 @@ def main():
                      f"{r['tiles_simulated']:,} / {r['tiles_total']:,}")
             if "geometry_triangles_simulated" in r:
                 extra += f"; geometry {r['geometry_triangles_simulated']:,} / {r['triangles']:,} triangles"
-        prep = "" if r.get("prepare_seconds") is None else f"{r['prepare_seconds']:.2f}"
+        fmt = lambda key, f: "" if r.get(key) is None else f.format(r[key])
         lines.append(f"| {r['scene']} | {r['triangles']:,} | {r['level']} | {r['wall_seconds']:.2f} | "
-                     f"{r['host_seconds']:.2f} | {prep} | {r['speedup_vs_reference']:.1f}x | {r['cycles']:,} | "
+                     f"{r['host_seconds']:.2f} | {fmt('prepare_seconds', '{:.2f}')} | {fmt('functional_seconds', '{:.2f}')} | "
+                     f"{fmt('timing_seconds', '{:.3f}')} | {r['speedup_vs_reference']:.1f}x | "
+                     f"{fmt('timing_speedup_vs_reference', '{:.1f}x')} | {r['cycles']:,} | "
                      f"{100 * r['cycles_vs_reference']:.2f} % | {extra} |")
     # Per level over the scenes: error and speed against the reference.
     lines += ["", "Per level over the scenes (median and largest error, median and smallest speed-up against the "
               "reference; auto: scenes whose interval holds the reference):", "",
-              "| level | scenes | median error | largest error | median faster | slowest faster | interval holds |",
-              "|---|---|---|---|---|---|---|"]
+              "| level | scenes | median error | largest error | median faster | slowest faster | median timing faster "
+              "| slowest timing faster | interval holds |",
+              "|---|---|---|---|---|---|---|---|---|"]
     for level in LEVELS:
         rs = [r for r in rows if r["level"] == level]
         if not rs:
@@ -198,8 +215,10 @@ def main():
         errs = sorted(100 * r["cycles_vs_reference"] for r in rs)
         fast = sorted(r["speedup_vs_reference"] for r in rs)
         holds = [r["reference_in_interval"] for r in rs if "reference_in_interval" in r]
+        tfast = sorted(r["timing_speedup_vs_reference"] for r in rs if r.get("timing_speedup_vs_reference") is not None)
+        ttext = f"{tfast[len(tfast) // 2]:.1f}x | {tfast[0]:.1f}x" if tfast else " | "
         lines.append(f"| {level} | {len(rs)} | {errs[len(errs) // 2]:.2f} % | {errs[-1]:.2f} % | "
-                     f"{fast[len(fast) // 2]:.1f}x | {fast[0]:.1f}x | "
+                     f"{fast[len(fast) // 2]:.1f}x | {fast[0]:.1f}x | {ttext} | "
                      f"{f'{sum(holds)} of {len(holds)}' if holds else ''} |")
     # auto against the full-detail tile level, per scene: what sampling buys in host time.
     pairs = [(r["scene"], t["host_seconds"] / max(r["host_seconds"], 1e-9), t["wall_seconds"] / max(r["wall_seconds"], 1e-9))

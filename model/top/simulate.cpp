@@ -141,6 +141,8 @@ SimOutput simulate(const trace::Frame& frame, const TilerConfig& config, const S
              {"sampling", fc.sampled ? tiler.scheduler().sampling_json() : nlohmann::json(nullptr)},
              {"host_seconds", out.host_seconds},
              {"host_prepare_seconds", out.host_prepare_seconds},
+             {"host_functional_seconds", work.host_functional_seconds()},
+             {"host_rtl_seconds", work.host_rtl_seconds()},
              {"host_threads", vis::host_threads()}};
   return out;
 }

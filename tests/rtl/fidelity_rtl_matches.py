@@ -26,6 +26,13 @@ def main():
                        stdout=subprocess.DEVNULL)
         stats = json.loads((out / "stats.json").read_text())
         runs[level] = (list(csv.DictReader(open(out / "tiles.csv"))), stats["totals"]["cycles"], stats["host_seconds"])
+        # The host seconds' split: the Verilated EVU's time is counted at rtl and only there,
+        # apart from the functional model's.
+        rtl_s, functional_s = stats["host_rtl_seconds"], stats["host_functional_seconds"]
+        if (rtl_s > 0) != (level == "rtl") or not 0 < functional_s <= stats["host_seconds"] - rtl_s:
+            print(f"FAILED: {level}: host_rtl_seconds {rtl_s}, host_functional_seconds {functional_s}, "
+                  f"host_seconds {stats['host_seconds']}")
+            return 1
     (prim, prim_cycles, prim_s), (rtl, rtl_cycles, rtl_s) = runs["primitive"], runs["rtl"]
     cols = ["cycles_evu_reject", "cycles_evu_clip", "cycles_evu_occlude"]
     bad = [(r["tx"], r["ty"], c, p[c], r[c]) for p, r in zip(prim, rtl) for c in cols if p[c] != r[c]]

@@ -340,6 +340,14 @@ TEST(Fidelity, AnalyticAndTileLevelsChargeEachTileTheSameUnitCycles) {
   // Frame cycles: the closed form tracks the event-driven levels.
   const double ca = a["totals"]["cycles"].get<double>(), ct = t["totals"]["cycles"].get<double>();
   EXPECT_NEAR(ca / ct, 1.0, 0.25);
+  // The host seconds are split: the functional model's share is part of the run's, and no
+  // Verilated EVU ran at these levels.
+  for (const auto* r : {&a, &t, &p}) {
+    const double host = (*r)["host_seconds"], functional = (*r)["host_functional_seconds"];
+    EXPECT_GT(functional, 0.0);
+    EXPECT_LE(functional, host);
+    EXPECT_EQ((*r)["host_rtl_seconds"].get<double>(), 0.0);
+  }
 }
 
 TEST(Outputs, VcdTracesUnitBusyAndQueues) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <chrono>
 #include <future>
 #include <numeric>
 #include <stdexcept>
@@ -99,6 +100,25 @@ struct FrameWork::Segment {
   std::vector<std::unique_ptr<TileWork>> open;
 };
 
+class FrameWork::HostTime {
+ public:
+  HostTime(double& total, int& depth) : m_total(total), m_depth(depth), m_outer(depth++ == 0) {
+    if (m_outer) m_t0 = std::chrono::steady_clock::now();
+  }
+  ~HostTime() {
+    --m_depth;
+    if (m_outer) m_total += std::chrono::duration<double>(std::chrono::steady_clock::now() - m_t0).count();
+  }
+  HostTime(const HostTime&) = delete;
+  HostTime& operator=(const HostTime&) = delete;
+
+ private:
+  double& m_total;
+  int& m_depth;
+  bool m_outer;
+  std::chrono::steady_clock::time_point m_t0;
+};
+
 FrameWork::FrameWork(const trace::Frame& frame, const FrameWorkConfig& config) : m_frame(frame), m_cfg(config) {
   m_trace_triangles = uint32_t(frame.triangle_count());
   m_gcfg.tile_w = config.tile_w;
@@ -134,6 +154,7 @@ FrameWork::FrameWork(const trace::Frame& frame, const FrameWorkConfig& config) :
 FrameWork::~FrameWork() = default;
 
 void FrameWork::run_setup() {
+  const HostTime timed(m_functional_s, m_functional_depth);
   m_setup = vis::primitive_setup(m_frame, {m_cfg.depth_bits});
   m_setup_begin.assign(size_t(m_trace_triangles) + 1, 0);
   for (const vis::SetupTriangle& t : m_setup.triangles) ++m_setup_begin[t.id + 1];
@@ -141,6 +162,7 @@ void FrameWork::run_setup() {
 }
 
 void FrameWork::run_binning() {
+  const HostTime timed(m_functional_s, m_functional_depth);
   // Edge owners: the first front-facing triangle of the draw with the edge as one of its own.
   // They read the setup alone: on a host with a second core they are found beside the binning.
   auto find_owners = [this] {
@@ -288,6 +310,7 @@ static std::unique_ptr<vis::Setup> segment_setup(const trace::Frame& f, const vi
 }
 
 void FrameWork::prepare_segment(uint32_t k) {
+  const HostTime timed(m_functional_s, m_functional_depth);
   if (m_seg) throw std::logic_error("prepare_segment: the previous segment is not finished");
   if (k >= segment_count()) throw std::logic_error("prepare_segment: no such segment");
   m_seg = std::make_unique<Segment>();
@@ -351,6 +374,7 @@ uint64_t FrameWork::tile_pair_tests(uint32_t tile) const {
 }
 
 TileWork* FrameWork::open_tile(uint32_t tile) {
+  const HostTime timed(m_functional_s, m_functional_depth);
   Segment& sg = *m_seg;
   auto w = std::make_unique<TileWork>();
   w->segment = sg.index;
@@ -394,11 +418,13 @@ uint32_t FrameWork::covering_fan(uint32_t id, geom::Point p) {
 }
 
 void FrameWork::resolve_ahead(const std::vector<uint32_t>& tiles) {
+  const HostTime timed(m_functional_s, m_functional_depth);
   if (!m_seg) throw std::logic_error("resolve_ahead: no segment");
   if (uses_evu(m_cfg.mode)) m_seg->golden->resolve_ahead(tiles, true);
 }
 
 void FrameWork::resolve_tile(TileWork& w) {
+  const HostTime timed(m_functional_s, m_functional_depth);
   if (w.resolved) return;
   if (uses_evu(m_cfg.mode)) resolve_analytic(w);
   else resolve_pixels(w);
@@ -411,6 +437,7 @@ void FrameWork::resolve_tile(TileWork& w) {
 // Called inside the simulation's threads: a failure stops the simulation and simulate() throws
 // it (an exception must not cross the SystemC kernel).
 void FrameWork::take_rtl_clocks(TileWork& w) {
+  const HostTime timed(m_rtl_s, m_rtl_depth);
   try {
     take_rtl_clocks_or_throw(w);
   } catch (const std::exception& e) {
@@ -565,6 +592,7 @@ void FrameWork::resolve_pixels(TileWork& w) {
 }
 
 void FrameWork::close_tile(TileWork* w) {
+  const HostTime timed(m_functional_s, m_functional_depth);
   Segment& sg = *m_seg;
   auto& row = m_rows[w->tile];
   uint64_t shaded = 0, tests = 0;
@@ -617,6 +645,7 @@ void FrameWork::close_tile(TileWork* w) {
 bool FrameWork::tile_closed(uint32_t tile) const { return m_seg && m_closed_in[tile] == m_seg->index + 1; }
 
 void FrameWork::finish_segment() {
+  const HostTime timed(m_functional_s, m_functional_depth);
   if (!m_seg) throw std::logic_error("finish_segment: no segment");
   for (const auto& w : m_seg->open)
     if (w) throw std::logic_error("finish_segment: tile " + std::to_string(w->tile) + " was never closed");
@@ -624,6 +653,7 @@ void FrameWork::finish_segment() {
 }
 
 void FrameWork::finish() {
+  const HostTime timed(m_functional_s, m_functional_depth);
   if (m_seg) throw std::logic_error("finish: a segment is still open");
   const uint32_t ns = samples();
   const bool from_owner = !m_owner.empty();

@@ -117,6 +117,13 @@ class FrameWork {
   // What stopped the simulation early (fidelity rtl: the RTL failed a tile), empty if nothing.
   const std::string& failure() const { return m_failure; }
 
+  // Host seconds of the calling thread spent in this functional model (setup, binning, every
+  // tile's list, visibility and results; with the other threads' work it waits for) and, at
+  // fidelity rtl, in the Verilated EVU (not in the former). The rest of a run's host time is the
+  // timing model's: SystemC, the units' cost functions, the memory system.
+  double host_functional_seconds() const { return m_functional_s - m_rtl_s; }
+  double host_rtl_seconds() const { return m_rtl_s; }
+
   // --- Results, after finish().
   void finish();
   const std::vector<int32_t>& ids() const { return m_ids; }
@@ -138,6 +145,9 @@ class FrameWork {
   void take_rtl_clocks_or_throw(TileWork& w);
   std::string m_failure;
   void resolve_pixels(TileWork& w);
+  class HostTime;  // adds the wall time of the outermost timed call to a total
+  double m_functional_s = 0, m_rtl_s = 0;
+  int m_functional_depth = 0, m_rtl_depth = 0;
 
   trace::Frame m_frame;
   FrameWorkConfig m_cfg;
