@@ -9,7 +9,7 @@
 # z-buffers timed in the same process; a table of new frame (device-sized graph), stream (sizes
 # read on the host), presized, graph and the ratios to the z-buffers, last. A/B of environment
 # switches: TILEVIS_QUICK_VARIANTS="off:TILEVIS_CUDA_PDL=off exit:TILEVIS_CUDA_PDL=exit" runs every
-# scene and precision under each NAME:VAR=VALUE in turn (interleaved, TILEVIS_QUICK_PASSES times,
+# scene and precision under each NAME:VAR=VALUE[,VAR=VALUE...] in turn (interleaved, TILEVIS_QUICK_PASSES times,
 # default 1), checks that ids.exr, tiles.csv and visible_area.bin are the same bytes under every
 # variant, and tables each variant's times. With .gpu carried
 # (prepare_gpu_run.sh) and the commit in .gpu/commit_src.txt (the sender writes it). $OUT gets
@@ -56,7 +56,9 @@ for ph in "${phases[@]}"; do
           for p in ${TILEVIS_QUICK_PRECISIONS:-float exact}; do
             for v in "${variants[@]}"; do
               name="$(run_name "$s" "$p" "$v" "$pass")"
-              env ${v:+"${v#*:}"} "$BIN" cuda "$BUILD/gpu_traces/$s.tvt" --tile 32 --precision "$p" \
+              assigns=()
+              [ -n "$v" ] && IFS=',' read -ra assigns <<<"${v#*:}"
+              env "${assigns[@]}" "$BIN" cuda "$BUILD/gpu_traces/$s.tvt" --tile 32 --precision "$p" \
                 --runs "${TILEVIS_QUICK_RUNS:-10}" ${TILEVIS_QUICK_ARGS:-} -o "/tmp/quick/$name" >"/tmp/quick/$name.log" 2>&1 ||
                 say "cuda $name failed: $(tail -n 2 "/tmp/quick/$name.log")"
             done
