@@ -531,7 +531,8 @@ bool run_once(Pipeline<P>& p, Timer& t) {
 // the above). Measured in reports/cuda/pdl_h100.md: float new frames 0.3-4.1 % faster, exact
 // faster on 7 scenes of 10 and slower on 3 (million +3.2 %). Launch-completion edges were slower;
 // programmatic edges only where the graph neither forks nor joins, or only into grids of at most
-// one block per SM, kept million exact but lost most of the gain.
+// one block per SM, kept million exact but lost most of the gain; full edges at the stage
+// boundaries kept the gain and the loss.
 enum class Pdl { off, exit };
 Pdl pdl_mode() {
   const char* v = std::getenv("TILEVIS_CUDA_PDL");
