@@ -2,7 +2,7 @@
 # One GPU call that builds, tests and times the tree as it is (gpu_run.sh's build and test
 # phases), then packs the binaries it built for later calls (TILEVIS_GPU_PREBUILT=1):
 #
-#   bash cuda_ref/quick_check.sh [build] [test] [emulation] [bench] [sanitize] [pack]   (default: all but sanitize)
+#   bash cuda_ref/quick_check.sh [build] [base] [test] [emulation] [bench] [sanitize] [pack]   (default: all but base and sanitize)
 #
 # bench: `tilevis cuda` at 32x32 tiles, TILEVIS_QUICK_RUNS runs (default 10), on the scenes of
 # TILEVIS_QUICK_SCENES (default "bunny million slivers"), exact and float, with both CUDA
@@ -11,7 +11,11 @@
 # switches: TILEVIS_QUICK_VARIANTS="off:TILEVIS_CUDA_PDL=off exit:TILEVIS_CUDA_PDL=exit" runs every
 # scene and precision under each NAME:VAR=VALUE[,VAR=VALUE...] in turn (interleaved, TILEVIS_QUICK_PASSES times,
 # default 1), checks that ids.exr, tiles.csv and visible_area.bin are the same bytes under every
-# variant, and tables each variant's times. With .gpu carried
+# variant, and tables each variant's times. A variant may run another build's tool:
+# TILEVIS_QUICK_BIN=PATH among its assignments. Phase `base` builds the tree of
+# .gpu/base_src.tar.xz (`git archive BASE | xz >.gpu/base_src.tar.xz` on the sender) beside this
+# one, so that "base:TILEVIS_QUICK_BIN=/tmp/base_src/build-gpu/model/app/tilevis new:" compares
+# a change with the commit before it, outputs byte for byte. With .gpu carried
 # (prepare_gpu_run.sh) and the commit in .gpu/commit_src.txt (the sender writes it). $OUT gets
 # bench.json (every stats.json), prebuilt.tar.xz (pack) and gpu_run.sh's logs.tar.xz.
 set -uo pipefail
@@ -38,6 +42,11 @@ for ph in "${phases[@]}"; do
       ctest --test-dir "$BUILD" -L cuda -j "$(nproc)" --output-on-failure >"$OUT/emulation.log" 2>&1
       say "host emulation tests: $(grep -E 'tests passed|tests failed' "$OUT/emulation.log" | tail -n 1)"
       grep -E "\*\*\*Failed|FAILED" "$OUT/emulation.log" | head -n 20 ;;
+    base)
+      rm -rf /tmp/base_src && mkdir -p /tmp/base_src && tar -C /tmp/base_src -xJf .gpu/base_src.tar.xz &&
+        ln -s "$ROOT/.gpu" /tmp/base_src/.gpu &&
+        (cd /tmp/base_src && OUT=/tmp/base_out bash cuda_ref/gpu_run.sh build 2>&1 | tail -n 2)
+      say "base build done: $(ls /tmp/base_src/build-gpu/model/app/tilevis 2>&1)" ;;
     sanitize)
       bash cuda_ref/gpu_run.sh sanitize 2>&1 | tail -n 20
       say "sanitizers: $(cat "$BUILD/work/meta/sanitizer.txt" 2>/dev/null)" ;;
@@ -58,7 +67,11 @@ for ph in "${phases[@]}"; do
               name="$(run_name "$s" "$p" "$v" "$pass")"
               assigns=()
               [ -n "$v" ] && IFS=',' read -ra assigns <<<"${v#*:}"
-              env "${assigns[@]}" "$BIN" cuda "$BUILD/gpu_traces/$s.tvt" --tile 32 --precision "$p" \
+              bin="$BIN" envs=()
+              for as in "${assigns[@]}"; do
+                case "$as" in TILEVIS_QUICK_BIN=*) bin="${as#*=}" ;; ?*) envs+=("$as") ;; esac
+              done
+              env "${envs[@]}" "$bin" cuda "$BUILD/gpu_traces/$s.tvt" --tile 32 --precision "$p" \
                 --runs "${TILEVIS_QUICK_RUNS:-10}" ${TILEVIS_QUICK_ARGS:-} -o "/tmp/quick/$name" >"/tmp/quick/$name.log" 2>&1 ||
                 say "cuda $name failed: $(tail -n 2 "/tmp/quick/$name.log")"
             done

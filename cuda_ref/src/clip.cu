@@ -69,17 +69,34 @@ TV_HD inline uint64_t piece_bound(uint64_t c) { return 1 + c + c * (c - 1) / 2; 
 
 inline constexpr uint32_t kCopyEdges = 12;
 
-// A piece's edges (slot: pool offset << 32 | edge count), copied into `copy` when at most
-// kCopyEdges, every load issued at once, so that the tests then walk registers, not the pool;
-// returns what to walk.
+// A piece being tested and split (slot: pool offset << 32 | edge count): one of at most
+// kCopyEdges edges is copied into a local array, every load issued at once, so that the tests
+// and the split walk L1, not the pool (written by an earlier step, so not in L1); a longer one is
+// walked in the pool. (A copy in registers, the loops unrolled over it, measured on the H100:
+// elephant float 0.707 -> 0.647 ms, million float 3.04 -> 3.29 ms at 8 edges and 3.63 at 12,
+// from the registers it takes; not kept.)
 template <class P>
-TV_HD inline const PEdge<P>* load_piece(const PEdge<P>* pool, uint64_t slot, PEdge<P> (&copy)[kCopyEdges]) {
-  const PEdge<P>* poly = pool + (slot >> 32);
-  if (uint32_t(slot) > kCopyEdges) return poly;
-  for (uint32_t i = 0; i < kCopyEdges; ++i)
-    if (i < uint32_t(slot)) copy[i] = poly[i];
-  return copy;
-}
+struct Piece {
+  PEdge<P> copy[kCopyEdges];
+  const PEdge<P>* at = nullptr;
+  uint32_t n = 0;
+
+  TV_HD void load(const PEdge<P>* pool, uint64_t slot) {
+    at = pool + (slot >> 32);
+    n = uint32_t(slot);
+    if (n > kCopyEdges) return;
+    for (uint32_t i = 0; i < kCopyEdges; ++i)
+      if (i < n) copy[i] = at[i];
+    at = copy;
+  }
+  TV_HD bool survives(const TileTri<P>& tt, const SilEdge<P>& e, Sides* sides) const {
+    return tilevis::cuda::survives<P>(at, n, tt, e, sides);
+  }
+  TV_HD void split(const typename P::Line& l, PolyOut<P>& in, PolyOut<P>& out, bool* regularized,
+                   const Sides* sides) const {
+    tilevis::cuda::split<P>(at, n, l, in, out, regularized, sides);
+  }
+};
 
 // A team's piece slots live in `stage` (the warp's shared memory) while it clips, if they fit,
 // and are copied to slot_poly at the end: each step reads and writes them.
@@ -159,7 +176,7 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team, uint64_t* stag
   bool failed = false;
   // A step waits on nothing it could have loaded earlier: the next step's edge is read during
   // this one, and a piece's polygon (written by an earlier step, so not in L1) is read whole,
-  // every load issued at once, into a local copy that survives() and split() then walk.
+  // every load issued at once (Piece).
   SilEdge<P> next_e = a.edges[a.cand_sorted[off]];
   for (uint32_t ci = 0; ci < c && !failed; ++ci) {
     const SilEdge<P> e = next_e;
@@ -170,13 +187,12 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team, uint64_t* stag
       const uint32_t k = k0 + lane;
       bool flag = false;
       uint64_t sp = 0;
-      PEdge<P> copy[kCopyEdges];
-      int8_t sides[kSideCap];
-      const PEdge<P>* poly = nullptr;
+      Piece<P> piece;
+      Sides sides;
       if (k < n) {
         sp = slots[k];
-        poly = load_piece<P>(a.pool, sp, copy);
-        flag = survives<P>(poly, uint32_t(sp), tt, e, sides);
+        piece.load(a.pool, sp);
+        flag = piece.survives(tt, e, &sides);
       }
       const uint32_t mask = team.ballot(flag);
       const uint32_t rank = popc(mask & ((1u << lane) - 1u));
@@ -192,7 +208,7 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team, uint64_t* stag
         const uint64_t at = step_at + incl - need;
         PolyOut<P> in{a.pool + at, 0, m + 1, false}, out{a.pool + at + m + 1, 0, m + 1, false};
         bool regular = false;
-        split<P>(poly, m, e.line, in, out, &regular, sides);
+        piece.split(e.line, in, out, &regular, &sides);
         regularized += regular ? 1 : 0;
         if (in.overflow || out.overflow) {
           ++anomalies;  // only float arithmetic can break convexity
@@ -312,12 +328,12 @@ __device__ void clip_item_block(const ClipArgs<P>& a, uint32_t j, uint64_t* stag
       const uint32_t k = k0 + t;
       bool flag = false;
       uint64_t sp = 0;
-      PEdge<P> copy[kCopyEdges];
-      const PEdge<P>* poly = nullptr;
+      Piece<P> piece;
+      Sides sides;
       if (k < n) {
         sp = slots[k];
-        poly = load_piece<P>(a.pool, sp, copy);
-        flag = survives<P>(poly, uint32_t(sp), tt, e);
+        piece.load(a.pool, sp);
+        flag = piece.survives(tt, e, &sides);
       }
       const uint32_t mask = __ballot_sync(0xffffffffu, flag);
       if (lane == 0) sh.wcnt[warp] = __popc(mask);
@@ -350,7 +366,7 @@ __device__ void clip_item_block(const ClipArgs<P>& a, uint32_t j, uint64_t* stag
         const uint64_t at = step_at + need_before + incl - need;
         PolyOut<P> in{a.pool + at, 0, m + 1, false}, out{a.pool + at + m + 1, 0, m + 1, false};
         bool regular = false;
-        split<P>(poly, m, e.line, in, out, &regular);
+        piece.split(e.line, in, out, &regular, &sides);
         regularized += regular ? 1 : 0;
         if (in.overflow || out.overflow) {
           ++anomalies;
@@ -486,15 +502,14 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
       __nanosleep(32);
     }
     if (cur == ~uint64_t{0}) break;
-    PEdge<P> copy[kCopyEdges];
-    const PEdge<P>* poly = nullptr;
-    auto load = [&] { poly = load_piece<P>(a.pool, cur, copy); };
-    load();
+    Piece<P> piece;
+    piece.load(a.pool, cur);
     for (uint32_t ci = sh_load(&born[id]) + 1; ci < c; ++ci) {
       if (sh_load(&ts.fail)) break;
       const SilEdge<P>& e = a.edges[a.cand_sorted[off + ci]];
       const uint32_t m = uint32_t(cur);
-      if (!survives<P>(poly, m, tt, e)) continue;
+      Sides sides;
+      if (!piece.survives(tt, e, &sides)) continue;
       const uint32_t child = atomicAdd(&ts.n_alloc, 1u);
       if (child >= want || child >= kTreeSlots) {
         atomic_add(&a.counters[kReserveOverflow], 1);
@@ -510,7 +525,7 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
       }
       PolyOut<P> in{a.pool + at, 0, m + 1, false}, out{a.pool + at + m + 1, 0, m + 1, false};
       bool regular = false;
-      split<P>(poly, m, e.line, in, out, &regular);
+      piece.split(e.line, in, out, &regular, &sides);
       regularized += regular ? 1 : 0;
       if (in.overflow || out.overflow) {
         ++anomalies;  // only float arithmetic can break convexity
@@ -523,7 +538,7 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
       __threadfence_block();  // the outside part's edges (global) and record before its polygon word
       sh_store(&sp[child], ((at + m + 1) << 32) | out.n);
       cur = (at << 32) | in.n;
-      load();
+      piece.load(a.pool, cur);
     }
     sh_store(&sp[id], cur);  // the piece's final polygon
     __threadfence_block();

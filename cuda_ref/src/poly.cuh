@@ -181,37 +181,61 @@ TV_HD inline SilEdge<P> make_sil_edge(const Vtx& a, const Vtx& b) {
 
 inline constexpr uint32_t kTileCap = 8;  // edges of a tile polygon (tile_polygon)
 
-// Float: the sides of a polygon's vertices against l, made those of a convex polygon. Float
-// vertices (meets rounded to float) can leave more than one run of positive vertices, and a
-// split would then emit a non-convex part with more edges than its bound. Keeps the first run
-// of positive vertices (cyclically) and a zero at either end of it; every other vertex counts
-// as negative. Returns whether a sign was changed. Exact polygons are convex: never called.
-// regular_sides: the sides given (sg[0..n)), made convex in place; convex_sides: computed too.
+// The sides of a polygon's vertices (at most kSideCap) against a line, as two bit masks in
+// registers: vertex k is positive where bit k of `pos` is set, negative where bit k of `neg`
+// is, on the line where neither is. (An int8_t array indexed by a loop variable lives in local
+// memory: every test and split of a clip step waited on it.)
 inline constexpr uint32_t kSideCap = 32;
-TV_HD inline bool regular_sides(int8_t* sg, uint32_t n) {
-  uint32_t start = n;
-  for (uint32_t i = 0; i < n && start == n; ++i)
-    if (sg[i] > 0 && sg[i == 0 ? n - 1 : i - 1] <= 0) start = i;
-  if (start == n) return false;  // all positive, or none: nothing to split
-  bool changed = false;
-  uint32_t i = start, end;
-  while (sg[i] > 0 && (i = i + 1 == n ? 0 : i + 1) != start) {}
-  end = i;  // first vertex after the run
-  const uint32_t before = start == 0 ? n - 1 : start - 1;
-  for (uint32_t k = end; k != start; k = k + 1 == n ? 0 : k + 1) {
-    const bool keep_zero = sg[k] == 0 && (k == end || k == before);
-    if (sg[k] >= 0 && !keep_zero) {
-      changed = true;
-      sg[k] = -1;
-    }
+struct Sides {
+  uint32_t pos = 0, neg = 0;
+  TV_HD int at(uint32_t k) const { return int((pos >> k) & 1u) - int((neg >> k) & 1u); }
+  TV_HD void set(uint32_t k, int s) {
+    pos |= uint32_t(s > 0) << k;
+    neg |= uint32_t(s < 0) << k;
   }
-  return changed;
-}
+  TV_HD static uint32_t low_bits(uint32_t n) { return n >= 32 ? ~0u : (1u << n) - 1u; }
+  // x's n bits rotated so that bit s comes to bit 0 (right) or bit 0 goes to bit s (left).
+  TV_HD static uint32_t rotr(uint32_t x, uint32_t s, uint32_t n) {
+    return uint32_t(((uint64_t(x) >> s) | (uint64_t(x) << (n - s))) & low_bits(n));
+  }
+  TV_HD static uint32_t rotl(uint32_t x, uint32_t s, uint32_t n) { return rotr(x, s == 0 ? 0 : n - s, n); }
+  TV_HD static uint32_t ctz(uint32_t v) {  // v != 0
+#if defined(__CUDA_ARCH__)
+    return uint32_t(__ffs(v) - 1);
+#else
+    return uint32_t(__builtin_ctz(v));
+#endif
+  }
+
+  // Float: made the sides of a convex polygon. Float vertices (meets rounded to float) can
+  // leave more than one run of positive vertices, and a split would then emit a non-convex part
+  // with more edges than its bound. Keeps the first run of positive vertices (cyclically: the
+  // lowest vertex that is positive after a non-positive one starts it) and a zero at either end
+  // of it; every other vertex counts as negative. Returns whether a side was changed. Exact
+  // polygons are convex: never called.
+  TV_HD bool regularize(uint32_t n) {
+    const uint32_t full = low_bits(n);
+    const uint32_t starts = pos & ~rotl(pos, 1, n);  // positive after a non-positive vertex
+    if (starts == 0) return false;                  // all positive, or none: nothing to split
+    const uint32_t start = ctz(starts);
+    const uint32_t run = ctz(~rotr(pos, start, n));  // < n: some vertex is not positive
+    const uint32_t end = start + run >= n ? start + run - n : start + run;  // first vertex after the run
+    const uint32_t before = start == 0 ? n - 1 : start - 1;
+    const uint32_t kept = rotl(low_bits(run), start, n);  // the run
+    const uint32_t rest = full & ~kept;
+    const uint32_t zero_kept = full & ~pos & ~neg & rest & ((1u << end) | (1u << before));
+    const bool changed = (~neg & rest & ~zero_kept) != 0;  // a positive or zero made negative
+    pos = kept;
+    neg = rest & ~zero_kept;
+    return changed;
+  }
+};
 
 template <class P>
-TV_HD inline bool convex_sides(const PEdge<P>* poly, uint32_t n, const typename P::Line& l, int8_t* sg) {
-  for (uint32_t i = 0; i < n; ++i) sg[i] = int8_t(P::side(l, poly[i].start));
-  return regular_sides(sg, n);
+TV_HD inline Sides sides_of(const PEdge<P>* poly, uint32_t n, const typename P::Line& l) {
+  Sides s;
+  for (uint32_t i = 0; i < n; ++i) s.set(i, P::side(l, poly[i].start));
+  return s;
 }
 
 // The triangle's polygon (positive order, vertex 0 = v0) clipped to the tile rectangle by
@@ -250,17 +274,13 @@ TV_HD inline uint32_t tile_polygon(const TileTri<P>& t, const Rect& r, PEdge<P>*
     if (!neg) continue;
     if (!pos) return 0;
     PolyOut<P> o{next, 0, kTileCap, false};
-    // Float: the sides made those of a convex polygon (convex_sides), so no part outgrows it.
-    int8_t sg[kTileCap];
-    if constexpr (P::kExact) {
-      for (uint32_t i = 0; i < n; ++i) sg[i] = int8_t(P::side(l, cur[i].start));
-    } else {
-      convex_sides<P>(cur, n, l, sg);
-    }
-    int si = sg[0];
+    // Float: the sides made those of a convex polygon (Sides::regularize), so no part outgrows it.
+    Sides sg = sides_of<P>(cur, n, l);
+    if constexpr (!P::kExact) sg.regularize(n);
+    int si = sg.at(0);
     for (uint32_t i = 0; i < n; ++i) {
       const uint32_t j = i + 1 == n ? 0 : i + 1;
-      const int sn = sg[j];
+      const int sn = sg.at(j);
       if (si > 0 || sn > 0) {
         o.push(cur[i].line, si >= 0 ? cur[i].start : P::meet(l, cur[i].line));
         if (sn <= 0) o.push(l, sn == 0 ? cur[j].start : P::meet(cur[i].line, l));
@@ -294,12 +314,11 @@ TV_HD inline void line_sides(const PEdge<P>* poly, uint32_t n, const typename P:
 
 // SVGPU §3.2.1 tests 1-3 of a silhouette edge against a (piece of a) triangle. true: the
 // pair survives and the piece must be split by the edge's line. Where `sides` is given (and
-// n <= kSideCap), the vertices' sides of AB's line are computed once, for tests 1 and 3 and
-// for split() to take over: a surviving pair's split needs them again. (Not given: computed
-// where each needs them, with no array: exact's k_clip_long spilled 444 bytes with it.)
+// n <= kSideCap), the vertices' sides of AB's line, which tests 1 and 3 compute, are left
+// there for split() to take over: a surviving pair's split needs them again.
 template <class P>
 TV_HD inline bool survives(const PEdge<P>* poly, uint32_t n, const TileTri<P>& tt, const SilEdge<P>& e,
-                           int8_t* sides = nullptr) {
+                           Sides* sides = nullptr) {
   if (n == 0) return false;
   // The pair survives only if tests 1, 2 and 3 all pass, so they may run in any order: the
   // cheap one first.
@@ -311,19 +330,19 @@ TV_HD inline bool survives(const PEdge<P>* poly, uint32_t n, const TileTri<P>& t
   for (uint32_t i = 0; i < n; ++i)
     if (P::eval(poly[i].line, a) <= 0 && P::eval(poly[i].line, b) <= 0) return false;
   // Test 1: the polygon lies on one side of the line (touching counts as one side).
-  const bool kept = sides && n <= kSideCap;
+  const bool masked = n <= kSideCap;
+  Sides sd;
   bool pos = false, neg = false;
-  if (kept) {
-    for (uint32_t i = 0; i < n; ++i) {
-      sides[i] = int8_t(P::side(e.line, poly[i].start));
-      pos |= sides[i] > 0;
-      neg |= sides[i] < 0;
-    }
+  if (masked) {
+    sd = sides_of<P>(poly, n, e.line);
+    pos = sd.pos != 0;
+    neg = sd.neg != 0;
   } else {
     line_sides<P>(poly, n, e.line, pos, neg);
   }
   if (!pos || !neg) return false;
-  auto side_at = [&](uint32_t k) { return kept ? int(sides[k]) : P::side(e.line, poly[k].start); };
+  auto side_at = [&](uint32_t k) { return masked ? sd.at(k) : P::side(e.line, poly[k].start); };
+  if (sides && masked) *sides = sd;
   // Test 3: the chord of AB's line through the polygon: `first` where the line's edge of the
   // inside part starts, `second` where it ends.
   typename P::V first = poly[0].start, second = poly[0].start;
@@ -348,12 +367,12 @@ TV_HD inline bool survives(const PEdge<P>* poly, uint32_t n, const TileTri<P>& t
 
 // split's pass with the sides given.
 template <class P>
-TV_HD inline void split_sides(const PEdge<P>* poly, uint32_t n, const typename P::Line& l, const int8_t* sg,
+TV_HD inline void split_sides(const PEdge<P>* poly, uint32_t n, const typename P::Line& l, const Sides& sg,
                               PolyOut<P>& in, PolyOut<P>& out) {
   const typename P::Line lf = l.flipped();
   for (uint32_t i = 0; i < n; ++i) {
     const uint32_t j = i + 1 == n ? 0 : i + 1;
-    const int si = sg[i], sn = sg[j];
+    const int si = sg.at(i), sn = sg.at(j);
     const typename P::Line& li = poly[i].line;
     if (si > 0 || sn > 0) {
       in.push(li, si >= 0 ? poly[i].start : P::meet(l, li));
@@ -368,28 +387,21 @@ TV_HD inline void split_sides(const PEdge<P>* poly, uint32_t n, const typename P
 
 // Splits a polygon that `l` crosses into inside = poly ∩ {l >= 0} and outside = poly ∩
 // {l <= 0}, in one pass over the vertices (signs: one positive block, one negative block).
-// Float: the signs made convex first (convex_sides; `regularized` says whether they changed).
+// Float: the signs made convex first (Sides::regularize; `regularized` says whether they
+// changed). `sides`: survives()'s, of the same vertices against the same line.
 template <class P>
 TV_HD inline void split(const PEdge<P>* poly, uint32_t n, const typename P::Line& l, PolyOut<P>& in, PolyOut<P>& out,
-                        bool* regularized = nullptr, int8_t* sides = nullptr) {
-  // The sides survives() left (of the same vertices against the same line), consumed here.
-  if (sides && n <= kSideCap) {
+                        bool* regularized = nullptr, const Sides* sides = nullptr) {
+  if (n <= kSideCap) {
+    Sides sg = sides ? *sides : sides_of<P>(poly, n, l);
     if constexpr (!P::kExact) {
-      const bool changed = regular_sides(sides, n);
+      const bool changed = sg.regularize(n);
       if (regularized) *regularized = changed;
     }
-    split_sides<P>(poly, n, l, sides, in, out);
+    split_sides<P>(poly, n, l, sg, in, out);
     return;
   }
-  if constexpr (!P::kExact) {
-    if (n <= kSideCap) {
-      int8_t sg[kSideCap];
-      const bool changed = convex_sides<P>(poly, n, l, sg);
-      if (regularized) *regularized = changed;
-      split_sides<P>(poly, n, l, sg, in, out);
-      return;
-    }
-  }
+  // More vertices than the masks hold (exact pieces of long chains): each side computed twice.
   const typename P::Line lf = l.flipped();
   const int s0 = P::side(l, poly[0].start);
   int si = s0;
