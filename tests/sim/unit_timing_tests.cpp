@@ -109,7 +109,8 @@ nlohmann::json run_unit(uint64_t expected, Mode mode, std::vector<TriangleWork> 
     sc_core::sc_report_handler::set_handler(collect);
     FrameWorkConfig fc;
     fc.mode = mode;
-    FrameWork work(empty_frame(), fc);
+    const trace::Frame frame = empty_frame();
+    FrameWork work(frame, fc);
     UnitEnv env{&work, kPeriod, false, nullptr};
     Harness h("harness", expected);
     h.items = items_of(tile_of(std::move(tris), edges), per_triangle);
@@ -213,7 +214,8 @@ nlohmann::json run_evu(uint64_t expected, bool per_triangle) {
            t.pieces = 3; t.occlusion_tests = 4; t.shape.pieces_tested = 2; return t; }()};
   return simtest::in_child([&] {
     sc_core::sc_report_handler::set_handler(collect);
-    FrameWork work(empty_frame(), {});
+    const trace::Frame frame = empty_frame();
+    FrameWork work(frame, {});
     UnitEnv env{&work, kPeriod, false, nullptr};
     Harness h("harness", expected);
     h.items = items_of(tile_of(tris, 24), per_triangle);

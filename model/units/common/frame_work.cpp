@@ -658,8 +658,9 @@ void FrameWork::finish() {
   const uint32_t ns = samples();
   const bool from_owner = !m_owner.empty();
   if (!from_owner) {
-    m_ids = m_full.ids;
-    m_visible_area = m_full.visible_area;
+    // The frame's golden result is complete: its buffers become the output, not copies.
+    m_ids = std::move(m_full.ids);
+    m_visible_area = std::move(m_full.visible_area);
     vis::sum_golden_totals(m_full);
   } else {
     m_ids.assign(m_owner.size(), -1);

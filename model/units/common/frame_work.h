@@ -56,7 +56,9 @@ class FrameWork {
  public:
   static constexpr uint32_t kNone = 0xffffffffu;
 
+  // `frame` must outlive the FrameWork (it is read, not copied: a trace can be large).
   FrameWork(const trace::Frame& frame, const FrameWorkConfig& config);
+  FrameWork(trace::Frame&&, const FrameWorkConfig&) = delete;
   ~FrameWork();
   FrameWork(const FrameWork&) = delete;
   FrameWork& operator=(const FrameWork&) = delete;
@@ -149,7 +151,7 @@ class FrameWork {
   double m_functional_s = 0, m_rtl_s = 0;
   int m_functional_depth = 0, m_rtl_depth = 0;
 
-  trace::Frame m_frame;
+  const trace::Frame& m_frame;
   FrameWorkConfig m_cfg;
   uint32_t m_trace_triangles = 0;
   vis::Setup m_setup;

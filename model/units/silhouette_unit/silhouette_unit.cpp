@@ -54,7 +54,14 @@ void SilhouetteUnit::prepare() {
   const trace::Frame& f = m_work.frame();
   const vis::Setup& s = m_work.setup();
   const uint32_t n = m_work.trace_triangles();
-  std::vector<uint64_t> ops(n, 0), wr(n, 0), rd(n, 0);
+  // Per triangle t, its look-ups, spill writes and reads are counted at [t + 1] of the prefix
+  // arrays they are summed into at the end (no per-triangle arrays beside them).
+  m_cycles.assign(size_t(n) + 1, 0);
+  m_spill_write.assign(size_t(n) + 1, 0);
+  m_spill_read.assign(size_t(n) + 1, 0);
+  uint64_t* const ops = m_cycles.data() + 1;
+  uint64_t* const wr = m_spill_write.data() + 1;
+  uint64_t* const rd = m_spill_read.data() + 1;
   const bool on = uses_evu(m_work.mode());
   std::vector<EdgeUse> uses;
   std::vector<uint64_t> scratch;
@@ -131,9 +138,6 @@ void SilhouetteUnit::prepare() {
   m_probes.value = double(probes);
   m_readback.value = double(readback);
   m_peak.value = double(peak);
-  m_cycles.assign(size_t(n) + 1, 0);
-  m_spill_write.assign(size_t(n) + 1, 0);
-  m_spill_read.assign(size_t(n) + 1, 0);
   for (uint32_t t = 0; t < n; ++t) {
     m_cycles[t + 1] = m_cycles[t] + ceil_div(ops[t], m_cfg.edges_per_clock);
     m_spill_write[t + 1] = m_spill_write[t] + wr[t] * m_cfg.entry_bytes;
