@@ -41,8 +41,7 @@ struct ClipArgs {
   uint64_t* counters;
   uint32_t slot_factor;
   uint64_t n_items;
-  // The thresholds below, as values (kSmallChain is 0 in exact, where a constant would make
-  // k_clip_items' comparisons pointless to the compiler):
+  // The thresholds below, as values:
   uint32_t long_chain;       // kLongChain: items of this many candidates or more go to k_clip_long
   uint32_t small_chain;      // kSmallChain: items of fewer, a thread each (k_clip_items; 0: none) ...
   uint64_t small_min_items;  // kSmallMinItems: ... when there are at least this many items
@@ -630,11 +629,14 @@ __global__ void k_cand_scatter(ClipArgs<P> a, const uint64_t* count, uint64_t ca
   TV_GRID_LOOP(i, n) cand_scatter<P>(a, i);
 }
 inline constexpr uint32_t kClipBlock = 128;
-// With at least kSmallMinItems items to clip, float's items of fewer than kSmallChain
-// candidates are clipped by a thread each in k_clip_items (million float, with the occlusion
-// cells: 3.58 ms with none, 3.37 below 4, 3.35 below 8, 3.49 below 16; exact: slower, so none).
-template <class P>
-inline constexpr uint32_t kSmallChain = P::kExact ? 0 : 8;
+// With at least kSmallMinItems items to clip, items of fewer than kSmallChain candidates are
+// clipped by a thread each in k_clip_items. Million float, with the occlusion cells: 3.58 ms with
+// none, 3.37 below 4, 3.35 below 8, 3.49 below 16 (H200). Exact was slower with it until a step's
+// vertex sides became masks (no local array, no spills): million exact 7.71 ms with none, 6.95
+// below 4, 6.73 below 8, 6.68 below 16 (H100, outputs byte-identical; the scenes of fewer items,
+// which keep a warp each, unchanged). With exact at 8 and kSmallMinItems 4096, dragon_bunnies
+// exact (9,376 items) took 3.35 ms against 3.61, armadillo and glass 1 % more; not taken.
+inline constexpr uint32_t kSmallChain = 8;
 inline constexpr uint32_t kSmallMinItems = 16384;
 
 template <class P>
@@ -725,7 +727,7 @@ bool stage_clip(Pipeline<P>& p) {
   a.slot_factor = p.caps.slot_factor;
   a.n_items = ni;
   a.long_chain = kLongChain;
-  a.small_chain = kSmallChain<P>;
+  a.small_chain = kSmallChain;
   a.small_min_items = kSmallMinItems;
 
   ex.exclusive_scan(a.cand_count, p.cand_offset.get(), p.N(kSzItems, ni), ni);
