@@ -228,22 +228,6 @@ struct WarpTeam {
   }
 };
 
-TV_HD inline uint32_t popc(uint32_t v) {
-#if defined(__CUDA_ARCH__)
-  return __popc(v);
-#else
-  return uint32_t(__builtin_popcount(v));
-#endif
-}
-
-TV_HD inline int ctz32(uint32_t v) {  // v != 0
-#if defined(__CUDA_ARCH__)
-  return __ffs(v) - 1;
-#else
-  return __builtin_ctz(v);
-#endif
-}
-
 // Warp-stride loop over [0, n): warp w takes elements w, w + warps, ... (64-bit safe).
 #define TV_WARP_LOOP(w, n)                                                                   \
   for (uint64_t w = (uint64_t(blockIdx.x) * blockDim.x + threadIdx.x) / 32,                  \

@@ -199,13 +199,6 @@ struct Sides {
     return uint32_t(((uint64_t(x) >> s) | (uint64_t(x) << (n - s))) & low_bits(n));
   }
   TV_HD static uint32_t rotl(uint32_t x, uint32_t s, uint32_t n) { return rotr(x, s == 0 ? 0 : n - s, n); }
-  TV_HD static uint32_t ctz(uint32_t v) {  // v != 0
-#if defined(__CUDA_ARCH__)
-    return uint32_t(__ffs(v) - 1);
-#else
-    return uint32_t(__builtin_ctz(v));
-#endif
-  }
 
   // Float: made the sides of a convex polygon. Float vertices (meets rounded to float) can
   // leave more than one run of positive vertices, and a split would then emit a non-convex part
@@ -217,8 +210,8 @@ struct Sides {
     const uint32_t full = low_bits(n);
     const uint32_t starts = pos & ~rotl(pos, 1, n);  // positive after a non-positive vertex
     if (starts == 0) return false;                  // all positive, or none: nothing to split
-    const uint32_t start = ctz(starts);
-    const uint32_t run = ctz(~rotr(pos, start, n));  // < n: some vertex is not positive
+    const uint32_t start = uint32_t(ctz32(starts));
+    const uint32_t run = uint32_t(ctz32(~rotr(pos, start, n)));  // < n: some vertex is not positive
     const uint32_t end = start + run >= n ? start + run - n : start + run;  // first vertex after the run
     const uint32_t before = start == 0 ? n - 1 : start - 1;
     const uint32_t kept = rotl(low_bits(run), start, n);  // the run

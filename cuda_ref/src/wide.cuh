@@ -25,6 +25,23 @@
 
 namespace tilevis::cuda {
 
+// Bit counts of a 32-bit word, on the device and on the host.
+TV_HD inline uint32_t popc(uint32_t v) {
+#if defined(__CUDA_ARCH__)
+  return __popc(v);
+#else
+  return uint32_t(__builtin_popcount(v));
+#endif
+}
+
+TV_HD inline int ctz32(uint32_t v) {  // v != 0
+#if defined(__CUDA_ARCH__)
+  return __ffs(v) - 1;
+#else
+  return __builtin_ctz(v);
+#endif
+}
+
 __extension__ typedef __int128 I128;
 __extension__ typedef unsigned __int128 U128;
 
