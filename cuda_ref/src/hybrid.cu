@@ -674,9 +674,9 @@ TV_HD void hybrid_fold(const HFoldArgs<P>& a, uint64_t q) {
 }
 
 // As raster.cu's fold: on the GPU a run of more than kFoldLong items (a big triangle, one
-// item per tile) goes to a warp, whose lanes load 32 items' values at once; the additions stay
-// one left fold in canonical order (every lane adds the same values in the same order), and the
-// counts are sums and maxima, in any order.
+// item per tile) goes to a block (block_fold_run): its threads gather the run's terms (a
+// per-pixel item's one term repeated once per owned sample), one thread adds them in canonical
+// order, and the counts are sums and maxima, in any order.
 
 template <class P>
 __global__ void k_hybrid_fold(HFoldArgs<P> a, uint64_t n) {
@@ -686,67 +686,51 @@ __global__ void k_hybrid_fold(HFoldArgs<P> a, uint64_t n) {
   }
 }
 
+// One entry's terms for block_fold_run, as hybrid_fold's loop adds them, and its counts.
 template <class P>
-__device__ void hybrid_fold_warp(const HFoldArgs<P>& a, uint64_t q0) {
-  const uint32_t lane = threadIdx.x & 31u;
-  const unsigned full = 0xffffffffu;
-  const uint64_t id = a.area_key[q0];
-  double sum = 0;
-  uint32_t vis_tris = 0, most_pieces = 0;  // this lane's share
-  for (uint64_t r0 = q0;; r0 += 32) {
-    const uint64_t r = r0 + lane;
-    const uint32_t m = fold_run_chunk(a.area_key, r0, a.n_items, id);  // the run's entries in this chunk
-    uint32_t j = 0, cnt = 0, owned = 0;
-    bool per_pixel = false, clipped = false, vis = false;
-    double x = 0;
-    if (lane < m) {
-      j = a.area_item[r];
-      per_pixel = a.cause[a.item_key[j]] != 0;
-      if (per_pixel) {
-        owned = a.owned[j];
-      } else {
-        cnt = a.piece_count[j];
-        clipped = a.cand_count[j] != 0;
-        most_pieces = tmax(most_pieces, clipped ? cnt : cnt != 0 ? 1u : 0u);
-        if (!clipped && cnt && a.visible[j]) {
-          vis = true;
-          x = a.piece_area[j];
-          vis_tris += a.edges[j] - 2u;
-        }
-      }
+struct HybridFoldTerms {
+  static constexpr bool kRepeats = true;
+  const HFoldArgs<P>& a;
+  uint64_t base = 0;
+  uint32_t owned = 0, vis_tris = 0, most_pieces = 0;
+  bool per_pixel = false, clipped = false;
+  __device__ uint32_t begin(uint64_t r) {
+    const uint32_t j = a.area_item[r];
+    per_pixel = a.cause[a.item_key[j]] != 0;
+    if (per_pixel) {
+      owned = a.owned[j];
+      return 1;
     }
-    for (uint32_t l = 0; l < m; ++l) {
-      if (__shfl_sync(full, per_pixel, l)) {
-        sum = add_repeated(sum, a.sample_area, __shfl_sync(full, owned, l));
-        continue;
-      }
-      if (!__shfl_sync(full, clipped, l)) {
-        const bool v = __shfl_sync(full, vis, l);
-        const double xl = __shfl_sync(full, x, l);
-        if (v) sum = dadd(sum, xl);
-        continue;
-      }
-      const uint32_t jl = __shfl_sync(full, j, l), nl = __shfl_sync(full, cnt, l);
-      warp_fold_pieces(a.visible, a.piece_area, a.edges, a.n_items + a.item_slot[jl], nl, sum, vis_tris);
+    const uint32_t n = a.piece_count[j];
+    clipped = a.cand_count[j] != 0;
+    most_pieces = tmax(most_pieces, clipped ? n : n != 0 ? 1u : 0u);
+    base = clipped ? a.n_items + a.item_slot[j] : j;
+    return n;
+  }
+  __device__ double term(uint32_t k, uint32_t& repeat) {
+    if (per_pixel) {
+      repeat = owned;  // a sample's share at a time
+      return a.sample_area;
     }
-    if (m < 32) break;
+    const uint64_t p = clipped ? base + k : base;
+    if (!a.visible[p]) return -0.0;
+    vis_tris += a.edges[p] - 2u;
+    return a.piece_area[p];
   }
-  for (int d = 16; d > 0; d >>= 1) {
-    vis_tris += __shfl_xor_sync(full, vis_tris, d);
-    most_pieces = tmax(most_pieces, __shfl_xor_sync(full, most_pieces, d));
-  }
-  if (lane == 0) {
-    a.area[id] = sum;
-    count_add(&a.counters[kVisibleTriangles], vis_tris);
-    count_max(&a.counters[kMaxTilePieces], most_pieces);
-  }
-}
+};
 
 template <class P>
-__global__ void k_hybrid_fold_long(HFoldArgs<P> a, const uint64_t* count, uint64_t cap) {
+__global__ void __launch_bounds__(kFoldBlock) k_hybrid_fold_long(HFoldArgs<P> a, const uint64_t* count, uint64_t cap) {
   TV_KERNEL_WAIT();
   const uint64_t n = *count < cap ? *count : cap;
-  TV_WARP_LOOP(w, n) hybrid_fold_warp<P>(a, a.long_runs[w]);
+  for (uint64_t w = blockIdx.x; w < n; w += gridDim.x) {
+    const uint64_t q0 = a.long_runs[w];
+    HybridFoldTerms<P> src{a};
+    const double sum = block_fold_run(a.area_key, q0, a.n_items, src);
+    if (threadIdx.x == 0) a.area[a.area_key[q0]] = sum;
+    count_add(&a.counters[kVisibleTriangles], src.vis_tris);
+    count_max(&a.counters[kMaxTilePieces], src.most_pieces);
+  }
 }
 template <class P>
 void hybrid_fold_long_host(const HFoldArgs<P>&, uint64_t) {}  // the host's hybrid_fold folds every run
@@ -830,7 +814,7 @@ void stage_hybrid(Pipeline<P>& p) {
   f.long_count = p.counters.get() + kHybridLongFolds;
   ex.zero(f.long_count, 8);
   ex.launch(k_hybrid_fold<P>, hybrid_fold<P>, p.N(kSzItems, ni), f);
-  ex.launch_dyn(k_hybrid_fold_long<P>, hybrid_fold_long_host<P>, f.long_count, ni, f);
+  ex.launch_dyn(k_hybrid_fold_long<P>, hybrid_fold_long_host<P>, f.long_count, ni, f, kFoldBlock, ex.grid_blocks);
 }
 
 template void stage_hybrid<ExactP>(Pipeline<ExactP>&);

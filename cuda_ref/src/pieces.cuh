@@ -89,12 +89,12 @@ PassRange pass_range(Pipeline<P>& p, Pass pass) {
   return {p.n_items, p.counters.get() + kSlotsUsed, p.caps.clip_slots};
 }
 
-// Runs of more than kFoldLong items go to a warp in both folds (raster.cu says why 16).
+// Runs of more than kFoldLong items go to a block in both folds (raster.cu says why 16).
 inline constexpr uint32_t kFoldLong = 16;
 
 // The visible-area folds (raster.cu's, and hybrid.cu's second one): a thread per original
 // triangle's run of items (area_key sorted, ending with a sentinel), except runs of more than
-// `longer` items (kFoldLong), which the GPU queues for a warp. At q: 0 not the start of a run, 1 a run for
+// `longer` items (kFoldLong), which the GPU queues for a block. At q: 0 not the start of a run, 1 a run for
 // the thread, 2 a run queued (its first entry appended to `runs`).
 TV_HD inline int fold_run_start(const uint64_t* area_key, uint64_t q, uint64_t n_items, uint32_t longer,
                                 uint32_t* runs, uint64_t* run_count) {
@@ -108,41 +108,61 @@ TV_HD inline int fold_run_start(const uint64_t* area_key, uint64_t q, uint64_t n
 }
 
 #if defined(__CUDACC__)
-// A warp's share of a queued run: the run's entries among r0 .. r0 + 31 (the list ends with a
-// sentinel, so r <= n_items is inside it).
-__device__ inline uint32_t fold_run_chunk(const uint64_t* area_key, uint64_t r0, uint64_t n_items, uint64_t id) {
-  const uint64_t r = r0 + (threadIdx.x & 31u);
-  const unsigned run = __ballot_sync(0xffffffffu, r <= n_items && area_key[r] == id);
-  return run == 0xffffffffu ? 32u : uint32_t(__ffs(~run) - 1);
-}
+// A block's left fold of one queued run, the same double as the thread's loop (fold_area,
+// hybrid_fold) without its chain of dependent loads. The run's terms in canonical order are
+// gathered a window at a time by every thread at once, each thread its entry's (src.begin(r): how
+// many terms entry r adds; src.term(k): its k-th, with a repeat count), and thread 0 adds the
+// window's terms in order. A piece that is not visible is the term -0.0: x + -0.0 == x for every
+// double x under round to nearest, so it changes no bit of the sum. A term repeated m times is
+// add_repeated's (m dadd in a row). Blocks of kFoldBlock threads; returns the sum on thread 0.
+inline constexpr uint32_t kFoldBlock = 256, kFoldWindow = 2048;
 
-// A warp's fold of a clipped item's pieces [base, base + n): the lanes load 32 pieces at a
-// time and every lane adds the visible ones' areas to `sum` in canonical order (one left fold:
-// every lane's sum is the same double). Returns whether one was visible; with `edges`, each
-// lane adds its visible pieces' triangles (edges - 2) to `tris`.
-__device__ inline bool warp_fold_pieces(const uint8_t* visible, const double* piece_area, const uint16_t* edges,
-                                        uint64_t base, uint32_t n, double& sum, uint32_t& tris) {
-  const uint32_t lane = threadIdx.x & 31u;
-  bool any = false;
-  for (uint32_t k0 = 0; k0 < n; k0 += 32) {
-    bool pv = false;
-    double px = 0;
-    if (k0 + lane < n && visible[base + k0 + lane]) {
-      pv = true;
-      px = piece_area[base + k0 + lane];
-      if (edges) tris += edges[base + k0 + lane] - 2u;
+template <class Src>
+__device__ double block_fold_run(const uint64_t* area_key, uint64_t q0, uint64_t n_items, Src& src) {
+  __shared__ double term[kFoldWindow];
+  __shared__ uint32_t repeat[Src::kRepeats ? kFoldWindow : 1];
+  __shared__ uint32_t warp_total[kFoldBlock / 32];
+  const uint32_t tid = threadIdx.x, lane = tid & 31u, warp = tid / 32u;
+  const uint64_t id = area_key[q0];
+  double sum = 0;
+  for (uint64_t r0 = q0;; r0 += kFoldBlock) {
+    const uint64_t r = r0 + tid;
+    const bool in = r <= n_items && area_key[r] == id;  // the run is contiguous: a prefix of the chunk
+    const uint32_t n = in ? src.begin(r) : 0u;
+    uint32_t incl = n;  // the block's exclusive scan of n: this thread's first term
+    for (uint32_t d = 1; d < 32; d <<= 1) {
+      const uint32_t y = __shfl_up_sync(0xffffffffu, incl, d);
+      if (lane >= d) incl += y;
     }
-    const uint32_t mm = n - k0 < 32 ? n - k0 : 32;
-    for (uint32_t t = 0; t < mm; ++t) {
-      const bool v = __shfl_sync(0xffffffffu, pv, t);
-      const double xt = __shfl_sync(0xffffffffu, px, t);
-      if (v) {
-        sum = dadd(sum, xt);
-        any = true;
+    if (lane == 31) warp_total[warp] = incl;
+    const bool whole = __syncthreads_and(in);
+    uint32_t first = incl - n, total = 0;
+    for (uint32_t w = 0; w < kFoldBlock / 32; ++w) {
+      const uint32_t t = warp_total[w];
+      if (w < warp) first += t;
+      total += t;
+    }
+    for (uint32_t w0 = 0; w0 < total; w0 += kFoldWindow) {
+      const uint32_t lo = first > w0 ? first : w0, hi = tmin(first + n, w0 + kFoldWindow);
+      for (uint32_t k = lo; k < hi; ++k) {
+        uint32_t m = 1;
+        term[k - w0] = src.term(k - first, m);
+        if constexpr (Src::kRepeats) repeat[k - w0] = m;
       }
+      __syncthreads();
+      if (tid == 0) {
+        const uint32_t count = tmin(total - w0, kFoldWindow);
+        for (uint32_t k = 0; k < count; ++k) {
+          if constexpr (Src::kRepeats) sum = repeat[k] == 1 ? dadd(sum, term[k]) : add_repeated(sum, term[k], repeat[k]);
+          else sum = dadd(sum, term[k]);
+        }
+      }
+      __syncthreads();
     }
+    __syncthreads();  // warp_total is read before the next chunk writes it
+    if (!whole) break;
   }
-  return any;
+  return sum;
 }
 #endif
 

@@ -300,11 +300,13 @@ TV_HD void fold_area(const OutArgs<P>& a, uint64_t q) {
 }
 
 // On the GPU a run of more than kFoldLong items (a big triangle: hot_tile's ground has 8,160,
-// one per tile) is queued for a warp rather than folded by its thread, whose chain of dependent
+// one per tile) is queued for a block rather than folded by its thread, whose chain of dependent
 // loads was the end of those frames (hot_tile float: k_fold_area 1.95 ms beside a 0.16 ms
-// raster; at 64, broken_mesh's runs of up to 64 items still took k_fold_area 28 us). The warp's lanes load 32 items' values at once; the additions stay one left fold in
-// canonical order (every lane adds the same values in the same order), so the area is the same
-// double. (kFoldLong: pieces.cuh.)
+// raster; at 64, broken_mesh's runs of up to 64 items still took k_fold_area 28 us). The
+// block's threads gather the run's terms in parallel and one thread adds them in canonical order
+// (block_fold_run, pieces.cuh), so the area is the same double. A warp per run, its lanes
+// loading 32 items' values and then adding a clipped item's pieces 32 at a time, took 745 us on
+// hot_tile float's ground (the raster stage's whole length). (kFoldLong: pieces.cuh.)
 
 template <class P>
 __global__ void k_fold_area(OutArgs<P> a, uint64_t n) {
@@ -314,52 +316,37 @@ __global__ void k_fold_area(OutArgs<P> a, uint64_t n) {
   }
 }
 
+// One entry's terms for block_fold_run: its pieces' areas, -0.0 where not visible (fold_area's loop).
 template <class P>
-__device__ void fold_run_warp(const OutArgs<P>& a, uint64_t q0) {
-  const uint32_t lane = threadIdx.x & 31u;
-  const unsigned full = 0xffffffffu;
-  const uint64_t id = a.area_key[q0];
-  double sum = 0;
-  bool any = false;
-  for (uint64_t r0 = q0;; r0 += 32) {
-    const uint64_t r = r0 + lane;
-    const uint32_t m = fold_run_chunk(a.area_key, r0, a.n_items, id);  // the run's entries in this chunk
-    uint32_t j = 0, cnt = 0;
-    bool clipped = false, vis = false;
-    double x = 0;
-    if (lane < m) {
-      j = a.area_item[r];
-      cnt = a.piece_count[j];
-      clipped = a.cand_count[j] != 0;
-      if (!clipped && cnt) {
-        vis = a.visible[j] != 0;
-        if (vis) x = a.piece_area[j];
-      }
-    }
-    for (uint32_t l = 0; l < m; ++l) {
-      if (!__shfl_sync(full, clipped, l)) {
-        const bool v = __shfl_sync(full, vis, l);
-        const double xl = __shfl_sync(full, x, l);
-        if (v) {
-          sum = dadd(sum, xl);
-          any = true;
-        }
-        continue;
-      }
-      const uint32_t jl = __shfl_sync(full, j, l), nl = __shfl_sync(full, cnt, l);
-      uint32_t unused = 0;
-      any = warp_fold_pieces(a.visible, a.piece_area, nullptr, a.n_items + a.item_slot[jl], nl, sum, unused) || any;
-    }
-    if (m < 32) break;
+struct FoldTerms {
+  static constexpr bool kRepeats = false;
+  const OutArgs<P>& a;
+  uint64_t base = 0;
+  bool clipped = false, any = false;
+  __device__ uint32_t begin(uint64_t r) {
+    const uint32_t j = a.area_item[r];
+    clipped = a.cand_count[j] != 0;
+    base = clipped ? a.n_items + a.item_slot[j] : j;
+    return a.piece_count[j];
   }
-  if (lane == 0 && any) a.area[id] = sum;
-}
+  __device__ double term(uint32_t k, uint32_t&) {
+    const uint64_t p = clipped ? base + k : base;
+    if (!a.visible[p]) return -0.0;
+    any = true;
+    return a.piece_area[p];
+  }
+};
 
 template <class P>
-__global__ void k_fold_long(OutArgs<P> a, const uint64_t* count, uint64_t cap) {
+__global__ void __launch_bounds__(kFoldBlock) k_fold_long(OutArgs<P> a, const uint64_t* count, uint64_t cap) {
   TV_KERNEL_WAIT();
   const uint64_t n = *count < cap ? *count : cap;
-  TV_WARP_LOOP(w, n) fold_run_warp<P>(a, a.long_runs[w]);
+  for (uint64_t w = blockIdx.x; w < n; w += gridDim.x) {
+    const uint64_t q0 = a.long_runs[w];
+    FoldTerms<P> src{a};
+    const double sum = block_fold_run(a.area_key, q0, a.n_items, src);
+    if (__syncthreads_or(src.any) && threadIdx.x == 0) a.area[a.area_key[q0]] = sum;
+  }
 }
 template <class P>
 void fold_long_host(const OutArgs<P>&, uint64_t) {}  // the host's fold_area folds every run
@@ -459,7 +446,7 @@ void stage_fold(Pipeline<P>& p) {
   o.long_runs = p.long_folds.need(p.n_items + 1);
   o.long_count = p.counters.get() + kLongFolds;
   p.ex.launch(k_fold_area<P>, fold_area<P>, p.N(kSzItems, p.n_items), o);
-  p.ex.launch_dyn(k_fold_long<P>, fold_long_host<P>, o.long_count, p.n_items, o);
+  p.ex.launch_dyn(k_fold_long<P>, fold_long_host<P>, o.long_count, p.n_items, o, kFoldBlock, p.ex.grid_blocks);
 }
 
 template void raster_begin<ExactP>(Pipeline<ExactP>&);
