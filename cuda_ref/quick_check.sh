@@ -2,7 +2,7 @@
 # One GPU call that builds, tests and times the tree as it is (gpu_run.sh's build and test
 # phases), then packs the binaries it built for later calls (TILEVIS_GPU_PREBUILT=1):
 #
-#   bash cuda_ref/quick_check.sh [build] [base] [test] [emulation] [bench] [sanitize] [pack]   (default: all but base and sanitize)
+#   bash cuda_ref/quick_check.sh [build] [base] [test] [emulation] [gl] [bench] [sanitize] [pack]   (default: all but base, gl and sanitize)
 #
 # bench: `tilevis cuda` at 32x32 tiles, TILEVIS_QUICK_RUNS runs (default 10), on the scenes of
 # TILEVIS_QUICK_SCENES (default "bunny million slivers"), exact and float, with both CUDA
@@ -15,7 +15,9 @@
 # TILEVIS_QUICK_BIN=PATH among its assignments. Phase `base` builds the tree of
 # .gpu/base_src.tar.xz (`git archive BASE | xz >.gpu/base_src.tar.xz` on the sender) beside this
 # one, so that "base:TILEVIS_QUICK_BIN=/tmp/base_src/build-gpu/model/app/tilevis new:" compares
-# a change with the commit before it, outputs byte for byte. With .gpu carried
+# a change with the commit before it, outputs byte for byte. Phase `gl` (before bench; .gl carried)
+# times the GPU's own rasteriser (gl_raster --runs 20) on the same scenes, and the bench table
+# then gives each run's new frame over it (/ GL). With .gpu carried
 # (prepare_gpu_run.sh) and the commit in .gpu/commit_src.txt (the sender writes it). $OUT gets
 # bench.json (every stats.json), prebuilt.tar.xz (pack) and gpu_run.sh's logs.tar.xz.
 set -uo pipefail
@@ -47,6 +49,25 @@ for ph in "${phases[@]}"; do
         ln -s "$ROOT/.gpu" /tmp/base_src/.gpu &&
         (cd /tmp/base_src && OUT=/tmp/base_out bash cuda_ref/gpu_run.sh build 2>&1 | tail -n 2)
       say "base build done: $(ls /tmp/base_src/build-gpu/model/app/tilevis 2>&1)" ;;
+    gl)
+      if [ -d .gl ] && ! ldconfig -p | grep -q libEGL.so.1; then
+        for f in .gl/*.deb; do dpkg -x "$f" /; done
+        ldconfig
+      fi
+      vendor=/usr/local/nvidia/share/glvnd/egl_vendor.d/10_nvidia.json
+      [ -f "$vendor" ] && export __EGL_VENDOR_LIBRARY_FILENAMES="$vendor"
+      rm -rf /tmp/quick_gl && mkdir -p /tmp/quick_gl
+      for s in ${TILEVIS_QUICK_SCENES:-bunny million slivers}; do
+        "$BUILD/cuda_ref/gl_raster" "$BUILD/gpu_traces/$s.tvt" --runs 20 -o "/tmp/quick_gl/$s" >"/tmp/quick_gl/$s.log" 2>&1 ||
+          say "gl_raster $s failed: $(tail -n 2 "/tmp/quick_gl/$s.log")"
+      done
+      python3 - "$OUT/gl.json" <<'PY'
+import glob, json, os, sys
+rows = {os.path.basename(os.path.dirname(f)): json.load(open(f)) for f in sorted(glob.glob("/tmp/quick_gl/*/stats.json"))}
+json.dump(rows, open(sys.argv[1], "w"), indent=1)
+print(" ".join(f"{k} {v['hw_raster_ms']:.3f} ms" for k, v in rows.items()))
+PY
+      say "GL timed" ;;
     sanitize)
       bash cuda_ref/gpu_run.sh sanitize 2>&1 | tail -n 20
       say "sanitizers: $(cat "$BUILD/work/meta/sanitizer.txt" 2>/dev/null)" ;;
@@ -93,12 +114,17 @@ rows = {}
 for f in sorted(glob.glob("/tmp/quick/*/stats.json")):
     rows[os.path.basename(os.path.dirname(f))] = json.load(open(f))
 json.dump(rows, open(sys.argv[1], "w"), indent=1)
-print("| run | new frame ms | stream | presized | graph | tiled zb ms | naive zb ms | / tiled | / naive | retries |")
+def gl_ms(run):  # phase gl's time of the run's scene (the longest scene name that prefixes it)
+    names = [n for n in os.listdir("/tmp/quick_gl") if run.startswith(n + "_")] if os.path.isdir("/tmp/quick_gl") else []
+    f = f"/tmp/quick_gl/{max(names, key=len)}/stats.json" if names else ""
+    return json.load(open(f))["hw_raster_ms"] if f and os.path.exists(f) else float("nan")
+print("| run | new frame ms | stream | presized | graph | tiled zb ms | naive zb ms | / tiled | / naive | GL ms | / GL | retries |")
 for k, s in rows.items():
     g = lambda key: s.get(key, float("nan"))
+    gl = gl_ms(k)
     print(f"| {k} | {g('total_ms'):.3f} | {g('stream_total_ms'):.3f} | {g('presized_total_ms'):.3f} | "
           f"{g('graph_total_ms'):.3f} | {g('cuda_zbuffer_ms'):.3f} | {g('naive_zbuffer_ms'):.3f} | "
-          f"{g('cuda_zbuffer_ratio'):.2f} | {g('naive_zbuffer_ratio'):.2f} | {g('retries')} |")
+          f"{g('cuda_zbuffer_ratio'):.2f} | {g('naive_zbuffer_ratio'):.2f} | {gl:.3f} | {g('total_ms') / gl:.2f} | {g('retries')} |")
 PY
       ;;
     pack)
