@@ -686,36 +686,40 @@ __global__ void k_hybrid_fold(HFoldArgs<P> a, uint64_t n) {
   }
 }
 
-// One entry's terms for block_fold_run, as hybrid_fold's loop adds them, and its counts.
+// An entry's terms for block_fold_run, as hybrid_fold's loop adds them, and the counts of the
+// terms this thread loads.
 template <class P>
 struct HybridFoldTerms {
   static constexpr bool kRepeats = true;
+  struct Entry {
+    uint64_t base;   // an analytic item's first piece
+    uint32_t owned;  // a per-pixel item's samples
+    uint8_t per_pixel, clipped;
+  };
   const HFoldArgs<P>& a;
-  uint64_t base = 0;
-  uint32_t owned = 0, vis_tris = 0, most_pieces = 0;
-  bool per_pixel = false, clipped = false;
-  __device__ uint32_t begin(uint64_t r) {
+  uint32_t vis_tris = 0, most_pieces = 0;
+  __device__ Entry entry(uint64_t r, uint32_t& n) {
     const uint32_t j = a.area_item[r];
-    per_pixel = a.cause[a.item_key[j]] != 0;
-    if (per_pixel) {
-      owned = a.owned[j];
-      return 1;
+    if (a.cause[a.item_key[j]] != 0) {
+      n = 1;
+      return {0, a.owned[j], 1, 0};
     }
-    const uint32_t n = a.piece_count[j];
-    clipped = a.cand_count[j] != 0;
+    n = a.piece_count[j];
+    const bool clipped = a.cand_count[j] != 0;
     most_pieces = tmax(most_pieces, clipped ? n : n != 0 ? 1u : 0u);
-    base = clipped ? a.n_items + a.item_slot[j] : j;
-    return n;
+    return {clipped ? a.n_items + a.item_slot[j] : j, 0, 0, uint8_t(clipped)};
   }
-  __device__ double term(uint32_t k, uint32_t& repeat) {
-    if (per_pixel) {
-      repeat = owned;  // a sample's share at a time
+  __device__ double term(const Entry& e, uint32_t k, uint32_t& repeat) {
+    if (e.per_pixel) {
+      repeat = e.owned;  // a sample's share at a time
       return a.sample_area;
     }
-    const uint64_t p = clipped ? base + k : base;
-    if (!a.visible[p]) return -0.0;
+    const uint64_t p = e.clipped ? e.base + k : e.base;
+    const bool v = a.visible[p] != 0;
+    const double x = a.piece_area[p];
+    if (!v) return -0.0;
     vis_tris += a.edges[p] - 2u;
-    return a.piece_area[p];
+    return x;
   }
 };
 

@@ -109,9 +109,11 @@ TV_HD inline int fold_run_start(const uint64_t* area_key, uint64_t q, uint64_t n
 
 #if defined(__CUDACC__)
 // A block's left fold of one queued run, the same double as the thread's loop (fold_area,
-// hybrid_fold) without its chain of dependent loads. The run's terms in canonical order are
-// gathered a window at a time by every thread at once, each thread its entry's (src.begin(r): how
-// many terms entry r adds; src.term(k): its k-th, with a repeat count), and thread 0 adds the
+// hybrid_fold) without its chain of dependent loads. The run's entries are taken kFoldBlock at a
+// time: each thread reads its entry (src.entry(r, n): what the entry's terms need, and n, how many
+// terms it adds), a block scan places the entries' terms in canonical order, and the terms are
+// loaded a window at a time, a thread per term (its entry found by binary search over the
+// scan), so an item of many pieces costs no thread a chain of loads. Thread 0 then adds the
 // window's terms in order. A piece that is not visible is the term -0.0: x + -0.0 == x for every
 // double x under round to nearest, so it changes no bit of the sum. A term repeated m times is
 // add_repeated's (m dadd in a row). Blocks of kFoldBlock threads; returns the sum on thread 0.
@@ -119,8 +121,11 @@ inline constexpr uint32_t kFoldBlock = 256, kFoldWindow = 2048;
 
 template <class Src>
 __device__ double block_fold_run(const uint64_t* area_key, uint64_t q0, uint64_t n_items, Src& src) {
+  using Entry = typename Src::Entry;
   __shared__ double term[kFoldWindow];
   __shared__ uint32_t repeat[Src::kRepeats ? kFoldWindow : 1];
+  __shared__ Entry entry[kFoldBlock];
+  __shared__ uint32_t first[kFoldBlock + 1];  // entry i's terms: [first[i], first[i + 1])
   __shared__ uint32_t warp_total[kFoldBlock / 32];
   const uint32_t tid = threadIdx.x, lane = tid & 31u, warp = tid / 32u;
   const uint64_t id = area_key[q0];
@@ -128,39 +133,46 @@ __device__ double block_fold_run(const uint64_t* area_key, uint64_t q0, uint64_t
   for (uint64_t r0 = q0;; r0 += kFoldBlock) {
     const uint64_t r = r0 + tid;
     const bool in = r <= n_items && area_key[r] == id;  // the run is contiguous: a prefix of the chunk
-    const uint32_t n = in ? src.begin(r) : 0u;
-    uint32_t incl = n;  // the block's exclusive scan of n: this thread's first term
+    uint32_t n = 0;
+    if (in) entry[tid] = src.entry(r, n);
+    uint32_t incl = n;  // the block's inclusive scan of n
     for (uint32_t d = 1; d < 32; d <<= 1) {
       const uint32_t y = __shfl_up_sync(0xffffffffu, incl, d);
       if (lane >= d) incl += y;
     }
     if (lane == 31) warp_total[warp] = incl;
-    const bool whole = __syncthreads_and(in);
-    uint32_t first = incl - n, total = 0;
-    for (uint32_t w = 0; w < kFoldBlock / 32; ++w) {
-      const uint32_t t = warp_total[w];
-      if (w < warp) first += t;
-      total += t;
-    }
+    const uint32_t entries = uint32_t(__syncthreads_count(in));
+    for (uint32_t w = 0; w < warp; ++w) incl += warp_total[w];
+    first[tid + 1] = incl;
+    if (tid == 0) first[0] = 0;
+    __syncthreads();
+    const uint32_t total = first[entries];
     for (uint32_t w0 = 0; w0 < total; w0 += kFoldWindow) {
-      const uint32_t lo = first > w0 ? first : w0, hi = tmin(first + n, w0 + kFoldWindow);
-      for (uint32_t k = lo; k < hi; ++k) {
+      const uint32_t end = tmin(total - w0, kFoldWindow);
+      for (uint32_t k = tid; k < end; k += kFoldBlock) {
+        const uint32_t t = w0 + k;
+        uint32_t lo = 0, hi = entries;  // the last entry whose first term is at most t
+        while (hi - lo > 1) {
+          const uint32_t mid = (lo + hi) / 2;
+          if (first[mid] <= t) lo = mid;
+          else hi = mid;
+        }
         uint32_t m = 1;
-        term[k - w0] = src.term(k - first, m);
-        if constexpr (Src::kRepeats) repeat[k - w0] = m;
+        term[k] = src.term(entry[lo], t - first[lo], m);
+        if constexpr (Src::kRepeats) repeat[k] = m;
       }
       __syncthreads();
       if (tid == 0) {
-        const uint32_t count = tmin(total - w0, kFoldWindow);
-        for (uint32_t k = 0; k < count; ++k) {
+#pragma unroll 8
+        for (uint32_t k = 0; k < end; ++k) {
           if constexpr (Src::kRepeats) sum = repeat[k] == 1 ? dadd(sum, term[k]) : add_repeated(sum, term[k], repeat[k]);
           else sum = dadd(sum, term[k]);
         }
       }
       __syncthreads();
     }
-    __syncthreads();  // warp_total is read before the next chunk writes it
-    if (!whole) break;
+    if (entries < kFoldBlock) break;
+    __syncthreads();  // first[] is read before the next chunk writes it
   }
   return sum;
 }

@@ -316,24 +316,28 @@ __global__ void k_fold_area(OutArgs<P> a, uint64_t n) {
   }
 }
 
-// One entry's terms for block_fold_run: its pieces' areas, -0.0 where not visible (fold_area's loop).
+// An entry's terms for block_fold_run: its pieces' areas, -0.0 where not visible (fold_area's loop).
 template <class P>
 struct FoldTerms {
   static constexpr bool kRepeats = false;
+  struct Entry {
+    uint64_t base;  // its first piece
+    bool clipped;
+  };
   const OutArgs<P>& a;
-  uint64_t base = 0;
-  bool clipped = false, any = false;
-  __device__ uint32_t begin(uint64_t r) {
+  bool any = false;
+  __device__ Entry entry(uint64_t r, uint32_t& n) const {
     const uint32_t j = a.area_item[r];
-    clipped = a.cand_count[j] != 0;
-    base = clipped ? a.n_items + a.item_slot[j] : j;
-    return a.piece_count[j];
+    const bool clipped = a.cand_count[j] != 0;
+    n = a.piece_count[j];
+    return {clipped ? a.n_items + a.item_slot[j] : j, clipped};
   }
-  __device__ double term(uint32_t k, uint32_t&) {
-    const uint64_t p = clipped ? base + k : base;
-    if (!a.visible[p]) return -0.0;
-    any = true;
-    return a.piece_area[p];
+  __device__ double term(const Entry& e, uint32_t k, uint32_t&) {
+    const uint64_t p = e.clipped ? e.base + k : e.base;
+    const bool v = a.visible[p] != 0;
+    const double x = a.piece_area[p];  // loaded beside the flag, not after it
+    any = any || v;
+    return v ? x : -0.0;
   }
 };
 
