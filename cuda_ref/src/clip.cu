@@ -41,10 +41,6 @@ struct ClipArgs {
   uint64_t* counters;
   uint32_t slot_factor;
   uint64_t n_items;
-  // The thresholds below, as values:
-  uint32_t long_chain;       // kLongChain: items of this many candidates or more go to k_clip_long
-  uint32_t small_chain;      // kSmallChain: items of fewer, a thread each (k_clip_items; 0: none) ...
-  uint64_t small_min_items;  // kSmallMinItems: ... when there are at least this many items
 };
 
 // A run whose candidate list overflowed has per-item counts without all their records: it is
@@ -609,7 +605,7 @@ __global__ void __launch_bounds__(kLongBlockOf<P>, 1) k_clip_long(ClipArgs<P> a,
   for (uint64_t w = blockIdx.x; w < n; w += gridDim.x) {
     const uint32_t j = a.clip_items[w];
     const uint32_t c = a.cand_count[j];
-    if (c < a.long_chain) continue;
+    if (c < kLongChain) continue;
     if (candidates_overflowed(a) || uint64_t(a.cand_offset[j]) + c > a.cand_cap) continue;
     const uint64_t want = tmin<uint64_t>(piece_bound(c), uint64_t(a.slot_factor) * (c + 1));
     if (want <= kTreeSlots && c <= kTreeCands) clip_item_tree<P>(a, j, want, smem, ts);
@@ -647,13 +643,13 @@ __global__ void k_clip_items(ClipArgs<P> a, const uint64_t* count, uint64_t cap)
   const uint64_t warps = uint64_t(gridDim.x) * blockDim.x / 32;
   __shared__ uint64_t stage[kClipBlock / 32][kStageSlots];
   // Many items (million: 45,960 items with candidates at 1080p; the next scene, dragon_bunnies,
-  // 9,376; host emulation counts): those of fewer than small_chain candidates first, a thread
+  // 9,376; host emulation counts): those of fewer than kSmallChain candidates first, a thread
   // each (the sequential loop, as on the host), their slots and first edges reserved with one
   // atomic per warp; then the others, a warp each.
   // Fewer items (every other scene at 1080p): a warp each, as the longest chains set the
   // stage's length there (measured: a thread per small item made glass's clipping 0.161 ->
   // 0.197 ms at 4 candidates, 0.297 at 8, first or after the warps' items).
-  const bool threads_first = a.small_chain != 0 && n >= a.small_min_items;
+  const bool threads_first = n >= kSmallMinItems;
   const uint32_t lane = threadIdx.x & 31u;
   if (threads_first && !candidates_overflowed(a)) {  // (overflowed: clip_item returns at once)
     const uint64_t threads = uint64_t(gridDim.x) * blockDim.x;
@@ -665,7 +661,7 @@ __global__ void k_clip_items(ClipArgs<P> a, const uint64_t* count, uint64_t cap)
         c = a.cand_count[j];
         if (uint64_t(a.cand_offset[j]) + c > a.cand_cap) c = kNone;  // clip_item returns at once
       }
-      const bool mine = c < a.small_chain && c < a.long_chain;
+      const bool mine = c < kSmallChain && c < kLongChain;
       const uint64_t want = mine ? tmin<uint64_t>(piece_bound(c), uint64_t(a.slot_factor) * (c + 1)) : 0;
       uint64_t incl = want;
       for (uint32_t d = 1; d < 32; d <<= 1) {
@@ -690,7 +686,7 @@ __global__ void k_clip_items(ClipArgs<P> a, const uint64_t* count, uint64_t cap)
   }
   for (uint64_t w = warp; w < n; w += warps) {
     const uint32_t c = a.cand_count[a.clip_items[w]];
-    if ((!threads_first || c >= a.small_chain) && c < a.long_chain) clip_item<P>(a, w, WarpTeam{}, stage[threadIdx.x / 32]);
+    if ((!threads_first || c >= kSmallChain) && c < kLongChain) clip_item<P>(a, w, WarpTeam{}, stage[threadIdx.x / 32]);
   }
 }
 
@@ -726,9 +722,6 @@ bool stage_clip(Pipeline<P>& p) {
   a.counters = p.counters.get();
   a.slot_factor = p.caps.slot_factor;
   a.n_items = ni;
-  a.long_chain = kLongChain;
-  a.small_chain = kSmallChain;
-  a.small_min_items = kSmallMinItems;
 
   ex.exclusive_scan(a.cand_count, p.cand_offset.get(), p.N(kSzItems, ni), ni);
   ex.launch_dyn(k_cand_scatter<P>, cand_scatter<P>, p.counters.get() + kCandidates, p.caps.candidates, a);
