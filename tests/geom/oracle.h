@@ -151,6 +151,9 @@ inline std::vector<RPoint> clip_rational(const std::vector<RPoint>& poly, const 
   return out;
 }
 
+// The largest |coordinate| the predicates accept (2^23): random inputs span it.
+inline constexpr int32_t kLim = kCoordLimit;
+
 inline Point random_point(std::mt19937_64& rng, int32_t lo, int32_t hi) {
   std::uniform_int_distribution<int32_t> d(lo, hi);
   const int32_t x = d(rng);

@@ -8,8 +8,6 @@
 namespace tilevis::geom::test {
 namespace {
 
-constexpr int32_t kLim = kCoordLimit;
-
 Vertex random_vertex(std::mt19937_64& rng, int32_t range, int depth_bits) {
   const Point p = random_point(rng, -range, range);
   const uint64_t zmax = (uint64_t{1} << depth_bits) - 1;

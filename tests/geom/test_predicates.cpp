@@ -8,8 +8,6 @@
 namespace tilevis::geom::test {
 namespace {
 
-constexpr int32_t kLim = kCoordLimit;  // predicates accept |coord| <= 2^23
-
 BigInt big_orient(Point a, Point b, Point c) {
   return (BigInt(b.x) - a.x) * (BigInt(c.y) - a.y) - (BigInt(b.y) - a.y) * (BigInt(c.x) - a.x);
 }

@@ -5,19 +5,19 @@
 namespace tilevis::scene {
 
 namespace {
-constexpr double kBig = 1e12;
+constexpr double kBigCoordinate = 1e12;
 }
 
 void raise_scene_error(const std::string& message) { throw SceneError(message); }
 
 glm::dvec3 vec3(const Node& n) {
   if (!n.is_array() || n.value().size() != 3) n.fail("expected an array of 3 numbers");
-  return {n.at(size_t{0}).number(-kBig, kBig), n.at(1).number(-kBig, kBig), n.at(2).number(-kBig, kBig)};
+  return {n.at(size_t{0}).number(-kBigCoordinate, kBigCoordinate), n.at(1).number(-kBigCoordinate, kBigCoordinate), n.at(2).number(-kBigCoordinate, kBigCoordinate)};
 }
 
 glm::dvec3 vec3_or_scalar(const Node& n) {
   if (n.is_number()) {
-    double s = n.number(-kBig, kBig);
+    double s = n.number(-kBigCoordinate, kBigCoordinate);
     return {s, s, s};
   }
   return vec3(n);
@@ -25,11 +25,11 @@ glm::dvec3 vec3_or_scalar(const Node& n) {
 
 glm::dvec2 vec2_or_scalar(const Node& n) {
   if (n.is_number()) {
-    double s = n.number(-kBig, kBig);
+    double s = n.number(-kBigCoordinate, kBigCoordinate);
     return {s, s};
   }
   if (!n.is_array() || n.value().size() != 2) n.fail("expected a number or an array of 2 numbers");
-  return {n.at(size_t{0}).number(-kBig, kBig), n.at(1).number(-kBig, kBig)};
+  return {n.at(size_t{0}).number(-kBigCoordinate, kBigCoordinate), n.at(1).number(-kBigCoordinate, kBigCoordinate)};
 }
 
 glm::dvec3 vec3_or(const Node& n, const char* key, glm::dvec3 fallback) {
