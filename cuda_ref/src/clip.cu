@@ -4,7 +4,7 @@
 // its slot: the inside part replaces its parent, the outside part is appended in parent order,
 // exactly the order a sequential loop leaves (the canonical piece order). Items with long
 // candidate chains (kLongChain or more) go to a block each instead (k_clip_long): a tree of
-// per-piece walks whose slots are assigned afterwards in the same canonical order.
+// per-piece walks, a warp each, whose slots are assigned afterwards in the same canonical order.
 //
 // No hand-sized buffers (SVGPU §4.3's failure): piece slots and polygon edges come from pools
 // with device-side bump counters. An item that finds its pool exhausted stops and is counted;
@@ -244,13 +244,17 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team, uint64_t* stag
 // block's threads take kLongBlock pieces a round; the ballots' counts, summed over the warps in
 // order, give each outside part the slot a sequential loop gives it (the same canonical order),
 // and one bump per round gives the round's polygon edges (from the block's chunk of the pool).
-// kLongChain from sweeps on the H200: with these rounds (48, 96, 160, 320: 96 best or within
-// noise of it on hot_tile, slivers, armadillo_box, interpenetrating, teapot_stadium, million,
-// both precisions) and with the tree below (16, 32, 64, 96: 16 slower on most scenes, 32 to 96
-// within noise of each other).
+// kLongChain: with the tree below walking a piece a warp at a time, 32 against 96 on the H100
+// (new frame, ms, float / exact): teapot_stadium 0.699 / 1.113 against 0.869 / 1.439,
+// interpenetrating 0.964 / 1.957 against 1.172 / 1.987, dragon_bunnies 1.697 / 3.371 against
+// 1.916 / 3.558, hot_tile and million alike; slivers 3.226 / 5.730 against 2.810 / 5.678 and
+// armadillo_box exact 2.715 against 2.537 (more items for k_clip_long's fixed stride over its
+// blocks). The rounds alone (no tree; every long item in rounds) were slower at 32 and at 96
+// on every scene but million and bunny (H100, with the thread-per-walk tree: interpenetrating
+// float 1.45 against 1.16 ms).
 // Exact's block is half float's: its 255 registers a thread (wide arithmetic) fill the SM's
 // register file at 256 threads; 512 would spill.
-inline constexpr uint32_t kLongBlock = 512, kLongChain = 96, kLongStage = 4096;
+inline constexpr uint32_t kLongBlock = 512, kLongChain = 32, kLongStage = 4096;
 template <class P>
 inline constexpr uint32_t kLongBlockOf = P::kExact ? kLongBlock / 2 : kLongBlock;
 
@@ -394,12 +398,17 @@ __device__ void clip_item_block(const ClipArgs<P>& a, uint32_t j, uint64_t* stag
   __syncthreads();  // the stage and sh are reused by the block's next item
 }
 
-// The same items as a tree of walks (the block's threads each walking one piece through the
+// The same items as a tree of walks (the block's warps each walking one piece through the
 // remaining candidates). A piece's history is its own: at candidate ci it is tested and maybe
 // split, the inside part staying in its slot and the outside part starting at ci + 1; no piece's
-// steps read another's. So a thread takes a piece, walks it to the end of the chain, and queues
-// the outside parts it cuts off for any thread to take: the longest dependent chain is one
-// piece's walk (mostly cheap rejections), not every candidate's round over all pieces. Each
+// steps read another's. So a warp takes a piece, walks it to the end of the chain, and queues
+// the outside parts it cuts off for any warp to take: the longest dependent chain is one
+// piece's walk, not every candidate's round over all pieces. The walk's tests are independent
+// too (a candidate the piece does not survive leaves it as it is), so the warp's lanes test 32
+// candidates at once and the lowest survivor is the next split: a walk takes about
+// (candidates / 32 + splits) steps. A thread per walk took 7,500 to 25,000 cycles a candidate
+// (clock64 on the H100, interpenetrating's 126-candidate item: waiting threads beside one walker,
+// then hundreds of diverging walkers), and that item 0.76 ms. Each
 // piece records its parent and the candidate that cut it off; the slots a sequential loop gives
 // (at candidate ci the new parts follow the existing pieces in their parents' slot order) are
 // then assigned in candidate order, so the canonical piece order, every polygon and every
@@ -487,57 +496,88 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
   }
   const uint64_t base = slot_of[0];
   uint32_t splits = 0, anomalies = 0, regularized = 0;
+  const uint32_t lane = t & 31u;
   for (;;) {
-    const uint32_t id = atomicAdd(&ts.head, 1u);
+    uint32_t id = 0;
     uint64_t cur = ~uint64_t{0};
-    for (;;) {  // wait for piece `id`, or for the end: every piece made has been walked
-      if (id < want && (cur = sh_load(&sp[id])) != ~uint64_t{0}) break;
-      const uint32_t fin = sh_load(&ts.finished);
-      if (fin == sh_load(&ts.n_alloc)) break;
-      __nanosleep(32);
+    if (lane == 0) {
+      id = atomicAdd(&ts.head, 1u);
+      for (;;) {  // wait for piece `id`, or for the end: every piece made has been walked
+        if (id < want && (cur = sh_load(&sp[id])) != ~uint64_t{0}) break;
+        const uint32_t fin = sh_load(&ts.finished);
+        if (fin == sh_load(&ts.n_alloc)) break;
+        __nanosleep(32);
+      }
     }
+    id = __shfl_sync(0xffffffffu, id, 0);
+    cur = __shfl_sync(0xffffffffu, static_cast<unsigned long long>(cur), 0);
     if (cur == ~uint64_t{0}) break;
     Piece<P> piece;
     piece.load(a.pool, cur);
-    for (uint32_t ci = sh_load(&born[id]) + 1; ci < c; ++ci) {
-      if (sh_load(&ts.fail)) break;
-      const SilEdge<P>& e = a.edges[a.cand_sorted[off + ci]];
-      const uint32_t m = uint32_t(cur);
+    // The warp's lanes test the next 32 candidates at once; the lowest that the piece survives is
+    // the next that splits it (those before it leave it as it is), and its lane splits it.
+    uint32_t ci = (lane == 0 ? sh_load(&born[id]) : 0u);
+    ci = __shfl_sync(0xffffffffu, ci, 0) + 1;  // the root's kNone + 1 = 0
+    while (ci < c) {
+      const uint32_t mine = ci + lane;
       Sides sides;
-      if (!piece.survives(tt, e, &sides)) continue;
-      const uint32_t child = atomicAdd(&ts.n_alloc, 1u);
-      if (child >= want || child >= kTreeSlots) {
-        atomic_add(&a.counters[kReserveOverflow], 1);
-        sh_store(&ts.fail, 1u);
-        atomicAdd(&ts.finished, 1u);  // the id taken stands for no piece
-        break;
+      bool flag = false;
+      if (mine < c) flag = piece.survives(tt, a.edges[a.cand_sorted[off + mine]], &sides);
+      const uint32_t mask = __ballot_sync(0xffffffffu, flag);
+      if (mask == 0) {
+        ci += 32;
+        continue;
       }
-      const uint64_t at = tree_edges(a, ts, 2 * (m + 1));
-      if (at == ~uint64_t{0}) {
-        sh_store(&ts.fail, 1u);
-        atomicAdd(&ts.finished, 1u);
-        break;
+      const uint32_t first = uint32_t(__ffs(mask)) - 1u;
+      uint64_t next = 0;
+      uint32_t quit = 0;
+      if (lane == first) {
+        const uint32_t m = uint32_t(cur);
+        const uint32_t child = sh_load(&ts.fail) ? kNone : atomicAdd(&ts.n_alloc, 1u);
+        if (child == kNone) {
+          quit = 1;
+        } else if (child >= want || child >= kTreeSlots) {
+          atomic_add(&a.counters[kReserveOverflow], 1);
+          sh_store(&ts.fail, 1u);
+          atomicAdd(&ts.finished, 1u);  // the id taken stands for no piece
+          quit = 1;
+        } else {
+          const uint64_t at = tree_edges(a, ts, 2 * (m + 1));
+          if (at == ~uint64_t{0}) {
+            sh_store(&ts.fail, 1u);
+            atomicAdd(&ts.finished, 1u);
+            quit = 1;
+          } else {
+            const SilEdge<P>& e = a.edges[a.cand_sorted[off + mine]];
+            PolyOut<P> in{a.pool + at, 0, m + 1, false}, out{a.pool + at + m + 1, 0, m + 1, false};
+            bool regular = false;
+            piece.split(e.line, in, out, &regular, &sides);
+            regularized += regular ? 1 : 0;
+            if (in.overflow || out.overflow) {
+              ++anomalies;  // only float arithmetic can break convexity
+              in.n = tmin(in.n, m + 1);
+              out.n = tmin(out.n, m + 1);
+            }
+            ++splits;
+            sh_store(&parent[child], id);
+            sh_store(&born[child], mine);
+            __threadfence_block();  // the outside part's edges (global) and record before its polygon word
+            sh_store(&sp[child], ((at + m + 1) << 32) | out.n);
+            next = (at << 32) | in.n;
+          }
+        }
       }
-      PolyOut<P> in{a.pool + at, 0, m + 1, false}, out{a.pool + at + m + 1, 0, m + 1, false};
-      bool regular = false;
-      piece.split(e.line, in, out, &regular, &sides);
-      regularized += regular ? 1 : 0;
-      if (in.overflow || out.overflow) {
-        ++anomalies;  // only float arithmetic can break convexity
-        in.n = tmin(in.n, m + 1);
-        out.n = tmin(out.n, m + 1);
-      }
-      ++splits;
-      sh_store(&parent[child], id);
-      sh_store(&born[child], ci);
-      __threadfence_block();  // the outside part's edges (global) and record before its polygon word
-      sh_store(&sp[child], ((at + m + 1) << 32) | out.n);
-      cur = (at << 32) | in.n;
+      if (__shfl_sync(0xffffffffu, quit, first) != 0) break;  // the block failed: nothing more is kept
+      cur = __shfl_sync(0xffffffffu, static_cast<unsigned long long>(next), first);
+      __syncwarp();  // the inside part's edges, written by lane `first`, before the lanes read them
       piece.load(a.pool, cur);
+      ci += first + 1;
     }
-    sh_store(&sp[id], cur);  // the piece's final polygon
-    __threadfence_block();
-    atomicAdd(&ts.finished, 1u);
+    if (lane == 0) {
+      sh_store(&sp[id], cur);  // the piece's final polygon
+      __threadfence_block();
+      atomicAdd(&ts.finished, 1u);
+    }
   }
   __syncthreads();
   const bool failed = ts.fail != 0;
