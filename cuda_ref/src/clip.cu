@@ -93,6 +93,26 @@ struct Piece {
   }
 };
 
+// Piece p (m edges) split by a candidate's line into the pool at `at`: the inside part's edges
+// first, the outside part's after them (m + 1 edges each at most). Returns the two polygons' slot
+// words (pool offset << 32 | edge count) in `in_slot` and `out_slot`.
+template <class P>
+TV_HD inline void split_piece(const Piece<P>& p, PEdge<P>* pool, uint64_t at, uint32_t m, const typename P::Line& line,
+                              const Sides* sides, uint32_t& regularized, uint32_t& anomalies, uint64_t& in_slot,
+                              uint64_t& out_slot) {
+  PolyOut<P> in{pool + at, 0, m + 1, false}, out{pool + at + m + 1, 0, m + 1, false};
+  bool regular = false;
+  p.split(line, in, out, &regular, sides);
+  regularized += regular ? 1 : 0;
+  if (in.overflow || out.overflow) {
+    ++anomalies;  // only float arithmetic can break convexity
+    in.n = tmin(in.n, m + 1);
+    out.n = tmin(out.n, m + 1);
+  }
+  in_slot = (at << 32) | in.n;
+  out_slot = ((at + m + 1) << 32) | out.n;
+}
+
 // A team's piece slots live in `stage` (the warp's shared memory) while it clips, if they fit,
 // and are copied to slot_poly at the end: each step reads and writes them.
 inline constexpr uint32_t kStageSlots = 256;
@@ -200,18 +220,8 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team, uint64_t* stag
       const uint64_t step_at = mask ? take(team.sum(need)) : 0;
       bool fail = flag && (!room || step_at == ~uint64_t{0});
       if (flag && !fail) {
-        const uint64_t at = step_at + incl - need;
-        PolyOut<P> in{a.pool + at, 0, m + 1, false}, out{a.pool + at + m + 1, 0, m + 1, false};
-        bool regular = false;
-        piece.split(e.line, in, out, &regular, &sides);
-        regularized += regular ? 1 : 0;
-        if (in.overflow || out.overflow) {
-          ++anomalies;  // only float arithmetic can break convexity
-          in.n = tmin(in.n, m + 1);
-          out.n = tmin(out.n, m + 1);
-        }
-        slots[k] = (at << 32) | in.n;
-        slots[dst] = ((at + m + 1) << 32) | out.n;
+        split_piece<P>(piece, a.pool, step_at + incl - need, m, e.line, &sides, regularized, anomalies, slots[k],
+                       slots[dst]);
         ++splits;
       }
       appended += popc(mask);
@@ -362,18 +372,8 @@ __device__ void clip_item_block(const ClipArgs<P>& a, uint32_t j, uint64_t* stag
       const uint64_t step_at = total ? sh.step_at : 0;
       const bool fail = flag && (!room || step_at == ~uint64_t{0});
       if (flag && !fail) {
-        const uint64_t at = step_at + need_before + incl - need;
-        PolyOut<P> in{a.pool + at, 0, m + 1, false}, out{a.pool + at + m + 1, 0, m + 1, false};
-        bool regular = false;
-        piece.split(e.line, in, out, &regular, &sides);
-        regularized += regular ? 1 : 0;
-        if (in.overflow || out.overflow) {
-          ++anomalies;
-          in.n = tmin(in.n, m + 1);
-          out.n = tmin(out.n, m + 1);
-        }
-        slots[k] = (at << 32) | in.n;
-        slots[dst] = ((at + m + 1) << 32) | out.n;
+        split_piece<P>(piece, a.pool, step_at + need_before + incl - need, m, e.line, &sides, regularized, anomalies,
+                       slots[k], slots[dst]);
         ++splits;
       }
       appended += total;
@@ -548,22 +548,14 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
             atomicAdd(&ts.finished, 1u);
             quit = 1;
           } else {
-            const SilEdge<P>& e = a.edges[a.cand_sorted[off + mine]];
-            PolyOut<P> in{a.pool + at, 0, m + 1, false}, out{a.pool + at + m + 1, 0, m + 1, false};
-            bool regular = false;
-            piece.split(e.line, in, out, &regular, &sides);
-            regularized += regular ? 1 : 0;
-            if (in.overflow || out.overflow) {
-              ++anomalies;  // only float arithmetic can break convexity
-              in.n = tmin(in.n, m + 1);
-              out.n = tmin(out.n, m + 1);
-            }
+            uint64_t out_slot = 0;
+            split_piece<P>(piece, a.pool, at, m, a.edges[a.cand_sorted[off + mine]].line, &sides, regularized, anomalies,
+                           next, out_slot);
             ++splits;
             sh_store(&parent[child], id);
             sh_store(&born[child], mine);
             __threadfence_block();  // the outside part's edges (global) and record before its polygon word
-            sh_store(&sp[child], ((at + m + 1) << 32) | out.n);
-            next = (at << 32) | in.n;
+            sh_store(&sp[child], out_slot);
           }
         }
       }
