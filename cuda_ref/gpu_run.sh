@@ -309,7 +309,9 @@ hw_ms() {  # the GL time of a scene in the current set, or nothing
 
 phase_sanitize() {
   [ -x "$BIN" ] || die "not built: run the build phase first"
-  local small="$TRACES/small/dragon_320x240.tvt" tool p
+  # TILEVIS_SANITIZE_TRACE: another trace in place of dragon 320x240 (say one whose items reach
+  # k_clip_long: .gpu/tiny/teapot_stadium_320x240.tvt).
+  local small="${TILEVIS_SANITIZE_TRACE:-$TRACES/small/dragon_320x240.tvt}" tool p
   command -v compute-sanitizer >/dev/null || { echo "compute-sanitizer not found" >"$WORK/meta/sanitizer.txt"; return; }
   : >"$WORK/meta/sanitizer.txt.tmp"
   export TILEVIS_CUDA_NO_LAUNCH_PROBE=1  # no launch-cost probe (2,300 empty launches) under the tools
@@ -326,9 +328,10 @@ phase_sanitize() {
       esac
       # racecheck of float hybrid did not finish on the 320x240 trace inside a lease: the 128x72
       # one (.gpu/tiny, prepare_gpu_run.sh) when carried.
-      local trace="$small" what="dragon 320x240"
+      local trace="$small" what
+      what="$(basename "$small" .tvt)"
       if [ "$tool $p" = "racecheck hybrid_float" ] && [ -f .gpu/tiny/dragon_128x72.tvt ]; then
-        trace=.gpu/tiny/dragon_128x72.tvt what="dragon 128x72"
+        trace=.gpu/tiny/dragon_128x72.tvt what="dragon_128x72"
       fi
       timeout "${TILEVIS_SANITIZE_TIMEOUT:-300}" compute-sanitizer --tool "$tool" --error-exitcode 3 "$BIN" cuda "$trace" \
         "${args[@]}" --runs 1 -o "$WORK/sanitize/${tool}_$p" >"$log" 2>&1 || rc=$?

@@ -31,6 +31,7 @@ struct ClipArgs {
   uint64_t cand_cap;  // room in cand_edges / cand_sorted; offsets past it belong to an overflowed run
   uint64_t deep_cap;
   uint32_t* clip_items;
+  uint32_t* long_items;  // the items of kLongChain or more candidates (unordered), listed by cand_scatter
   uint32_t* item_slot;
   uint64_t* slot_poly;  // edge offset << 32 | edge count
   uint32_t* slot_item;  // the item of each used slot; kNone in reserved slots left unused
@@ -50,12 +51,18 @@ TV_HD inline bool candidates_overflowed(const ClipArgs<P>& a) {
   return a.counters[kCandidates] > a.cand_cap || a.counters[kDeepPairs] > a.deep_cap;
 }
 
+// Items of kLongChain or more candidates are clipped by a block each (k_clip_long, below, says
+// why 32). The candidate that is an item's kLongChain-th to be scattered lists the item for it.
+inline constexpr uint32_t kLongChain = 32;
+
 template <class P>
 TV_HD void cand_scatter(const ClipArgs<P>& a, uint64_t k) {
   const uint64_t d = a.cands[k];
   const uint32_t j = uint32_t(d >> 32);
-  const uint64_t at = uint64_t(a.cand_offset[j]) + atomic_add(&a.cand_cursor[j], 1u);
+  const uint32_t pos = atomic_add(&a.cand_cursor[j], 1u);
+  const uint64_t at = uint64_t(a.cand_offset[j]) + pos;
   if (at < a.cand_cap) a.cand_edges[at] = uint32_t(d);
+  if (pos == kLongChain - 1) a.long_items[bump_one(&a.counters[kLongItems], ~uint64_t{0})] = j;
 }
 
 
@@ -259,12 +266,15 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team, uint64_t* stag
 // interpenetrating 0.964 / 1.957 against 1.172 / 1.987, dragon_bunnies 1.697 / 3.371 against
 // 1.916 / 3.558, hot_tile and million alike; slivers 3.226 / 5.730 against 2.810 / 5.678 and
 // armadillo_box exact 2.715 against 2.537 (more items for k_clip_long's fixed stride over its
-// blocks). The rounds alone (no tree; every long item in rounds) were slower at 32 and at 96
+// blocks). With the blocks taking listed items as they finish (H100, new frame ms, against the
+// fixed stride): slivers 2.345 / 3.572 against 3.154 / 5.713, armadillo_box 1.209 / 2.299
+// against 1.450 / 2.690, dragon_bunnies 1.462 / 2.994 against 1.708 / 3.344, the others
+// alike. The rounds alone (no tree; every long item in rounds) were slower at 32 and at 96
 // on every scene but million and bunny (H100, with the thread-per-walk tree: interpenetrating
 // float 1.45 against 1.16 ms).
 // Exact's block is half float's: its 255 registers a thread (wide arithmetic) fill the SM's
 // register file at 256 threads; 512 would spill.
-inline constexpr uint32_t kLongBlock = 512, kLongChain = 32, kLongStage = 4096;
+inline constexpr uint32_t kLongBlock = 512, kLongStage = 4096;
 template <class P>
 inline constexpr uint32_t kLongBlockOf = P::kExact ? kLongBlock / 2 : kLongBlock;
 
@@ -633,11 +643,21 @@ __global__ void __launch_bounds__(kLongBlockOf<P>, 1) k_clip_long(ClipArgs<P> a,
   extern __shared__ __align__(16) uint8_t smem[];
   __shared__ LongShared sh;
   __shared__ TreeShared ts;
+  __shared__ uint32_t taken;
   const uint64_t n = *count < cap ? *count : cap;
-  for (uint64_t w = blockIdx.x; w < n; w += gridDim.x) {
-    const uint32_t j = a.clip_items[w];
+  // A block takes the next listed item when it is done with its last: the few long items are
+  // the stage, and a fixed stride over the blocks (item w to block w % blocks) left blocks with
+  // two or three of them beside idle ones.
+  for (;;) {
+    if (threadIdx.x == 0) {
+      const uint64_t w = atomic_add(&a.counters[kLongTaken], uint64_t{1});
+      taken = w < n ? a.long_items[w] : kNone;
+    }
+    __syncthreads();
+    const uint32_t j = taken;
+    __syncthreads();  // every thread has read it before thread 0 takes the next
+    if (j == kNone) break;
     const uint32_t c = a.cand_count[j];
-    if (c < kLongChain) continue;
     if (candidates_overflowed(a) || uint64_t(a.cand_offset[j]) + c > a.cand_cap) continue;
     const uint64_t want = tmin<uint64_t>(piece_bound(c), uint64_t(a.slot_factor) * (c + 1));
     if (want <= kTreeSlots && c <= kTreeCands) clip_item_tree<P>(a, j, want, smem, ts);
@@ -744,6 +764,7 @@ bool stage_clip(Pipeline<P>& p) {
   a.cand_cap = p.caps.candidates;
   a.deep_cap = p.caps.deep_pairs;
   a.clip_items = p.clip_items.get();  // listed by cull
+  a.long_items = p.long_items.need(ni + 1);
   a.item_slot = p.item_slot.need(ni + 1);
   a.slot_poly = p.slot_poly.need(p.caps.clip_slots);
   a.slot_item = p.slot_item.need(p.caps.clip_slots);
@@ -769,7 +790,7 @@ bool stage_clip(Pipeline<P>& p) {
       return true;
     }();
     (void)smem_set;
-    k_clip_long<P><<<ex.grid_blocks / 2, kLongBlockOf<P>, kTreeSmem, ex.stream>>>(a, p.counters.get() + kClipItems, ni);
+    k_clip_long<P><<<ex.grid_blocks / 2, kLongBlockOf<P>, kTreeSmem, ex.stream>>>(a, p.counters.get() + kLongItems, ni);
     TV_CUDA(cudaGetLastError());
     ex.on_main();
     ++ex.queued;

@@ -51,6 +51,8 @@ enum Counter : uint32_t {
   kBigTris, kBigEdges,  // binning: primitives of wide spans queued for a block each
   kLongFolds,           // visible-area fold: runs of items queued for a warp each
   kHybridLongFolds,     // hybrid's second fold: likewise
+  kLongItems,           // clipping items of kLongChain or more candidates, listed for k_clip_long
+  kLongTaken,           // k_clip_long: the listed items its blocks have taken
   kCounterCount
 };
 
@@ -280,6 +282,7 @@ struct Pipeline {
   Buf<uint32_t> cand_edges;        // per item, its candidate edges (ascending after the clip's sort)
   Buf<uint32_t> cand_scratch;
   Buf<uint32_t> clip_items;
+  Buf<uint32_t> long_items;        // items of long candidate chains (clip.cu, k_clip_long)
   Buf<uint32_t> item_slot;         // first piece slot of a clipping item
   Buf<uint64_t> slot_poly;         // piece slot: edge offset << 32 | edge count
   Buf<PEdge<P>> clip_edges;
@@ -310,7 +313,7 @@ struct Pipeline {
                     &tri_tiles, &edge_tiles, &item_tri, &item_tri_sorted, &occ_tri, &occ_tri_sorted, &tedge_id,
                     &tedge_id_sorted, &tile_item_begin, &tile_edge_begin, &tile_occ_count, &area_item,
                     &area_item_sorted, &piece_count, &cand_count, &cand_cursor, &cand_offset,
-                    &cand_edges, &cand_scratch, &clip_items, &item_slot, &indices, &tri_draw, &sample_xy,
+                    &cand_edges, &cand_scratch, &clip_items, &long_items, &item_slot, &indices, &tri_draw, &sample_xy,
                     &obin_cnt, &obin_val, &obin_val_sorted, &obin_begin, &obin_count, &slot_item, &occ_cells, &big_tris,
                     &big_edges, &long_folds})
       b->bind(&e);
