@@ -4,6 +4,7 @@
 
 #include "geom/depth.h"
 #include "oracle.h"
+#include "test_cases.h"
 
 namespace tilevis::geom::test {
 namespace {
@@ -55,7 +56,7 @@ TEST_P(DepthOrder, AtSamplesMatchesOracle) {
   const int bits = GetParam();
   std::mt19937_64 rng(31 + static_cast<uint64_t>(bits));
   const BigInt zmax = (BigInt(1) << bits) - 1;
-  for (int i = 0; i < 30000; ++i) {
+  for (int i = 0; i < tilevis::test::cases(30000); ++i) {
     const Triangle a = random_triangle(rng, kLim, bits), b = random_triangle(rng, kLim, bits);
     const DepthPlane pa = DepthPlane::from(a), pb = DepthPlane::from(b);
     const Point s = random_point(rng, -kLim, kLim);
@@ -81,7 +82,7 @@ TEST_P(DepthOrder, TiesAlongASharedEdge) {
   const int bits = GetParam();
   std::mt19937_64 rng(41 + static_cast<uint64_t>(bits));
   int ties = 0;
-  for (int i = 0; i < 6000; ++i) {
+  for (int i = 0; i < tilevis::test::cases(6000); ++i) {
     const Triangle a = random_triangle(rng, kLim, bits);
     Triangle b = a;
     b.v[2] = random_vertex(rng, kLim, bits);
@@ -116,7 +117,7 @@ TEST_P(DepthOrder, TiesAlongASharedEdge) {
     // Lattice points on the shared line (the vertices themselves).
     ASSERT_EQ(depth_order(pa, pb, a.v[1].xy()), 0);
   }
-  EXPECT_GT(ties, 8000);
+  EXPECT_GT(ties, tilevis::test::cases(8000));
 }
 
 // Coplanar triangles on z = z0 + gx x + gy y (integer gradient): ties everywhere.
@@ -124,7 +125,7 @@ TEST_P(DepthOrder, CoplanarTrianglesTieEverywhere) {
   const int bits = GetParam();
   std::mt19937_64 rng(51 + static_cast<uint64_t>(bits));
   const int64_t zmax = (int64_t{1} << bits) - 1;
-  for (int i = 0; i < 3000; ++i) {
+  for (int i = 0; i < tilevis::test::cases(3000); ++i) {
     const int64_t gx = static_cast<int64_t>(rng() % 7) - 3, gy = static_cast<int64_t>(rng() % 7) - 3;
     const int32_t range = 1 << (bits - 5);
     const int64_t z0 = zmax / 2;
@@ -164,7 +165,7 @@ TEST_P(DepthOrder, CoplanarTrianglesTieEverywhere) {
 TEST_P(DepthOrder, AtImplicitAndRationalPointsMatchesOracle) {
   const int bits = GetParam();
   std::mt19937_64 rng(61 + static_cast<uint64_t>(bits));
-  for (int i = 0; i < 10000; ++i) {
+  for (int i = 0; i < tilevis::test::cases(10000); ++i) {
     const Triangle a = random_triangle(rng, kLim, bits), b = random_triangle(rng, kLim, bits);
     const DepthPlane pa = DepthPlane::from(a), pb = DepthPlane::from(b);
     ImplicitPoint q[3];
@@ -190,7 +191,7 @@ TEST_P(DepthOrder, PlaneVersusSilhouetteEdge) {
   const int bits = GetParam();
   std::mt19937_64 rng(71 + static_cast<uint64_t>(bits));
   int ties = 0;
-  for (int i = 0; i < 20000; ++i) {
+  for (int i = 0; i < tilevis::test::cases(20000); ++i) {
     const Triangle t = random_triangle(rng, kLim, bits);
     Vertex a = random_vertex(rng, kLim, bits), b = random_vertex(rng, kLim, bits);
     const int mode = i % 3;
@@ -216,14 +217,14 @@ TEST_P(DepthOrder, PlaneVersusSilhouetteEdge) {
       ties += expect == 0;
     }
   }
-  EXPECT_GT(ties, 5000);
+  EXPECT_GT(ties, tilevis::test::cases(5000));
 }
 
 INSTANTIATE_TEST_SUITE_P(Bits, DepthOrder, ::testing::Values(16, 24, 26, 27, 32));
 
 TEST(DepthOrder, MixedSmallAndWidePlanes) {
   std::mt19937_64 rng(81);
-  for (int i = 0; i < 20000; ++i) {
+  for (int i = 0; i < tilevis::test::cases(20000); ++i) {
     const Triangle a = random_triangle(rng, kLim, 24), b = random_triangle(rng, kLim, 32);
     const DepthPlane pa = DepthPlane::from(a), pb = DepthPlane::from(b);
     const Point s = random_point(rng, -kLim, kLim);
@@ -253,7 +254,7 @@ TEST(DepthOrder, ExactFallbacksMatchOracleAtExtremes) {
         if (!(p == q)) return Line::through(p, q);
       }
     };
-    for (int i = 0; i < 4000; ++i) {
+    for (int i = 0; i < tilevis::test::cases(4000); ++i) {
       const bool ex = i % 2 == 0;
       Triangle a, b;
       do a = Triangle{{extreme_vertex(ex), extreme_vertex(ex), extreme_vertex(ex)}};

@@ -6,6 +6,7 @@
 
 #include "geom/fixed.h"
 #include "oracle.h"
+#include "test_cases.h"
 
 namespace tilevis::geom::test {
 namespace {
@@ -28,7 +29,7 @@ TEST(Snap, CoordRoundsHalfToEven) {
 TEST(Snap, CoordMatchesExactOracle) {
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<float> d(-40000.0f, 40000.0f);
-  for (int i = 0; i < 200000; ++i) {
+  for (int i = 0; i < tilevis::test::cases(200000); ++i) {
     const float v = (i % 3 == 0) ? std::round(d(rng) * 512.0f) / 512.0f : d(rng);  // many exact ties
     const Rational scaled = exact(static_cast<double>(v)) * 256;
     BigInt fl = boost::multiprecision::numerator(scaled) / boost::multiprecision::denominator(scaled);
@@ -80,7 +81,7 @@ TEST(Snap, DepthMatchesExactOracle) {
   std::uniform_real_distribution<float> d(0.0f, 1.0f);
   for (int bits : {8, 16, 24, 29, 32}) {
     const BigInt max_value = (BigInt(1) << bits) - 1;
-    for (int i = 0; i < 50000; ++i) {
+    for (int i = 0; i < tilevis::test::cases(50000); ++i) {
       float z = d(rng);
       if (i % 4 == 0) z = std::ldexp(z, -static_cast<int>(rng() % 40));
       const Rational scaled = exact(static_cast<double>(z)) * Rational(max_value);
@@ -99,7 +100,7 @@ TEST(Snap, DoubleInputsAndSubpixelBits) {
   std::mt19937_64 rng(13);
   std::uniform_real_distribution<double> d(-40000.0, 40000.0);
   for (int bits : {0, 4, 8}) {
-    for (int i = 0; i < 50000; ++i) {
+    for (int i = 0; i < tilevis::test::cases(50000); ++i) {
       double v = d(rng);
       if (i % 3 == 0) v = std::round(v * 2.0 * (1 << bits)) / (2.0 * (1 << bits));  // exact ties
       const Rational scaled = exact(v) * (1 << bits);
@@ -119,7 +120,7 @@ TEST(Snap, DoubleInputsAndSubpixelBits) {
   std::uniform_real_distribution<double> dz(0.0, 1.0);
   for (int bits : {16, 24, 32}) {
     const BigInt max_value = (BigInt(1) << bits) - 1;
-    for (int i = 0; i < 50000; ++i) {
+    for (int i = 0; i < tilevis::test::cases(50000); ++i) {
       double z = dz(rng);
       if (i % 4 == 0) z = std::ldexp(z, -static_cast<int>(rng() % 80));
       if (i % 4 == 1) z = (std::round(z * static_cast<double>(max_value)) + 0.5) / static_cast<double>(max_value);

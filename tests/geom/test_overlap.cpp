@@ -5,6 +5,7 @@
 #include "geom/clip.h"
 #include "geom/overlap.h"
 #include "oracle.h"
+#include "test_cases.h"
 
 namespace tilevis::geom::test {
 namespace {
@@ -60,19 +61,19 @@ TEST(TriangleOverlapsRect, MatchesOracleWithManyContacts) {
   std::mt19937_64 rng(101);
   const Rect r{0, 0, 64, 64};
   int overlaps = 0;
-  for (int it = 0; it < 60000; ++it) {
+  for (int it = 0; it < tilevis::test::cases(60000); ++it) {
     auto p = [&] { return Point{8 * static_cast<int32_t>(rng() % 25) - 64, 8 * static_cast<int32_t>(rng() % 25) - 64}; };
     const Point a = p(), b = p(), c = p();
     const bool expect = oracle_triangle_rect(a, b, c, r);
     ASSERT_EQ(triangle_overlaps_rect(a, b, c, r), expect) << a.x << "," << a.y << " " << b.x << "," << b.y << " " << c.x << "," << c.y;
     overlaps += expect;
   }
-  EXPECT_GT(overlaps, 10000);
+  EXPECT_GT(overlaps, tilevis::test::cases(10000));
 }
 
 TEST(TriangleOverlapsRect, MatchesOracleFullRange) {
   std::mt19937_64 rng(102);
-  for (int it = 0; it < 30000; ++it) {
+  for (int it = 0; it < tilevis::test::cases(30000); ++it) {
     const int32_t lim = kCoordLimit;
     const Point a = random_point(rng, -lim, lim), b = random_point(rng, -lim, lim), c = random_point(rng, -lim, lim);
     const Point q = random_point(rng, -lim, lim - 1 - (1 << 20));
@@ -85,7 +86,7 @@ TEST(TriangleOverlapsRect, MatchesOracleFullRange) {
 TEST(TriangleOverlapsRect, NeverMissesACoveredSample) {
   std::mt19937_64 rng(103);
   const Rect r{0, 0, 32, 32};
-  for (int it = 0; it < 20000; ++it) {
+  for (int it = 0; it < tilevis::test::cases(20000); ++it) {
     const Point a = random_point(rng, -20, 52), b = random_point(rng, -20, 52), c = random_point(rng, -20, 52);
     const TriangleEdges t = TriangleEdges::from(a, b, c);
     bool covered = false;
@@ -101,7 +102,7 @@ TEST(SegmentOverlapsRect, MatchesOracle) {
   std::mt19937_64 rng(104);
   const Rect r{0, 0, 64, 64};
   int overlaps = 0;
-  for (int it = 0; it < 60000; ++it) {
+  for (int it = 0; it < tilevis::test::cases(60000); ++it) {
     auto p = [&] { return Point{8 * static_cast<int32_t>(rng() % 25) - 64, 8 * static_cast<int32_t>(rng() % 25) - 64}; };
     const Point a = p(), b = (it % 5 == 0) ? a : p();
     const bool expect = !(a == b) && oracle_segment_open_region(a, b, rect_region(r));
@@ -109,7 +110,7 @@ TEST(SegmentOverlapsRect, MatchesOracle) {
     ASSERT_EQ(segment_overlaps(ConvexPolygon::from_rect(r), a, b), expect);
     overlaps += expect;
   }
-  EXPECT_GT(overlaps, 5000);
+  EXPECT_GT(overlaps, tilevis::test::cases(5000));
   // Along a border, or touching a corner: no overlap.
   EXPECT_FALSE(segment_overlaps_rect({0, -10}, {0, 100}, r));
   EXPECT_FALSE(segment_overlaps_rect({-8, 72}, {72, -8}, {0, 0, 32, 32}));  // x + y = 64 touches (32,32)
@@ -118,7 +119,7 @@ TEST(SegmentOverlapsRect, MatchesOracle) {
 
 TEST(SegmentOverlapsPolygon, MatchesOracle) {
   std::mt19937_64 rng(105);
-  for (int it = 0; it < 30000; ++it) {
+  for (int it = 0; it < tilevis::test::cases(30000); ++it) {
     const ConvexPolygon poly = random_convex_polygon(rng, -40, 40, 3 + static_cast<int>(rng() % 5));
     const Point a = random_point(rng, -50, 50), b = random_point(rng, -50, 50);
     std::vector<Affine> fs;

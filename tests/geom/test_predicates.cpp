@@ -4,6 +4,7 @@
 
 #include "geom/predicates.h"
 #include "oracle.h"
+#include "test_cases.h"
 
 namespace tilevis::geom::test {
 namespace {
@@ -196,7 +197,7 @@ CentroidCase centroid_case(std::mt19937_64& rng) {
 
 TEST(RationalPoint, CentroidIsExact) {
   std::mt19937_64 rng(27);
-  for (int i = 0; i < 20000; ++i) {
+  for (int i = 0; i < tilevis::test::cases(20000); ++i) {
     const Line l[6] = {random_line(rng), random_line(rng), random_line(rng),
                        random_line(rng), random_line(rng), random_line(rng)};
     const ImplicitPoint a = intersect(l[0], l[1]), b = intersect(l[2], l[3]), c = intersect(l[4], l[5]);
@@ -219,7 +220,7 @@ TEST(RationalPoint, CentroidIsExact) {
 TEST(RationalPoint, SideOnAndNearLinesThroughTheCentroid) {
   std::mt19937_64 rng(28);
   int zeros = 0;
-  for (int i = 0; i < 20000; ++i) {
+  for (int i = 0; i < tilevis::test::cases(20000); ++i) {
     const CentroidCase cc = centroid_case(rng);
     const RationalPoint g = centroid(cc.p0, cc.p1, cc.p2);
     Point e = random_point(rng, -kLim / 2, kLim / 2);
@@ -238,7 +239,7 @@ TEST(RationalPoint, SideOnAndNearLinesThroughTheCentroid) {
 
 TEST(TriangleEdges, ContainsImplicitAndRationalAgreeWithSampleRule) {
   std::mt19937_64 rng(29);
-  for (int i = 0; i < 20000; ++i) {
+  for (int i = 0; i < tilevis::test::cases(20000); ++i) {
     const Point a = random_point(rng, -100, 100), b = random_point(rng, -100, 100), c = random_point(rng, -100, 100);
     const TriangleEdges t = TriangleEdges::from(a, b, c);
     const Point s = random_point(rng, -100, 100);

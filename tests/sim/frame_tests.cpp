@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include "sim_support.h"
+#include "test_cases.h"
 #include "top/simulate.h"
 #include "visibility/golden.h"
 #include "visibility/setup.h"
@@ -191,7 +192,9 @@ INSTANTIATE_TEST_SUITE_P(Modes, ModesVsTruth,
 // output and every cycle is the same as on one thread, at every level that resolves tiles
 // (a sampled frame's rounds included), in analytic and hybrid mode.
 TEST(HostThreads, ResolvingAheadChangesNoOutputAndNoCycle) {
-  const trace::Frame f = simtest::shipped("bunny", 480, 270, 4);
+  // Under the sanitizers a quarter of the pixels (test_cases.h): 16 simulations of 135 tiles.
+  const trace::Frame f = tilevis::test::kSanitized ? simtest::shipped("bunny", 240, 135, 4)
+                                                   : simtest::shipped("bunny", 480, 270, 4);
   for (const std::string level : {"analytic", "tile", "primitive", "auto"})
     for (const std::string mode : {"analytic", "hybrid"}) {
       SCOPED_TRACE(level + " " + mode);
