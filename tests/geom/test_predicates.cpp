@@ -234,7 +234,7 @@ TEST(RationalPoint, SideOnAndNearLinesThroughTheCentroid) {
     zeros += expect == 0;
     ASSERT_EQ(in_half_plane(l, g) + in_half_plane(l.flipped(), g), 1);
   }
-  EXPECT_GT(zeros, 6000);
+  EXPECT_GT(zeros, tilevis::test::cases(6000));
 }
 
 TEST(TriangleEdges, ContainsImplicitAndRationalAgreeWithSampleRule) {
