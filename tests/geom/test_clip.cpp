@@ -5,6 +5,7 @@
 #include "geom/clip.h"
 #include "geom/overlap.h"
 #include "oracle.h"
+#include "test_cases.h"
 
 namespace tilevis::geom::test {
 namespace {
@@ -68,7 +69,7 @@ TEST(ConvexPolygon, Constructors) {
 TEST(Split, ConservesAreaAndPartitionsSamples) {
   std::mt19937_64 rng(91);
   int crossed = 0;
-  for (int it = 0; it < 3000; ++it) {
+  for (int it = 0; it < tilevis::test::cases(3000); ++it) {
     const ConvexPolygon poly = random_convex_polygon(rng, -40, 40, 3 + static_cast<int>(rng() % 8));
     Line l = random_line_in(rng, -50, 50);
     if (it % 4 == 0) {  // through a vertex of the polygon when it is a lattice point
@@ -101,14 +102,14 @@ TEST(Split, ConservesAreaAndPartitionsSamples) {
       ASSERT_TRUE(r.outside.empty());
     }
   }
-  EXPECT_GT(crossed, 1000);
+  EXPECT_GT(crossed, tilevis::test::cases(1000));
 }
 
 // Recursive splitting as in SVGPU §3.2.2 (both sides re-clipped by later lines): the leaves
 // still conserve area exactly and cover every sample of the root exactly once.
 TEST(Split, RecursivePiecesPartitionTheTriangle) {
   std::mt19937_64 rng(92);
-  for (int it = 0; it < 150; ++it) {
+  for (int it = 0; it < tilevis::test::cases(150); ++it) {
     const Point a = random_point(rng, -60, 60), b = random_point(rng, -60, 60), c = random_point(rng, -60, 60);
     const ConvexPolygon root = ConvexPolygon::from_triangle(a, b, c);
     if (root.empty()) continue;
@@ -146,7 +147,7 @@ TEST(Split, RecursivePiecesPartitionTheTriangle) {
 TEST(Split, ConservesAreaAtFullRange) {
   std::mt19937_64 rng(93);
   const int32_t lim = kCoordLimit;
-  for (int it = 0; it < 2000; ++it) {
+  for (int it = 0; it < tilevis::test::cases(2000); ++it) {
     const ConvexPolygon poly = random_convex_polygon(rng, -lim, lim, 3 + static_cast<int>(rng() % 6));
     std::vector<ConvexPolygon> pieces{poly};
     for (int k = 0; k < 3; ++k) {
@@ -205,7 +206,7 @@ TEST(Split, CanonicalOrder) {
 
 TEST(Chord, MatchesSplitVertices) {
   std::mt19937_64 rng(94);
-  for (int it = 0; it < 5000; ++it) {
+  for (int it = 0; it < tilevis::test::cases(5000); ++it) {
     const ConvexPolygon poly = random_convex_polygon(rng, -1000, 1000, 3 + static_cast<int>(rng() % 6));
     const Line l = random_line_in(rng, -1000, 1000);
     ImplicitPoint p, q;
@@ -230,7 +231,7 @@ TEST(Chord, MatchesSplitVertices) {
 
 TEST(ClipToRect, MatchesRationalClipping) {
   std::mt19937_64 rng(95);
-  for (int it = 0; it < 5000; ++it) {
+  for (int it = 0; it < tilevis::test::cases(5000); ++it) {
     const Point a = random_point(rng, -3000, 3000), b = random_point(rng, -3000, 3000), c = random_point(rng, -3000, 3000);
     const Rect r{-256 * static_cast<int32_t>(rng() % 8), -256 * static_cast<int32_t>(rng() % 8), 256 * static_cast<int32_t>(1 + rng() % 8),
                  256 * static_cast<int32_t>(1 + rng() % 8)};

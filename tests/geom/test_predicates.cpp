@@ -82,7 +82,7 @@ Line random_line(std::mt19937_64& rng) {
 
 TEST(ImplicitPoint, IntersectMatchesCramer) {
   std::mt19937_64 rng(24);
-  for (int i = 0; i < 50000; ++i) {
+  for (int i = 0; i < tilevis::test::cases(50000); ++i) {
     const Point a = random_point(rng, -kLim, kLim), b = random_point(rng, -kLim, kLim);
     const Point c = random_point(rng, -kLim, kLim), d = random_point(rng, -kLim, kLim);
     if (a == b || c == d) continue;
@@ -119,7 +119,7 @@ Concurrent concurrent_lines(std::mt19937_64& rng, int32_t range, int k) {
 
 TEST(ImplicitPoint, SideMatchesOracleRandom) {
   std::mt19937_64 rng(25);
-  for (int i = 0; i < 100000; ++i) {
+  for (int i = 0; i < tilevis::test::cases(100000); ++i) {
     const Line l1 = random_line(rng), l2 = random_line(rng), l3 = random_line(rng);
     const ImplicitPoint p = intersect(l1, l2);
     if (!p.valid()) continue;
@@ -132,7 +132,7 @@ TEST(ImplicitPoint, SideMatchesOracleRandom) {
 TEST(ImplicitPoint, SideOfConcurrentAndNearlyConcurrentLines) {
   std::mt19937_64 rng(26);
   int zeros = 0;
-  for (int i = 0; i < 60000; ++i) {
+  for (int i = 0; i < tilevis::test::cases(60000); ++i) {
     const int k = 1 + static_cast<int>(rng() % 5);
     const int32_t range = kLim / (2 * (k + 1));
     Concurrent c = concurrent_lines(rng, range, k);
@@ -152,7 +152,7 @@ TEST(ImplicitPoint, SideOfConcurrentAndNearlyConcurrentLines) {
       ASSERT_EQ(rpoint(p2), o);
     }
   }
-  EXPECT_GE(zeros, 20000);
+  EXPECT_GE(zeros, tilevis::test::cases(20000));
 }
 
 TEST(ImplicitPoint, SideAtBoundExtremes) {
