@@ -386,10 +386,16 @@ void FrameWork::prepare_segment(uint32_t k) {
   }
   if (uses_evu(m_cfg.mode))
     for (uint32_t tile = 0; tile < tile_count(); ++tile) m_rows[tile][1] += int64_t(rs.edge_count[tile]);
-  m_seg_result.assign(m_replay ? tile_count() : 0, kNone);
-  for (uint32_t i = 0; i < rs.resolved.size(); ++i) {
-    if (rs.resolved[i] >= tile_count()) throw std::runtime_error("the functional record's tiles exceed the grid");
-    m_seg_result[rs.resolved[i]] = i;
+  if (m_replay) {
+    m_seg_result.assign(tile_count(), kNone);
+    for (uint32_t i = 0; i < rs.resolved.size(); ++i) {
+      if (rs.resolved[i] >= tile_count()) throw std::runtime_error("the functional record's tiles exceed the grid");
+      m_seg_result[rs.resolved[i]] = i;
+    }
+    m_recorded_last.resize(tile_count(), kNone);
+    m_replayed_last.resize(tile_count(), kNone);
+    if (k > 0)
+      for (uint32_t tile : m_rec.segments[k - 1].resolved) m_recorded_last[tile] = k - 1;
   }
   m_tiles_binned += n;
 }
@@ -722,10 +728,19 @@ void FrameWork::replay_tile(TileWork& w) {
     w.tris.assign(w.ids.size(), {});  // the units finish this delta on empty work
     for (size_t i = 0; i < w.ids.size(); ++i) w.tris[i].id = w.ids[i], w.tris[i].draw = w.draws[i];
   };
+  // Fidelity auto resolves a sample of the tiles: the record must have this one, and the same
+  // stored depth under it (the same earlier segments resolved it).
+  const std::string where = "tile " + std::to_string(w.tile) + " of segment " + std::to_string(w.segment);
   const uint32_t i = m_seg_result[w.tile];
   if (i == kNone)
-    return stop("the functional record has no visibility for tile " + std::to_string(w.tile) + " of segment " +
-                std::to_string(w.segment) + " (the recording run did not resolve it: fidelity auto sampled other tiles)");
+    return stop("the functional record has no visibility for " + where +
+                " (the recording run did not resolve it: fidelity auto sampled other tiles)");
+  auto last = [](uint32_t k) { return k == kNone ? std::string("none") : std::to_string(k); };
+  if (m_recorded_last[w.tile] != m_replayed_last[w.tile])
+    return stop("the functional record's " + where + " lies on the stored depth of segment " +
+                last(m_recorded_last[w.tile]) + ", this run's on that of segment " + last(m_replayed_last[w.tile]) +
+                " (fidelity auto sampled other tiles in earlier partial renders)");
+  m_replayed_last[w.tile] = w.segment;
   const RecordedTile& r = m_rec.segments[m_seg->index].results[i];
   const vis::zbuffer::PixelRect px = vis::zbuffer::tile_pixels(m_grid, w.tile);
   const size_t row = size_t(px.x1 - px.x0) * samples();

@@ -200,6 +200,8 @@ class FrameWork {
   std::vector<uint32_t> m_seg_tiles;
   std::vector<uint32_t> m_seg_pos;       // per tile: its place in the open segment's tiles, kNone
   std::vector<uint32_t> m_seg_result;    // replay, per tile: its place in the open segment's results, kNone
+  // Replay, per tile: the last earlier segment that resolved it, in the record and in this run.
+  std::vector<uint32_t> m_recorded_last, m_replayed_last;
   vis::TileOutput m_tile_added;          // recording: what the last analytic tile added to m_full
   std::vector<bool> m_stored;            // per tile: a partial render stored its depth/colour
   std::vector<uint32_t> m_owner;         // per sample: setup triangle in front (stored depth), kNone

@@ -90,7 +90,6 @@ template <typename A>
 void fields(A& a, FunctionalKey& k) {
   a.io(k.frame_fnv1a64), a.io(k.mode), a.io(k.tile_w), a.io(k.tile_h), a.io(k.depth_bits);
   a.io(k.evu_triangle_entries), a.io(k.evu_edge_entries), a.io(k.hybrid_pair_budget), a.io(k.detection_bin);
-  a.io(k.sampled);
 }
 template <typename A>
 void fields(A& a, FunctionalRecord& r) {
@@ -177,7 +176,6 @@ FunctionalKey functional_key(const trace::Frame& frame, const FrameWorkConfig& c
   k.evu_edge_entries = c.evu_edge_entries;
   k.hybrid_pair_budget = c.hybrid_pair_budget;
   k.detection_bin = c.detection_bin;
-  k.sampled = c.sampled;
   return k;
 }
 
@@ -200,7 +198,6 @@ std::string key_differences(const FunctionalKey& r, const FunctionalKey& n) {
   differ("evu.edge_list_entries", std::to_string(r.evu_edge_entries), std::to_string(n.evu_edge_entries));
   differ("evu.hybrid_pair_budget", std::to_string(r.hybrid_pair_budget), std::to_string(n.hybrid_pair_budget));
   differ("evu.detection_bin", std::to_string(r.detection_bin), std::to_string(n.detection_bin));
-  differ("sampled tiles (sim.fidelity auto)", r.sampled ? "yes" : "no", n.sampled ? "yes" : "no");
   return out;
 }
 

@@ -5,6 +5,10 @@
 // FrameWork fills one while it computes and answers from a loaded one while it replays; the
 // frame's outputs (ids, visible areas, samples covered) follow from the tiles' records in
 // the order the replaying run resolves them, exactly as they follow from computed tiles.
+// A tile's results depend on no other tile, only on the stored depth its own earlier
+// resolves left (partial renders): a run may replay any of the recorded tiles (fidelity
+// auto's sample of a record made at another level) as long as each tile it resolves was
+// resolved in the same earlier segments as in the recording run (checked).
 //
 // File: magic "TVFREC\r\n", format version (u32), the key, the payload, and a checksum of
 // every byte before it (u64: FNV-1a 64's step on 64-bit words); little-endian. Written to a
@@ -34,7 +38,6 @@ struct FunctionalKey {
   uint32_t evu_triangle_entries = 0, evu_edge_entries = 0;
   uint64_t hybrid_pair_budget = 0;
   uint32_t detection_bin = 0;
-  uint32_t sampled = 0;  // fidelity auto
   bool operator==(const FunctionalKey&) const = default;
 };
 
