@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <stdexcept>
 #include <type_traits>
 
@@ -99,21 +100,35 @@ void fields(A& a, FunctionalRecord& r) {
   a.io(r.owned_begin), a.io(r.owned), a.io(r.segment_plan), a.io(r.segments);
 }
 
+// Integers wider than a byte are LEB128 varints (signed ones zigzagged): most counters,
+// indices and ids are small, and the record is several times smaller for it. Bytes, bools and
+// doubles are stored as they are.
+template <typename T>
+constexpr bool kVarint = std::is_integral_v<T> && sizeof(T) > 1;
+
 class Writer {
  public:
   std::vector<uint8_t> bytes;
   template <typename T>
   requires std::is_arithmetic_v<T>
   void io(const T& v) {
-    const auto* p = reinterpret_cast<const uint8_t*>(&v);
-    bytes.insert(bytes.end(), p, p + sizeof v);
+    if constexpr (kVarint<T>) {
+      uint64_t u = std::is_signed_v<T> ? (uint64_t(int64_t(v)) << 1) ^ uint64_t(int64_t(v) >> 63) : uint64_t(v);
+      for (; u >= 0x80; u >>= 7) bytes.push_back(uint8_t(u) | 0x80);
+      bytes.push_back(uint8_t(u));
+    } else {
+      const auto* p = reinterpret_cast<const uint8_t*>(&v);
+      bytes.insert(bytes.end(), p, p + sizeof v);
+    }
   }
   template <typename T>
   void io(const std::vector<T>& v) {
     io(uint64_t(v.size()));
-    if constexpr (std::is_arithmetic_v<T>) {
+    if constexpr (std::is_arithmetic_v<T> && !kVarint<T>) {
       const auto* p = reinterpret_cast<const uint8_t*>(v.data());
       bytes.insert(bytes.end(), p, p + v.size() * sizeof(T));
+    } else if constexpr (std::is_arithmetic_v<T>) {
+      for (const T& x : v) io(x);
     } else {
       for (const T& x : v) fields(*this, const_cast<T&>(x));
     }
@@ -126,9 +141,29 @@ class Reader {
   template <typename T>
   requires std::is_arithmetic_v<T>
   void io(T& v) {
-    need(sizeof v, "a value");
-    std::memcpy(&v, m_p + m_at, sizeof v);
-    m_at += sizeof v;
+    if constexpr (kVarint<T>) {
+      uint64_t u = 0;
+      for (int shift = 0;; shift += 7) {
+        need(1, "a value");
+        const uint8_t b = m_p[m_at++];
+        if (shift == 63 && b > 1) fail("an integer over 64 bits");
+        u |= uint64_t(b & 0x7f) << shift;
+        if (!(b & 0x80)) break;
+      }
+      if constexpr (std::is_signed_v<T>) {
+        const int64_t x = int64_t(u >> 1) ^ -int64_t(u & 1);
+        if (x < int64_t(std::numeric_limits<T>::min()) || x > int64_t(std::numeric_limits<T>::max()))
+          fail("an integer out of its field's range");
+        v = T(x);
+      } else {
+        if (u > uint64_t(std::numeric_limits<T>::max())) fail("an integer out of its field's range");
+        v = T(u);
+      }
+    } else {
+      need(sizeof v, "a value");
+      std::memcpy(&v, m_p + m_at, sizeof v);
+      m_at += sizeof v;
+    }
   }
   template <typename T>
   void io(std::vector<T>& v) {
@@ -138,10 +173,12 @@ class Reader {
     // an allocation to try.
     if (n > m_n - m_at) fail("a list of " + std::to_string(n) + " elements, beyond the file's end");
     v.resize(size_t(n));
-    if constexpr (std::is_arithmetic_v<T>) {
+    if constexpr (std::is_arithmetic_v<T> && !kVarint<T>) {
       need(v.size() * sizeof(T), "a list's elements");
       std::memcpy(v.data(), m_p + m_at, v.size() * sizeof(T));
       m_at += v.size() * sizeof(T);
+    } else if constexpr (std::is_arithmetic_v<T>) {
+      for (T& x : v) io(x);
     } else {
       for (T& x : v) fields(*this, x);
     }
@@ -203,10 +240,14 @@ std::string key_differences(const FunctionalKey& r, const FunctionalKey& n) {
 
 void FunctionalRecord::save(const std::filesystem::path& path) const {
   Writer w;
+  auto raw = [&w](const auto& v) {
+    const auto* p = reinterpret_cast<const uint8_t*>(&v);
+    w.bytes.insert(w.bytes.end(), p, p + sizeof v);
+  };
   w.bytes.insert(w.bytes.end(), kMagic, kMagic + sizeof kMagic);
-  w.io(kVersion);
+  raw(kVersion);
   fields(w, const_cast<FunctionalRecord&>(*this));
-  w.io(word_fnv1a64(w.bytes.data(), w.bytes.size()));
+  raw(word_fnv1a64(w.bytes.data(), w.bytes.size()));
   std::filesystem::path tmp = path;
   tmp += ".tmp";
   {

@@ -11,7 +11,8 @@
 // resolved in the same earlier segments as in the recording run (checked).
 //
 // File: magic "TVFREC\r\n", format version (u32), the key, the payload, and a checksum of
-// every byte before it (u64: FNV-1a 64's step on 64-bit words); little-endian. Written to a
+// every byte before it (u64: FNV-1a 64's step on 64-bit words); little-endian, integers wider
+// than a byte as LEB128 varints (signed: zigzag). Written to a
 // temporary file beside the target and renamed: an interrupted run leaves no partial record.
 #pragma once
 
@@ -73,7 +74,7 @@ struct RecordedSegment {
 };
 
 struct FunctionalRecord {
-  static constexpr uint32_t kVersion = 1;
+  static constexpr uint32_t kVersion = 2;  // 2: varint integers
 
   FunctionalKey key;
   vis::Setup setup;
