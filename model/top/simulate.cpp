@@ -91,6 +91,10 @@ SimOutput simulate(const trace::Frame& frame, const TilerConfig& config, const S
       replay = std::make_unique<FunctionalRecord>(FunctionalRecord::load(record_path));
       functional = "replayed";
     } else {
+      // Written at the end: a folder that is not there fails now, not after the simulation.
+      const std::filesystem::path dir = record_path.has_parent_path() ? record_path.parent_path() : ".";
+      if (!std::filesystem::is_directory(dir))
+        throw std::invalid_argument("sim.functional_record: " + record_path.string() + ": no folder " + dir.string());
       fc.record = true;
       functional = "recorded";
     }

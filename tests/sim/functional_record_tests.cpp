@@ -31,9 +31,20 @@ const trace::Frame& small_scene(size_t which) {
 const trace::Frame& cubes() { return small_scene(0); }
 const trace::Frame& spheres() { return small_scene(1); }
 
+// The records' folder, this process's own, removed after the last test.
+const fs::path& record_folder() {
+  static const fs::path dir = fs::temp_directory_path() / ("tilevis_functional_record_" + std::to_string(getpid()));
+  return dir;
+}
+class RemoveRecords : public ::testing::Environment {
+ public:
+  void TearDown() override { fs::remove_all(record_folder()); }
+};
+[[maybe_unused]] ::testing::Environment* const g_remove_records = ::testing::AddGlobalTestEnvironment(new RemoveRecords);
+
 // A fresh path for a record in the test's own temporary folder.
 fs::path record_path(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("tilevis_functional_record_" + std::to_string(getpid()));
+  const fs::path& dir = record_folder();
   fs::create_directories(dir);
   const fs::path p = dir / (name + ".rec");
   fs::remove(p);
@@ -264,7 +275,10 @@ TEST(RecordFile, AFailedRunWritesNoRecord) {
   const std::string e = error_of(run(spheres(), {"pb.capacity_bytes=1"}, rec));
   EXPECT_FALSE(e.empty());
   EXPECT_FALSE(fs::exists(rec));
-  EXPECT_FALSE(fs::exists(fs::path(rec.string() + ".tmp")));
+  for (const auto& entry : fs::directory_iterator(rec.parent_path()))  // nor a temporary file
+    EXPECT_EQ(entry.path().filename().string().rfind("failed.rec", 0), std::string::npos) << entry.path();
+  const std::string folder = error_of(run(spheres(), {}, rec.parent_path() / "no_such_folder" / "x.rec"));
+  EXPECT_NE(folder.find("no folder"), std::string::npos) << folder;
   const std::string rtl = error_of(run(spheres(), {"sim.fidelity=rtl"}, rec));
   EXPECT_NE(rtl.find("not at fidelity rtl"), std::string::npos) << rtl;
   EXPECT_FALSE(fs::exists(rec));

@@ -9,6 +9,8 @@
 #include <stdexcept>
 #include <type_traits>
 
+#include <unistd.h>
+
 #include "units/common/frame_work.h"
 
 namespace tilevis::sim {
@@ -248,8 +250,10 @@ void FunctionalRecord::save(const std::filesystem::path& path) const {
   raw(kVersion);
   fields(w, const_cast<FunctionalRecord&>(*this));
   raw(word_fnv1a64(w.bytes.data(), w.bytes.size()));
+  // One temporary name per process: runs of a sweep recording the same file do not mix bytes
+  // (the last rename wins, and every record it may leave is whole).
   std::filesystem::path tmp = path;
-  tmp += ".tmp";
+  tmp += ".tmp." + std::to_string(getpid());
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     out.write(reinterpret_cast<const char*>(w.bytes.data()), std::streamsize(w.bytes.size()));
