@@ -11,6 +11,11 @@ auto's rows add its confidence interval and the share of tiles it simulated, and
 again on seeds 2..N (--auto-seeds, default 8) to say how often its interval holds. A chart of
 host time against error per scene goes to OUT/sim_bench.png. Targets (issue 4): bunny
 1920x1080 at fidelity tile <= 5 s wall, million <= 60 s, on a 2-core machine.
+
+Level "tile (replayed)" is fidelity tile replaying a recorded functional pass
+(sim.functional_record, issue 15): a recording run at fidelity tile (not measured) writes
+OUT/work/SCENE.rec, then the measured run replays it (setup, binning and visibility not
+computed; the same cycles and outputs). Its rows add the record's size and load seconds.
 """
 import argparse
 import json
@@ -22,7 +27,13 @@ import sys
 import time
 from pathlib import Path
 
-LEVELS = ("analytic", "tile", "primitive", "auto", "rtl")
+LEVELS = ("analytic", "tile", "tile (replayed)", "primitive", "auto", "rtl")
+REPLAYED = "tile (replayed)"  # fidelity tile replaying the record a recording run wrote
+
+
+def level_args(level):
+    """The fidelity a level runs at, and the folder name part it writes to."""
+    return ("tile", "tile_replayed") if level == REPLAYED else (level, level)
 TARGETS = {("bunny", "tile"): 5.0, ("million", "tile"): 60.0}
 
 
@@ -48,7 +59,7 @@ def chart(rows, reference, path):
         print("bench_sim: no matplotlib, no chart", file=sys.stderr)
         return
     fig, ax = plt.subplots(figsize=(8, 5))
-    markers = {"analytic": "o", "tile": "s", "primitive": "^", "auto": "*", "rtl": "D"}
+    markers = {"analytic": "o", "tile": "s", REPLAYED: "P", "primitive": "^", "auto": "*", "rtl": "D"}
     for level in LEVELS:
         pts = [(r["host_seconds"], max(100 * r["cycles_vs_reference"], 1e-3)) for r in rows if r["level"] == level]
         if pts:
@@ -101,9 +112,17 @@ def main():
             run_measured([a.bin, "trace", scene, "-q", "-o", trace])
         per = {}
         for level in LEVELS:
-            d = work / f"{scene.stem}_{level}"
-            wall = run_measured([a.bin, "sim", trace, "--tile", a.tile, "-p", f"sim.fidelity={level}",
-                                 "-p", f"sim.mode={a.mode}", "-o", d], allow_fail=level == "rtl")
+            fidelity, folder = level_args(level)
+            d = work / f"{scene.stem}_{folder}"
+            extra = []
+            if level == REPLAYED:
+                record = work / f"{scene.stem}.rec"
+                record.unlink(missing_ok=True)
+                extra = ["-p", f"sim.functional_record={record}"]
+                run_measured([a.bin, "sim", trace, "--tile", a.tile, "-p", "sim.fidelity=tile", "-p", f"sim.mode={a.mode}",
+                              *extra, "-o", work / f"{scene.stem}_tile_recording"])
+            wall = run_measured([a.bin, "sim", trace, "--tile", a.tile, "-p", f"sim.fidelity={fidelity}",
+                                 "-p", f"sim.mode={a.mode}", *extra, "-o", d], allow_fail=level == "rtl")
             if isinstance(wall, list):  # rtl failed: unavailable in this build, or the RTL refused a job
                 print(f"{scene.stem}: fidelity rtl failed: {wall[0]}", file=sys.stderr)
                 failures[scene.stem] = wall[0]
@@ -119,6 +138,11 @@ def main():
                           "rtl_seconds": s.get("host_rtl_seconds"), "cycles": s["totals"]["cycles"],
                           "triangles": s["totals"]["triangles_in"], "tiles": s["totals"]["tiles_rendered"],
                           "geometry_end_cycles": s["totals"].get("geometry_end_cycles")}
+            if level == REPLAYED:
+                if s.get("functional") != "replayed":
+                    raise SystemExit(f"bench_sim: {d}: expected a replayed functional pass, got {s.get('functional')}")
+                per[level].update({"record_bytes": record.stat().st_size,
+                                   "record_load_seconds": s["host_functional_record_seconds"]})
             if s.get("sampling"):
                 m = s["sampling"]
                 per[level].update({"interval": m["interval_cycles"], "tiles_total": m["tiles"],
@@ -167,7 +191,7 @@ def main():
             r["meets_target"] = None if target is None else r["wall_seconds"] <= target
             rows.append(r)
             mark = "" if target is None else (f"  (target <= {target:g} s: {'met' if r['meets_target'] else 'MISSED'})")
-            print(f"{scene.stem:<16} {level:<9} wall {r['wall_seconds']:7.2f} s  model {r['host_seconds']:7.2f} s  "
+            print(f"{scene.stem:<16} {level:<15} wall {r['wall_seconds']:7.2f} s  model {r['host_seconds']:7.2f} s  "
                   f"{r['cycles']:>12,} cycles  {100 * r['cycles_vs_reference']:6.2f} % from {reference}  "
                   f"{r['speedup_vs_reference']:6.1f}x faster{mark}", flush=True)
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
@@ -180,7 +204,10 @@ def main():
              "simulation thread's seconds in the functional model (setup, binning, every tile's visibility and results: the "
              "same work at every level, stats.json `host_functional_seconds`), timing = model - functional (elaboration, "
              "SystemC, the units' cost functions, the memory system, and at rtl the Verilated EVU), 'timing faster' = the "
-             "reference's timing seconds / the level's. Cycles are the frame's; "
+             "reference's timing seconds / the level's. 'tile (replayed)' = fidelity tile replaying the functional pass "
+             "a recording run at fidelity tile wrote (`-p sim.functional_record=FILE`, unmeasured; setup, binning and "
+             "visibility not computed, the same cycles and outputs): its model seconds include loading the record, "
+             "listed with its size below the table. Cycles are the frame's; "
              "'error' is their deviation from the reference level's (rtl; primitive where a build has no "
              "Verilator); 'faster' = the reference's model seconds / the level's. auto: interval = its 95 % "
              "confidence interval, tiles = simulated / in the frame.", "",
@@ -202,6 +229,11 @@ def main():
                      f"{fmt('timing_seconds', '{:.3f}')} | {r['speedup_vs_reference']:.1f}x | "
                      f"{fmt('timing_speedup_vs_reference', '{:.1f}x')} | {r['cycles']:,} | "
                      f"{100 * r['cycles_vs_reference']:.2f} % | {extra} |")
+    replayed = [r for r in rows if r["level"] == REPLAYED]
+    if replayed:
+        lines += ["", "tile (replayed): the record's size and the seconds loading it took (in its model seconds):", "",
+                  "| scene | record MB | load s |", "|---|---|---|"]
+        lines += [f"| {r['scene']} | {r['record_bytes'] / 1e6:.1f} | {r['record_load_seconds']:.3f} |" for r in replayed]
     # Per level over the scenes: error and speed against the reference.
     lines += ["", "Per level over the scenes (median and largest error, median and smallest speed-up against the "
               "reference; auto: scenes whose interval holds the reference):", "",

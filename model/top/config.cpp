@@ -55,6 +55,15 @@ class Registry {
                         }});
     m_index[name] = m_params.size() - 1;
   }
+  void add_string(std::string name, std::string unit, std::string help, std::string& (*field)(TilerConfig&)) {
+    m_params.push_back({name, unit, help, [field](const TilerConfig& c) { return nlohmann::json(field(const_cast<TilerConfig&>(c))); },
+                        [field](TilerConfig& c, const nlohmann::json& v) -> std::string {
+                          if (!v.is_string()) return "a string";
+                          field(c) = v.get<std::string>();
+                          return {};
+                        }});
+    m_index[name] = m_params.size() - 1;
+  }
   void add_real(std::string name, std::string unit, std::string help, double lo, double hi,
                 double& (*field)(TilerConfig&)) {
     const std::string expect = "a number in " + fmt_range(lo, hi);
@@ -133,6 +142,11 @@ Registry::Registry() {
   TV_UINT("sim.tile_height", sim.tile_height, "pixels", geom::TileGrid::kMinTile, geom::TileGrid::kMaxTile,
           "tile height");
   TV_UINT("sim.depth_bits", sim.depth_bits, "bits", 1, 24, "bits of snapped depth");
+  add_string("sim.functional_record", "path",
+             "recorded functional pass (setup, binning, visibility): absent, the run computes it and writes it "
+             "there; present, the run replays it (same frame and functional parameters, else an error; any "
+             "fidelity but rtl) and only the timing is simulated; empty: off",
+             +[](TilerConfig& c) -> std::string& { return c.sim.functional_record; });
   TV_REAL("sim.clock_mhz", sim.clock_mhz, "MHz", 1.0, 10000.0, "GPU clock; every latency below is in its cycles");
   TV_UINT("sim.batch_triangles", sim.batch_triangles, "triangles", 1, kMaxU32, "geometry transaction size at fidelity tile");
   TV_UINT("sim.fifo_tiles", sim.fifo_tiles, "tiles", 1, 1024, "queue depth between render units at fidelity tile");

@@ -42,6 +42,9 @@ struct SimulationConfig {
   uint32_t batch_triangles = 1024;   // geometry transaction size at fidelity tile
   uint32_t fifo_tiles = 2;           // queue between render units at fidelity tile: double-buffered tile memory
   uint32_t fifo_primitives = 16;     // queue between units at fidelity primitive (assumption)
+  // A recorded functional pass (units/common/functional_record.h): written here when absent,
+  // replayed when present; empty: off.
+  std::string functional_record;
 };
 
 // Energy proxy (stats.json totals.energy): events times per-event energies, to rank

@@ -77,7 +77,30 @@ SimOutput simulate(const trace::Frame& frame, const TilerConfig& config, const S
     rtl = make_rtl_evu(config.evu.reject.lanes, config.evu.triangle_list_entries, config.evu.edge_list_entries);
     fc.rtl = rtl.get();
   }
-  FrameWork work(frame, fc);
+  // sim.functional_record: replay the file if it exists, else compute and write it at the end.
+  const std::filesystem::path record_path = config.sim.functional_record;
+  std::unique_ptr<FunctionalRecord> replay;
+  const char* functional = "computed";
+  double record_seconds = 0;
+  if (!record_path.empty()) {
+    if (config.sim.fidelity == Fidelity::rtl)
+      throw std::invalid_argument("sim.functional_record: not at fidelity rtl (the Verilated EVU checks every tile "
+                                  "against the computed one); run rtl without it");
+    const auto r0 = std::chrono::steady_clock::now();
+    if (std::filesystem::exists(record_path)) {
+      replay = std::make_unique<FunctionalRecord>(FunctionalRecord::load(record_path));
+      functional = "replayed";
+    } else {
+      // Written at the end: a folder that is not there fails now, not after the simulation.
+      const std::filesystem::path dir = record_path.has_parent_path() ? record_path.parent_path() : ".";
+      if (!std::filesystem::is_directory(dir))
+        throw std::invalid_argument("sim.functional_record: " + record_path.string() + ": no folder " + dir.string());
+      fc.record = true;
+      functional = "recorded";
+    }
+    record_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - r0).count();
+  }
+  FrameWork work(frame, fc, std::move(replay));
   const bool event_driven = config.sim.fidelity != Fidelity::analytic;
   Tiler tiler("tiler", config, work, event_driven && !options.vcd.empty());
   tiler.prepare();
@@ -105,6 +128,11 @@ SimOutput simulate(const trace::Frame& frame, const TilerConfig& config, const S
   work.finish();
   g_reports = nullptr;
   out.host_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (fc.record) {  // only a run that finished writes its record
+    const auto r0 = std::chrono::steady_clock::now();
+    work.record().save(record_path);
+    record_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - r0).count();
+  }
 
   outputs::Result& r = out.result;
   r.width = frame.width;
@@ -143,7 +171,12 @@ SimOutput simulate(const trace::Frame& frame, const TilerConfig& config, const S
              {"host_prepare_seconds", out.host_prepare_seconds},
              {"host_functional_seconds", work.host_functional_seconds()},
              {"host_rtl_seconds", work.host_rtl_seconds()},
-             {"host_threads", vis::host_threads()}};
+             {"host_threads", vis::host_threads()},
+             // sim.functional_record: "computed" (no record), "recorded" (computed and written) or
+             // "replayed"; the seconds spent loading or writing the record (not in host_seconds
+             // when written, at the end).
+             {"functional", functional},
+             {"host_functional_record_seconds", record_seconds}};
   return out;
 }
 

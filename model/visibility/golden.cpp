@@ -77,7 +77,7 @@ void GoldenTiler::resolve_ahead(const std::vector<uint32_t>& tiles, bool per_tri
   m_ahead->submit(tiles);
 }
 
-TileVerdict GoldenTiler::process_tile(uint32_t tile, std::vector<TileTriangleWork>* per_triangle) {
+TileVerdict GoldenTiler::process_tile(uint32_t tile, std::vector<TileTriangleWork>* per_triangle, TileOutput* added) {
   Resolved r;
   m_report_progress = m_cfg.progress && !per_triangle;
   const bool ahead = m_ahead && m_ahead->take(tile, r);
@@ -86,6 +86,10 @@ TileVerdict GoldenTiler::process_tile(uint32_t tile, std::vector<TileTriangleWor
   if (!ahead) resolve(tile, r, *m_resolver, per_triangle != nullptr);
   TileCounters& c = r.counters;
   const TileVerdict& v = r.verdict;
+  if (added) {
+    added->areas = r.out.areas;
+    added->visible_triangles = r.out.visible_triangles;
+  }
   m_r.add(std::move(r.out));
   if (per_triangle) per_triangle->insert(per_triangle->end(), r.per_triangle.begin(), r.per_triangle.end());
   m_r.max_tile_triangles = std::max<uint64_t>(m_r.max_tile_triangles, uint64_t(c.triangles));

@@ -80,8 +80,10 @@ class GoldenTiler {
   // Resolves one tile with the configured mode. With `per_triangle`, appends one record per
   // binned triangle (in processing order) whose counters sum to the tile's row. Returns the
   // verdict: with a mode that can fall back (hybrid), why the tile went per pixel (0: it did
-  // not); per-pixel tiles' records count covered and owned samples only.
-  TileVerdict process_tile(uint32_t tile, std::vector<TileTriangleWork>* per_triangle = nullptr);
+  // not); per-pixel tiles' records count covered and owned samples only. With `added`, it
+  // also gets the visible areas and triangles the tile adds to the result (as produced).
+  TileVerdict process_tile(uint32_t tile, std::vector<TileTriangleWork>* per_triangle = nullptr,
+                           TileOutput* added = nullptr);
 
   // Tiles process_tile() will be asked for, in about that order: resolved meanwhile on
   // host_threads() - 1 other threads (none: nothing happens), with per-triangle records or

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <future>
 #include <numeric>
+#include <span>
 #include <stdexcept>
 #include <string>
 
@@ -96,7 +97,6 @@ struct FrameWork::Segment {
   std::unique_ptr<vis::GoldenTiler> tiler;
   const vis::Setup* s = nullptr;            // the setup the tile lists index
   vis::GoldenTiler* golden = nullptr;       // analytic mode
-  std::vector<std::vector<uint32_t>> lists; // per-pixel modes: per tile, frame setup indices
   std::vector<std::unique_ptr<TileWork>> open;
 };
 
@@ -119,8 +119,22 @@ class FrameWork::HostTime {
   std::chrono::steady_clock::time_point m_t0;
 };
 
-FrameWork::FrameWork(const trace::Frame& frame, const FrameWorkConfig& config) : m_frame(frame), m_cfg(config) {
+FrameWork::FrameWork(const trace::Frame& frame, const FrameWorkConfig& config,
+                     std::unique_ptr<FunctionalRecord> replay)
+    : m_frame(frame), m_cfg(config) {
   m_trace_triangles = uint32_t(frame.triangle_count());
+  if (replay || config.record) {
+    if (config.rtl)
+      throw std::invalid_argument("sim.functional_record: fidelity rtl takes the EVU's clocks from the Verilated RTL, "
+                                  "which needs the computed tiles; run it without a record");
+    m_rec.key = functional_key(frame, config);
+  }
+  if (replay) {
+    const std::string differ = key_differences(replay->key, m_rec.key);
+    if (!differ.empty()) throw std::runtime_error("the functional record is of another frame or configuration: " + differ);
+    m_rec = std::move(*replay);
+    m_replay = true;
+  }
   m_gcfg.tile_w = config.tile_w;
   m_gcfg.tile_h = config.tile_h;
   m_gcfg.mode = uses_evu(config.mode) ? to_string(config.mode) : "per_pixel";
@@ -155,6 +169,12 @@ FrameWork::~FrameWork() = default;
 
 void FrameWork::run_setup() {
   const HostTime timed(m_functional_s, m_functional_depth);
+  if (m_replay) {
+    if (m_setup_begin.size() != size_t(m_trace_triangles) + 1 || m_setup.triangle_draw.size() != m_trace_triangles)
+      throw std::runtime_error("the functional record's setup does not fit the frame's " +
+                               std::to_string(m_trace_triangles) + " triangles");
+    return;
+  }
   m_setup = vis::primitive_setup(m_frame, {m_cfg.depth_bits});
   m_setup_begin.assign(size_t(m_trace_triangles) + 1, 0);
   for (const vis::SetupTriangle& t : m_setup.triangles) ++m_setup_begin[t.id + 1];
@@ -163,6 +183,18 @@ void FrameWork::run_setup() {
 
 void FrameWork::run_binning() {
   const HostTime timed(m_functional_s, m_functional_depth);
+  m_full.width = m_setup.width;
+  m_full.height = m_setup.height;
+  m_full.samples = samples();
+  if (m_replay) {
+    // The outputs replayed tiles write, sized as golden's tiler sizes them.
+    m_full.ids.assign(size_t(m_setup.width) * m_setup.height * m_setup.samples.size(), -1);
+    m_full.visible_area.assign(m_setup.triangle_draw.size(), 0.0);
+    if (m_tri_refs.size() != m_setup.triangles.size() || m_edge_refs.size() != m_setup.silhouettes.size() ||
+        m_owned_begin.size() != size_t(m_trace_triangles) + 1)
+      throw std::runtime_error("the functional record's binning does not fit its setup");
+    return;
+  }
   // Edge owners: the first front-facing triangle of the draw with the edge as one of its own.
   // They read the setup alone: on a host with a second core they are found beside the binning.
   auto find_owners = [this] {
@@ -203,9 +235,6 @@ void FrameWork::run_binning() {
     return owner;
   };
   auto owners = std::async(vis::host_threads() > 1 ? std::launch::async : std::launch::deferred, find_owners);
-  m_full.width = m_setup.width;
-  m_full.height = m_setup.height;
-  m_full.samples = samples();
   m_full_tiler = std::make_unique<vis::GoldenTiler>(m_setup, m_gcfg, m_full);
   m_full_tiler->bin();
   m_front_of.assign(m_setup.triangles.size(), kNone);
@@ -251,6 +280,20 @@ void FrameWork::set_segments(std::vector<uint32_t> first_ids) {
   for (size_t i = 1; i < first_ids.size(); ++i)
     if (first_ids[i] <= first_ids[i - 1] || first_ids[i] >= m_trace_triangles)
       throw std::logic_error("segment plan must be strictly ascending inside the frame");
+  if (m_replay && first_ids != m_rec.segment_plan) {
+    auto plan = [](const std::vector<uint32_t>& p) {
+      std::string s = std::to_string(p.size()) + " segments, first triangles";
+      for (size_t i = 0; i < p.size() && i < 8; ++i) s += " " + std::to_string(p[i]);
+      return s + (p.size() > 8 ? " ..." : "");
+    };
+    throw std::runtime_error("the functional record's parameter-buffer segments differ from this run's (pb.* "
+                             "parameters set the partial renders): the record has " +
+                             plan(m_rec.segment_plan) + "; this run " + plan(first_ids));
+  }
+  if (!m_replay) {
+    m_rec.segment_plan = first_ids;
+    m_rec.segments.assign(first_ids.size(), {});
+  }
   m_seg_first = std::move(first_ids);
   m_seg_front.assign(m_seg_first.size(), 0);
   if (segment_count() > 1 && m_owner.empty())
@@ -320,18 +363,61 @@ void FrameWork::prepare_segment(uint32_t k) {
   sg.setup_end = m_setup_begin[segment_end(k)];
   sg.open.resize(tile_count());
   for (uint32_t i = sg.setup_first; i < sg.setup_end; ++i) m_seg_front[k] += m_setup.triangles[i].front;
+  if (!m_replay) bin_segment(sg);
 
+  const RecordedSegment& rs = m_rec.segments.at(k);
+  const size_t n = rs.tiles.size();
+  if (rs.triangle_count.size() != n || rs.pair_tests.size() != n || rs.list_begin.size() != n + 1 ||
+      rs.list_begin.back() != rs.list.size() || rs.edge_count.size() != (uses_evu(m_cfg.mode) ? tile_count() : 0) ||
+      rs.results.size() != rs.resolved.size())
+    throw std::runtime_error("the functional record's segment " + std::to_string(k) + " is inconsistent");
+  for (uint32_t s : rs.list)
+    if (s >= m_setup.triangles.size()) throw std::runtime_error("the functional record's tile lists exceed its setup");
+  m_seg_pos.assign(tile_count(), kNone);
+  m_seg_tiles = rs.tiles;
   const size_t c_tri = 0,
                c_seg = size_t(std::find(m_columns.begin(), m_columns.end(), "segments") - m_columns.begin());
-  const size_t c_edges = uses_evu(m_cfg.mode) ? 1 : SIZE_MAX;
-  m_seg_tiles.clear();
+  for (uint32_t i = 0; i < n; ++i) {
+    const uint32_t tile = rs.tiles[i];
+    if (tile >= tile_count()) throw std::runtime_error("the functional record's tiles exceed the grid");
+    m_seg_pos[tile] = i;
+    m_rows[tile][c_tri] += int64_t(rs.triangle_count[i]);
+    ++m_rows[tile][c_seg];
+  }
+  if (uses_evu(m_cfg.mode))
+    for (uint32_t tile = 0; tile < tile_count(); ++tile) m_rows[tile][1] += int64_t(rs.edge_count[tile]);
+  if (m_replay) {
+    m_seg_result.assign(tile_count(), kNone);
+    for (uint32_t i = 0; i < rs.resolved.size(); ++i) {
+      if (rs.resolved[i] >= tile_count()) throw std::runtime_error("the functional record's tiles exceed the grid");
+      m_seg_result[rs.resolved[i]] = i;
+    }
+    m_recorded_last.resize(tile_count(), kNone);
+    m_replayed_last.resize(tile_count(), kNone);
+    if (k > 0)
+      for (uint32_t tile : m_rec.segments[k - 1].resolved) m_recorded_last[tile] = k - 1;
+  }
+  m_tiles_binned += n;
+}
+
+// The segment's binning, into its record.
+void FrameWork::bin_segment(Segment& sg) {
+  RecordedSegment& rs = m_rec.segments[sg.index];
+  rs.list_begin.assign(1, 0);
+  auto add_tile = [&](uint32_t tile, size_t triangles, uint64_t pair_tests) {
+    rs.tiles.push_back(tile);
+    rs.triangle_count.push_back(uint32_t(triangles));
+    rs.pair_tests.push_back(pair_tests);
+    rs.list_begin.push_back(uint32_t(rs.list.size()));
+  };
   if (uses_evu(m_cfg.mode)) {
+    uint32_t offset = 0;  // the segment's own setup indexes its triangles from the frame's setup_first
     if (segment_count() == 1) {
       sg.s = &m_setup;
       sg.golden = m_full_tiler.get();
     } else {
-      sg.setup = segment_setup(m_frame, m_setup, segment_first(k), segment_end(k), m_cfg.depth_bits, sg.setup_first,
-                               sg.setup_end);
+      sg.setup = segment_setup(m_frame, m_setup, segment_first(sg.index), segment_end(sg.index), m_cfg.depth_bits,
+                               sg.setup_first, sg.setup_end);
       sg.result = std::make_unique<vis::GoldenResult>();
       sg.result->width = m_setup.width;
       sg.result->height = m_setup.height;
@@ -340,37 +426,46 @@ void FrameWork::prepare_segment(uint32_t k) {
       sg.tiler->bin();
       sg.s = sg.setup.get();
       sg.golden = sg.tiler.get();
+      offset = sg.setup_first;
     }
+    rs.edge_count.resize(tile_count());
     for (uint32_t tile = 0; tile < tile_count(); ++tile) {
+      rs.edge_count[tile] = uint32_t(sg.golden->frame().tile_edges(tile).size());
       const size_t n = sg.golden->frame().tile_triangles(tile).size();
-      m_rows[tile][c_tri] += int64_t(n);
-      m_rows[tile][c_edges] += int64_t(sg.golden->frame().tile_edges(tile).size());
-      if (n) m_seg_tiles.push_back(tile);
+      if (!n) continue;
+      for (uint32_t s : sg.golden->tile_triangles(tile)) rs.list.push_back(offset + s);
+      add_tile(tile, n, sg.golden->frame().pair_tests(tile));
     }
   } else {
     sg.s = &m_setup;
-    sg.lists.resize(tile_count());
     for (uint32_t tile = 0; tile < tile_count(); ++tile) {
+      const size_t before = rs.list.size();
       for (uint32_t s : m_full_tiler->tile_triangles(tile))
-        if (s >= sg.setup_first && s < sg.setup_end) sg.lists[tile].push_back(s);
-      m_rows[tile][c_tri] += int64_t(sg.lists[tile].size());
-      if (!sg.lists[tile].empty()) m_seg_tiles.push_back(tile);
+        if (s >= sg.setup_first && s < sg.setup_end) rs.list.push_back(s);
+      if (rs.list.size() > before) add_tile(tile, rs.list.size() - before, 0);
     }
   }
-  for (uint32_t tile : m_seg_tiles) ++m_rows[tile][c_seg];
-  m_tiles_binned += m_seg_tiles.size();
+}
+
+std::pair<const uint32_t*, const uint32_t*> FrameWork::tile_list(uint32_t tile) const {
+  const RecordedSegment& rs = m_rec.segments[m_seg->index];
+  const uint32_t i = m_seg_pos[tile];
+  if (i == kNone) return {nullptr, nullptr};
+  return {rs.list.data() + rs.list_begin[i], rs.list.data() + rs.list_begin[i + 1]};
 }
 
 uint32_t FrameWork::tile_triangle_count(uint32_t tile) const {
-  return uint32_t(uses_evu(m_cfg.mode) ? m_seg->golden->frame().tile_triangles(tile).size() : m_seg->lists[tile].size());
+  const uint32_t i = m_seg_pos[tile];
+  return i == kNone ? 0 : m_rec.segments[m_seg->index].triangle_count[i];
 }
 
 uint32_t FrameWork::tile_edge_count(uint32_t tile) const {
-  return uses_evu(m_cfg.mode) ? uint32_t(m_seg->golden->frame().tile_edges(tile).size()) : 0;
+  return uses_evu(m_cfg.mode) ? m_rec.segments[m_seg->index].edge_count[tile] : 0;
 }
 
 uint64_t FrameWork::tile_pair_tests(uint32_t tile) const {
-  return uses_evu(m_cfg.mode) ? m_seg->golden->frame().pair_tests(tile) : 0;
+  const uint32_t i = m_seg_pos[tile];
+  return i == kNone ? 0 : m_rec.segments[m_seg->index].pair_tests[i];
 }
 
 TileWork* FrameWork::open_tile(uint32_t tile) {
@@ -383,17 +478,17 @@ TileWork* FrameWork::open_tile(uint32_t tile) {
   w->ty = m_grid.tile_y(tile);
   const uint32_t x0 = w->tx * m_cfg.tile_w, y0 = w->ty * m_cfg.tile_h;
   w->pixels = (std::min(m_frame.width, x0 + m_cfg.tile_w) - x0) * (std::min(m_frame.height, y0 + m_cfg.tile_h) - y0);
-  std::vector<uint32_t> list = uses_evu(m_cfg.mode) ? sg.golden->tile_triangles(tile) : sg.lists[tile];
-  w->draws.reserve(list.size());
-  w->ids.reserve(list.size());
-  for (uint32_t s : list) {
-    const vis::SetupTriangle& t = sg.s->triangles[s];
+  const auto [b, e] = tile_list(tile);
+  w->draws.reserve(size_t(e - b));
+  w->ids.reserve(size_t(e - b));
+  for (const uint32_t* s = b; s != e; ++s) {
+    const vis::SetupTriangle& t = m_setup.triangles[*s];
     w->draws.push_back(t.draw);
     w->ids.push_back(t.id);
     w->opaque += t.opaque;
   }
   if (uses_evu(m_cfg.mode)) {
-    w->edges = uint32_t(sg.golden->frame().tile_edges(tile).size());
+    w->edges = tile_edge_count(tile);
     // SVGPU needs a tile's whole edge list beside each triangle: a list over the on-chip
     // capacity is streamed in passes (triangles in chunks, edges and occluders re-read).
     const uint32_t tp = (w->triangles() + m_cfg.evu_triangle_entries - 1) / m_cfg.evu_triangle_entries;
@@ -420,14 +515,19 @@ uint32_t FrameWork::covering_fan(uint32_t id, geom::Point p) {
 void FrameWork::resolve_ahead(const std::vector<uint32_t>& tiles) {
   const HostTime timed(m_functional_s, m_functional_depth);
   if (!m_seg) throw std::logic_error("resolve_ahead: no segment");
-  if (uses_evu(m_cfg.mode)) m_seg->golden->resolve_ahead(tiles, true);
+  if (uses_evu(m_cfg.mode) && !m_replay) m_seg->golden->resolve_ahead(tiles, true);
 }
 
 void FrameWork::resolve_tile(TileWork& w) {
   const HostTime timed(m_functional_s, m_functional_depth);
   if (w.resolved) return;
-  if (uses_evu(m_cfg.mode)) resolve_analytic(w);
-  else resolve_pixels(w);
+  if (m_replay) {
+    replay_tile(w);
+  } else {
+    if (uses_evu(m_cfg.mode)) resolve_analytic(w);
+    else resolve_pixels(w);
+    if (m_cfg.record) record_tile(w);
+  }
   w.resolved = true;
   if (m_cfg.progress) m_cfg.progress(++m_tiles_resolved, m_tiles_binned);
 }
@@ -474,7 +574,8 @@ void FrameWork::take_rtl_clocks_or_throw(TileWork& w) {
 void FrameWork::resolve_analytic(TileWork& w) {
   Segment& sg = *m_seg;
   m_per_tri.clear();
-  const vis::TileVerdict verdict = sg.golden->process_tile(w.tile, &m_per_tri);
+  const bool keep = m_cfg.record && segment_count() == 1;  // the tile's visible areas go to m_full
+  const vis::TileVerdict verdict = sg.golden->process_tile(w.tile, &m_per_tri, keep ? &m_tile_added : nullptr);
   w.per_pixel = uint8_t(verdict.per_pixel_cause);
   w.detection_screens = verdict.detection_screens;
   w.detection_tests = verdict.detection_tests;
@@ -530,8 +631,8 @@ void FrameWork::resolve_analytic(TileWork& w) {
 }
 
 void FrameWork::resolve_pixels(TileWork& w) {
-  Segment& sg = *m_seg;
-  const std::vector<uint32_t>& list = sg.lists[w.tile];
+  const auto [list_begin, list_end] = tile_list(w.tile);
+  const std::span<const uint32_t> list(list_begin, list_end);
   const uint32_t ns = samples();
   const vis::zbuffer::PixelRect region = vis::zbuffer::tile_pixels(m_grid, w.tile);
   std::unordered_map<uint32_t, size_t> local;
@@ -589,6 +690,75 @@ void FrameWork::resolve_pixels(TileWork& w) {
       });
       w.tris[i].fragments_shaded += uint32_t(shaded.count);
     }
+}
+
+int32_t* FrameWork::sample_buffer() {
+  return m_owner.empty() ? m_full.ids.data() : reinterpret_cast<int32_t*>(m_owner.data());
+}
+
+void FrameWork::record_tile(const TileWork& w) {
+  RecordedSegment& rs = m_rec.segments[m_seg->index];
+  RecordedTile& r = rs.results.emplace_back();
+  rs.resolved.push_back(w.tile);
+  r.per_pixel = w.per_pixel;
+  r.detection_screens = w.detection_screens;
+  r.detection_tests = w.detection_tests;
+  r.tris = w.tris;
+  const int32_t* buf = sample_buffer();
+  const vis::zbuffer::PixelRect px = vis::zbuffer::tile_pixels(m_grid, w.tile);
+  const size_t row = size_t(px.x1 - px.x0) * samples();
+  for (uint32_t y = px.y0; y < px.y1; ++y) {
+    const int32_t* p = buf + vis::zbuffer::sample_index(m_setup, px.x0, y, 0);
+    r.samples.insert(r.samples.end(), p, p + row);
+  }
+  if (m_owner.empty()) {
+    r.areas = std::move(m_tile_added.areas);
+    r.visible_triangles = m_tile_added.visible_triangles;
+    m_tile_added = {};
+  }
+}
+
+// Inside the simulation's threads a tile the record lacks stops the simulation (as an RTL
+// failure does); the closed form, outside them, throws.
+void FrameWork::replay_tile(TileWork& w) {
+  auto stop = [&](const std::string& m) {
+    if (!sc_core::sc_is_running()) throw std::runtime_error(m);
+    if (m_failure.empty()) m_failure = m;
+    sc_core::sc_stop();
+    w.tris.assign(w.ids.size(), {});  // the units finish this delta on empty work
+    for (size_t i = 0; i < w.ids.size(); ++i) w.tris[i].id = w.ids[i], w.tris[i].draw = w.draws[i];
+  };
+  // Fidelity auto resolves a sample of the tiles: the record must have this one, and the same
+  // stored depth under it (the same earlier segments resolved it).
+  const std::string where = "tile " + std::to_string(w.tile) + " of segment " + std::to_string(w.segment);
+  const uint32_t i = m_seg_result[w.tile];
+  if (i == kNone)
+    return stop("the functional record has no visibility for " + where +
+                " (the recording run did not resolve it: fidelity auto sampled other tiles)");
+  auto last = [](uint32_t k) { return k == kNone ? std::string("none") : std::to_string(k); };
+  if (m_recorded_last[w.tile] != m_replayed_last[w.tile])
+    return stop("the functional record's " + where + " lies on the stored depth of segment " +
+                last(m_recorded_last[w.tile]) + ", this run's on that of segment " + last(m_replayed_last[w.tile]) +
+                " (fidelity auto sampled other tiles in earlier partial renders)");
+  m_replayed_last[w.tile] = w.segment;
+  const RecordedTile& r = m_rec.segments[m_seg->index].results[i];
+  const vis::zbuffer::PixelRect px = vis::zbuffer::tile_pixels(m_grid, w.tile);
+  const size_t row = size_t(px.x1 - px.x0) * samples();
+  if (r.samples.size() != row * (px.y1 - px.y0) || r.tris.size() != w.ids.size())
+    return stop("the functional record's tile " + std::to_string(w.tile) + " does not fit its list or the grid");
+  w.per_pixel = r.per_pixel;
+  w.detection_screens = r.detection_screens;
+  w.detection_tests = r.detection_tests;
+  w.tris = r.tris;
+  int32_t* buf = sample_buffer();
+  for (uint32_t y = px.y0; y < px.y1; ++y)
+    std::copy_n(r.samples.data() + (y - px.y0) * row, row, buf + vis::zbuffer::sample_index(m_setup, px.x0, y, 0));
+  if (m_owner.empty()) {
+    vis::TileOutput added;
+    added.areas = r.areas;
+    added.visible_triangles = r.visible_triangles;
+    m_full.add(std::move(added));
+  }
 }
 
 void FrameWork::close_tile(TileWork* w) {
@@ -649,6 +819,7 @@ void FrameWork::finish_segment() {
   if (!m_seg) throw std::logic_error("finish_segment: no segment");
   for (const auto& w : m_seg->open)
     if (w) throw std::logic_error("finish_segment: tile " + std::to_string(w->tile) + " was never closed");
+  if (!m_cfg.record && !m_replay) m_rec.segments[m_seg->index] = {};  // needed no more
   m_seg.reset();
 }
 

@@ -10,6 +10,11 @@
 // in another segment become boundaries) and merged per sample into the depth stored by the
 // earlier partial renders, as a TBDR does after a flush: ties keep the earlier (lower id)
 // triangle, golden's rule. The per-pixel modes keep the stored depth across segments too.
+//
+// Setup, binning and each segment's tile lists are computed into a FunctionalRecord
+// (functional_record.h), and the units' questions are answered from it; a run that records
+// keeps each tile's visibility there too, and a run that replays loads one and computes none
+// of it: every tile's results, samples and visible areas come from the record.
 #pragma once
 
 #include <cstdint>
@@ -26,6 +31,7 @@
 #include "geom/tile_grid.h"
 #include "tilevis/outputs.h"
 #include "tilevis/trace.h"
+#include "units/common/functional_record.h"
 #include "units/common/work.h"
 #include "visibility/golden.h"
 #include "visibility/setup.h"
@@ -50,6 +56,8 @@ struct FrameWorkConfig {
   RtlEvu* rtl = nullptr;
   // Called after each tile's visibility with (tiles resolved, tiles binned so far).
   std::function<void(uint64_t, uint64_t)> progress;
+  // Keep every tile's visibility in record() (sim.functional_record: a run that records).
+  bool record = false;
 };
 
 class FrameWork {
@@ -57,7 +65,11 @@ class FrameWork {
   static constexpr uint32_t kNone = 0xffffffffu;
 
   // `frame` must outlive the FrameWork (it is read, not copied: a trace can be large).
-  FrameWork(const trace::Frame& frame, const FrameWorkConfig& config);
+  // With `replay`, a record of this frame and functional configuration (else it throws,
+  // naming what differs), setup, binning and visibility are not computed: every answer is
+  // the record's (functional_record.h). Fidelity rtl cannot replay (config.rtl: throws).
+  FrameWork(const trace::Frame& frame, const FrameWorkConfig& config,
+            std::unique_ptr<FunctionalRecord> replay = nullptr);
   FrameWork(trace::Frame&&, const FrameWorkConfig&) = delete;
   ~FrameWork();
   FrameWork(const FrameWork&) = delete;
@@ -68,6 +80,8 @@ class FrameWork {
   Mode mode() const { return m_cfg.mode; }
   uint32_t trace_triangles() const { return m_trace_triangles; }
   uint32_t samples() const { return uint32_t(m_frame.samples.size()); }
+  // What this run computed (config.record: every resolved tile too); what it replays.
+  const FunctionalRecord& record() const { return m_rec; }
 
   // --- PrimitiveSetup: clipping, snapping, facing and silhouettes of the whole frame.
   void run_setup();
@@ -141,6 +155,14 @@ class FrameWork {
   const vis::FrontTriangle& raster(uint32_t setup_triangle) const;
   // Does the triangle's draw shade once per sample (trace::kSampleRateShading)?
   bool sample_rate(const TriangleWork& t) const { return m_frame.draws[t.draw].sample_rate(); }
+  void bin_segment(Segment& sg);
+  // The open segment's list of a tile (frame setup triangles), empty if it has none.
+  std::pair<const uint32_t*, const uint32_t*> tile_list(uint32_t tile) const;
+  // The frame-sized per-sample buffer tiles' visibility writes: golden's ids (analytic modes,
+  // one segment) or the stored depth's owners (m_owner).
+  int32_t* sample_buffer();
+  void record_tile(const TileWork& w);
+  void replay_tile(TileWork& w);
   uint32_t covering_fan(uint32_t id, geom::Point p);
   void resolve_analytic(TileWork& w);
   void take_rtl_clocks(TileWork& w);
@@ -154,20 +176,33 @@ class FrameWork {
   const trace::Frame& m_frame;
   FrameWorkConfig m_cfg;
   uint32_t m_trace_triangles = 0;
-  vis::Setup m_setup;
-  std::vector<uint32_t> m_setup_begin;
+  // Setup, binning and segments live in the record (computed into it, or loaded); the
+  // names below are its fields.
+  FunctionalRecord m_rec;
+  bool m_replay = false;
+  vis::Setup& m_setup = m_rec.setup;
+  std::vector<uint32_t>& m_setup_begin = m_rec.setup_begin;
 
   vis::GoldenConfig m_gcfg;
   vis::GoldenResult m_full;  // the whole frame's golden result (one segment: the output)
   std::unique_ptr<vis::GoldenTiler> m_full_tiler;
   geom::TileGrid m_grid;
   std::vector<uint32_t> m_front_of;      // per setup triangle: index into the frame's front triangles, kNone
-  std::vector<uint32_t> m_tri_refs, m_tri_tests, m_edge_refs, m_edge_tests;
-  std::vector<uint32_t> m_owned_begin, m_owned;
+  std::vector<uint32_t>& m_tri_refs = m_rec.tri_refs;
+  std::vector<uint32_t>& m_tri_tests = m_rec.tri_tests;
+  std::vector<uint32_t>& m_edge_refs = m_rec.edge_refs;
+  std::vector<uint32_t>& m_edge_tests = m_rec.edge_tests;
+  std::vector<uint32_t>& m_owned_begin = m_rec.owned_begin;
+  std::vector<uint32_t>& m_owned = m_rec.owned;
 
   std::vector<uint32_t> m_seg_first;
   std::unique_ptr<Segment> m_seg;
   std::vector<uint32_t> m_seg_tiles;
+  std::vector<uint32_t> m_seg_pos;       // per tile: its place in the open segment's tiles, kNone
+  std::vector<uint32_t> m_seg_result;    // replay, per tile: its place in the open segment's results, kNone
+  // Replay, per tile: the last earlier segment that resolved it, in the record and in this run.
+  std::vector<uint32_t> m_recorded_last, m_replayed_last;
+  vis::TileOutput m_tile_added;          // recording: what the last analytic tile added to m_full
   std::vector<bool> m_stored;            // per tile: a partial render stored its depth/colour
   std::vector<uint32_t> m_owner;         // per sample: setup triangle in front (stored depth), kNone
   std::vector<vis::TileTriangleWork> m_per_tri;

@@ -1,0 +1,300 @@
+#include "units/common/functional_record.h"
+
+#include <algorithm>
+#include <bit>
+#include <chrono>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <stdexcept>
+#include <type_traits>
+
+#include <unistd.h>
+
+#include "units/common/frame_work.h"
+
+namespace tilevis::sim {
+namespace {
+
+static_assert(std::endian::native == std::endian::little, "the record is written little-endian, as the host's memory");
+
+constexpr char kMagic[8] = {'T', 'V', 'F', 'R', 'E', 'C', '\r', '\n'};
+
+uint64_t fnv1a64(const uint8_t* p, size_t n, uint64_t h = 1469598103934665603ull) {
+  for (size_t i = 0; i < n; ++i) {
+    h ^= p[i];
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+
+// The record's checksum: FNV-1a's step on 64-bit little-endian words, then on the last bytes
+// (eight times fewer dependent multiplies than bytewise: a record is tens of megabytes).
+uint64_t word_fnv1a64(const uint8_t* p, size_t n) {
+  uint64_t h = 1469598103934665603ull;
+  size_t i = 0;
+  for (; i + 8 <= n; i += 8) {
+    uint64_t w;
+    std::memcpy(&w, p + i, 8);
+    h = (h ^ w) * 1099511628211ull;
+  }
+  return fnv1a64(p + i, n - i, h);
+}
+
+// One description of each structure's fields serves writing and reading (Writer, Reader).
+template <typename A>
+void fields(A& a, geom::Vertex& v) {
+  a.io(v.x), a.io(v.y), a.io(v.z);
+}
+template <typename A>
+void fields(A& a, trace::SamplePos& s) {
+  a.io(s.x), a.io(s.y);
+}
+template <typename A>
+void fields(A& a, vis::SetupTriangle& t) {
+  for (geom::Vertex& v : t.v) fields(a, v);
+  a.io(t.id), a.io(t.draw), a.io(t.front), a.io(t.opaque), a.io(t.sample_rate), a.io(t.clipped);
+}
+template <typename A>
+void fields(A& a, vis::SilhouetteEdge& e) {
+  fields(a, e.a), fields(a, e.b), a.io(e.draw);
+}
+template <typename A>
+void fields(A& a, vis::Setup& s) {
+  a.io(s.width), a.io(s.height), a.io(s.samples), a.io(s.subpixel_bits), a.io(s.depth_bits);
+  a.io(s.triangles), a.io(s.silhouettes), a.io(s.triangle_draw);
+  vis::SetupStats& st = s.stats;
+  for (uint64_t* x : {&st.triangles_in, &st.frustum_culled, &st.clipped, &st.setup_triangles, &st.edge_on,
+                      &st.degenerate, &st.back_facing, &st.front_facing, &st.silhouette_edges})
+    a.io(*x);
+}
+template <typename A>
+void fields(A& a, TriangleWork& t) {
+  for (const auto& f : vis::TileCounters::kFields) a.io(t.*f.second);
+  vis::EvuShape& s = t.shape;
+  a.io(s.test6_stop), a.io(s.split_edges), a.io(s.crossing_edges), a.io(s.piece_checks), a.io(s.pieces_tested);
+  a.io(t.id), a.io(t.draw), a.io(t.depth_tests), a.io(t.fragments_shaded);
+}
+template <typename A>
+void fields(A& a, std::pair<uint32_t, double>& p) {
+  a.io(p.first), a.io(p.second);
+}
+template <typename A>
+void fields(A& a, RecordedTile& t) {
+  a.io(t.per_pixel), a.io(t.detection_screens), a.io(t.detection_tests);
+  a.io(t.tris), a.io(t.samples), a.io(t.areas), a.io(t.visible_triangles);
+}
+template <typename A>
+void fields(A& a, RecordedSegment& s) {
+  a.io(s.tiles), a.io(s.triangle_count), a.io(s.edge_count), a.io(s.pair_tests), a.io(s.list_begin), a.io(s.list);
+  a.io(s.resolved), a.io(s.results);
+}
+template <typename A>
+void fields(A& a, FunctionalKey& k) {
+  a.io(k.frame_fnv1a64), a.io(k.mode), a.io(k.tile_w), a.io(k.tile_h), a.io(k.depth_bits);
+  a.io(k.evu_triangle_entries), a.io(k.evu_edge_entries), a.io(k.hybrid_pair_budget), a.io(k.detection_bin);
+}
+template <typename A>
+void fields(A& a, FunctionalRecord& r) {
+  fields(a, r.key);
+  fields(a, r.setup);
+  a.io(r.setup_begin), a.io(r.tri_refs), a.io(r.tri_tests), a.io(r.edge_refs), a.io(r.edge_tests);
+  a.io(r.owned_begin), a.io(r.owned), a.io(r.segment_plan), a.io(r.segments);
+}
+
+// Integers wider than a byte are LEB128 varints (signed ones zigzagged): most counters,
+// indices and ids are small, and the record is several times smaller for it. Bytes, bools and
+// doubles are stored as they are.
+template <typename T>
+constexpr bool kVarint = std::is_integral_v<T> && sizeof(T) > 1;
+
+class Writer {
+ public:
+  std::vector<uint8_t> bytes;
+  template <typename T>
+  requires std::is_arithmetic_v<T>
+  void io(const T& v) {
+    if constexpr (kVarint<T>) {
+      uint64_t u = std::is_signed_v<T> ? (uint64_t(int64_t(v)) << 1) ^ uint64_t(int64_t(v) >> 63) : uint64_t(v);
+      for (; u >= 0x80; u >>= 7) bytes.push_back(uint8_t(u) | 0x80);
+      bytes.push_back(uint8_t(u));
+    } else {
+      const auto* p = reinterpret_cast<const uint8_t*>(&v);
+      bytes.insert(bytes.end(), p, p + sizeof v);
+    }
+  }
+  template <typename T>
+  void io(const std::vector<T>& v) {
+    io(uint64_t(v.size()));
+    if constexpr (std::is_arithmetic_v<T> && !kVarint<T>) {
+      const auto* p = reinterpret_cast<const uint8_t*>(v.data());
+      bytes.insert(bytes.end(), p, p + v.size() * sizeof(T));
+    } else if constexpr (std::is_arithmetic_v<T>) {
+      for (const T& x : v) io(x);
+    } else {
+      for (const T& x : v) fields(*this, const_cast<T&>(x));
+    }
+  }
+};
+
+class Reader {
+ public:
+  Reader(const std::string& file, const uint8_t* p, size_t n) : m_file(file), m_p(p), m_n(n) {}
+  template <typename T>
+  requires std::is_arithmetic_v<T>
+  void io(T& v) {
+    if constexpr (kVarint<T>) {
+      uint64_t u = 0;
+      for (int shift = 0;; shift += 7) {
+        need(1, "a value");
+        const uint8_t b = m_p[m_at++];
+        if (shift == 63 && b > 1) fail("an integer over 64 bits");
+        u |= uint64_t(b & 0x7f) << shift;
+        if (!(b & 0x80)) break;
+      }
+      if constexpr (std::is_signed_v<T>) {
+        const int64_t x = int64_t(u >> 1) ^ -int64_t(u & 1);
+        if (x < int64_t(std::numeric_limits<T>::min()) || x > int64_t(std::numeric_limits<T>::max()))
+          fail("an integer out of its field's range");
+        v = T(x);
+      } else {
+        if (u > uint64_t(std::numeric_limits<T>::max())) fail("an integer out of its field's range");
+        v = T(u);
+      }
+    } else {
+      need(sizeof v, "a value");
+      std::memcpy(&v, m_p + m_at, sizeof v);
+      m_at += sizeof v;
+    }
+  }
+  template <typename T>
+  void io(std::vector<T>& v) {
+    uint64_t n = 0;
+    io(n);
+    // Every element takes at least one byte: a count beyond the bytes left is corruption, not
+    // an allocation to try.
+    if (n > m_n - m_at) fail("a list of " + std::to_string(n) + " elements, beyond the file's end");
+    v.resize(size_t(n));
+    if constexpr (std::is_arithmetic_v<T> && !kVarint<T>) {
+      need(v.size() * sizeof(T), "a list's elements");
+      std::memcpy(v.data(), m_p + m_at, v.size() * sizeof(T));
+      m_at += v.size() * sizeof(T);
+    } else if constexpr (std::is_arithmetic_v<T>) {
+      for (T& x : v) io(x);
+    } else {
+      for (T& x : v) fields(*this, x);
+    }
+  }
+  size_t at() const { return m_at; }
+  [[noreturn]] void fail(const std::string& what) const {
+    throw std::runtime_error(m_file + ": offset " + std::to_string(m_at) + ": " + what);
+  }
+
+ private:
+  void need(size_t k, const char* what) const {
+    if (k > m_n - m_at) fail(std::string("truncated: expected ") + what);
+  }
+  std::string m_file;
+  const uint8_t* m_p;
+  size_t m_n, m_at = 0;
+};
+
+}  // namespace
+
+FunctionalKey functional_key(const trace::Frame& frame, const FrameWorkConfig& c) {
+  trace::Trace t;
+  t.frames.push_back(frame);
+  const std::vector<uint8_t> bytes = trace::encode(t);
+  FunctionalKey k;
+  k.frame_fnv1a64 = fnv1a64(bytes.data(), bytes.size());
+  k.mode = uint32_t(c.mode);
+  k.tile_w = c.tile_w;
+  k.tile_h = c.tile_h;
+  k.depth_bits = c.depth_bits;
+  k.evu_triangle_entries = c.evu_triangle_entries;
+  k.evu_edge_entries = c.evu_edge_entries;
+  k.hybrid_pair_budget = c.hybrid_pair_budget;
+  k.detection_bin = c.detection_bin;
+  return k;
+}
+
+std::string key_differences(const FunctionalKey& r, const FunctionalKey& n) {
+  std::string out;
+  auto differ = [&](const char* what, const std::string& a, const std::string& b) {
+    if (a != b) out += std::string(out.empty() ? "" : "; ") + what + ": the record has " + a + ", this run " + b;
+  };
+  auto hex = [](uint64_t h) {
+    char s[17];
+    std::snprintf(s, sizeof s, "%016llx", static_cast<unsigned long long>(h));
+    return std::string(s);
+  };
+  differ("the frame (FNV-1a 64 of its trace encoding)", hex(r.frame_fnv1a64), hex(n.frame_fnv1a64));
+  differ("sim.mode", to_string(Mode(r.mode)), to_string(Mode(n.mode)));
+  differ("sim.tile_width", std::to_string(r.tile_w), std::to_string(n.tile_w));
+  differ("sim.tile_height", std::to_string(r.tile_h), std::to_string(n.tile_h));
+  differ("sim.depth_bits", std::to_string(r.depth_bits), std::to_string(n.depth_bits));
+  differ("evu.triangle_list_entries", std::to_string(r.evu_triangle_entries), std::to_string(n.evu_triangle_entries));
+  differ("evu.edge_list_entries", std::to_string(r.evu_edge_entries), std::to_string(n.evu_edge_entries));
+  differ("evu.hybrid_pair_budget", std::to_string(r.hybrid_pair_budget), std::to_string(n.hybrid_pair_budget));
+  differ("evu.detection_bin", std::to_string(r.detection_bin), std::to_string(n.detection_bin));
+  return out;
+}
+
+void FunctionalRecord::save(const std::filesystem::path& path) const {
+  Writer w;
+  auto raw = [&w](const auto& v) {
+    const auto* p = reinterpret_cast<const uint8_t*>(&v);
+    w.bytes.insert(w.bytes.end(), p, p + sizeof v);
+  };
+  w.bytes.insert(w.bytes.end(), kMagic, kMagic + sizeof kMagic);
+  raw(kVersion);
+  fields(w, const_cast<FunctionalRecord&>(*this));
+  raw(word_fnv1a64(w.bytes.data(), w.bytes.size()));
+  // One temporary name per process: runs of a sweep recording the same file do not mix bytes
+  // (the last rename wins, and every record it may leave is whole).
+  std::filesystem::path tmp = path;
+  tmp += ".tmp." + std::to_string(getpid());
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    out.write(reinterpret_cast<const char*>(w.bytes.data()), std::streamsize(w.bytes.size()));
+    out.close();
+    if (!out) {
+      std::error_code ec;
+      std::filesystem::remove(tmp, ec);
+      throw std::runtime_error(path.string() + ": writing the functional record failed");
+    }
+  }
+  std::filesystem::rename(tmp, path);
+}
+
+FunctionalRecord FunctionalRecord::load(const std::filesystem::path& path) {
+  const std::string name = path.string();
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  if (!in) throw std::runtime_error(name + ": cannot read the functional record");
+  const std::streamoff size = in.tellg();
+  in.seekg(0);
+  std::vector<uint8_t> bytes(size_t(std::max<std::streamoff>(size, 0)));
+  if (!in.read(reinterpret_cast<char*>(bytes.data()), std::streamsize(bytes.size())))
+    throw std::runtime_error(name + ": reading the functional record failed");
+  const size_t head = sizeof kMagic + sizeof(uint32_t), tail = sizeof(uint64_t);
+  if (bytes.size() < sizeof kMagic || std::memcmp(bytes.data(), kMagic, sizeof kMagic) != 0)
+    throw std::runtime_error(name + ": not a TileVis functional record (no \"TVFREC\" magic)");
+  if (bytes.size() < head + tail)
+    throw std::runtime_error(name + ": truncated functional record (" + std::to_string(bytes.size()) + " bytes)");
+  uint32_t version = 0;
+  std::memcpy(&version, bytes.data() + sizeof kMagic, sizeof version);
+  if (version != kVersion)
+    throw std::runtime_error(name + ": functional record format version " + std::to_string(version) +
+                             ", this build reads version " + std::to_string(kVersion) + " (record it again)");
+  uint64_t sum = 0;
+  std::memcpy(&sum, bytes.data() + bytes.size() - tail, tail);
+  if (sum != word_fnv1a64(bytes.data(), bytes.size() - tail))
+    throw std::runtime_error(name + ": functional record is truncated or corrupt (checksum mismatch)");
+  Reader r(name, bytes.data() + head, bytes.size() - head - tail);
+  FunctionalRecord rec;
+  fields(r, rec);
+  if (r.at() != bytes.size() - head - tail) r.fail("bytes after the record's end");
+  return rec;
+}
+
+}  // namespace tilevis::sim

@@ -1,0 +1,294 @@
+// sim.functional_record (units/common/functional_record.h): a run that records and a run that
+// replays the record give a normal run's outputs and cycles, bit for bit, at every fidelity
+// level but rtl, in the EVU and per-pixel modes, with partial renders; a timing parameter
+// changed at replay gives a normal run's cycles with it; a record of another frame or
+// functional configuration, and a truncated or corrupt one, are errors naming why; a run that
+// fails writes no record. Each simulation runs in its own child (sim_support.h).
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <bit>
+#include <filesystem>
+#include <fstream>
+
+#include "sim_support.h"
+#include "top/simulate.h"
+
+using namespace tilevis;
+using namespace tilevis::sim;
+using simtest::in_child;
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// The small scenes of sim_support.h, read once.
+const trace::Frame& small_scene(size_t which) {
+  static const trace::Frame frames[] = {simtest::frame_of("cubes", simtest::kCubes),
+                                        simtest::frame_of("spheres", simtest::kSpheres)};
+  return frames[which];
+}
+const trace::Frame& cubes() { return small_scene(0); }
+const trace::Frame& spheres() { return small_scene(1); }
+
+// The records' folder, this process's own, removed after the last test.
+const fs::path& record_folder() {
+  static const fs::path dir = fs::temp_directory_path() / ("tilevis_functional_record_" + std::to_string(getpid()));
+  return dir;
+}
+class RemoveRecords : public ::testing::Environment {
+ public:
+  void TearDown() override { fs::remove_all(record_folder()); }
+};
+[[maybe_unused]] ::testing::Environment* const g_remove_records = ::testing::AddGlobalTestEnvironment(new RemoveRecords);
+
+// A fresh path for a record in the test's own temporary folder.
+fs::path record_path(const std::string& name) {
+  const fs::path& dir = record_folder();
+  fs::create_directories(dir);
+  const fs::path p = dir / (name + ".rec");
+  fs::remove(p);
+  return p;
+}
+
+// Everything a run gives but host timings, the "functional" field and the record's path in
+// the config: cycles, stats.json, ids, visible areas (as bits) and tiles.csv's rows.
+nlohmann::json run(const trace::Frame& frame, std::vector<std::string> params, const fs::path& record = {}) {
+  if (!record.empty()) params.push_back("sim.functional_record=" + record.string());
+  return in_child([&] {
+    const TilerConfig cfg = load_config("", params);
+    const SimOutput out = simulate(frame, cfg);
+    nlohmann::json stats = out.result.stats;
+    nlohmann::json r;
+    r["functional"] = stats["functional"];
+    for (auto it = stats.begin(); it != stats.end();)
+      it = it.key().rfind("host_", 0) == 0 || it.key() == "functional" ? stats.erase(it) : std::next(it);
+    stats["config"]["sim"].erase("functional_record");
+    r["stats"] = stats;
+    r["cycles"] = out.cycles;
+    r["ids"] = out.result.ids;
+    std::vector<uint64_t> area_bits;
+    for (double a : out.result.visible_area) area_bits.push_back(std::bit_cast<uint64_t>(a));
+    r["area_bits"] = area_bits;
+    r["tiles"] = out.result.tiles.rows;
+    r["columns"] = out.result.tiles.columns;
+    return r;
+  });
+}
+
+void expect_same_run(const nlohmann::json& a, const nlohmann::json& b) {
+  ASSERT_FALSE(a.contains("error")) << a.dump().substr(0, 400);
+  ASSERT_FALSE(b.contains("error")) << b.dump().substr(0, 400);
+  EXPECT_GT(a["cycles"].get<uint64_t>(), 0u);
+  EXPECT_TRUE(a["stats"]["systemc_reports"].empty());
+  for (const char* key : {"cycles", "ids", "area_bits", "tiles", "columns"}) EXPECT_TRUE(a[key] == b[key]) << key;
+  for (const auto& [k, v] : a["stats"].items()) EXPECT_TRUE(b["stats"][k] == v) << "stats." << k;
+  EXPECT_EQ(a["stats"].size(), b["stats"].size());
+}
+
+// A normal run, a recording run and a replaying run of `params`, all alike.
+void expect_record_and_replay_alike(const trace::Frame& f, const std::vector<std::string>& params,
+                                    const std::string& name) {
+  const fs::path rec = record_path(name);
+  const auto normal = run(f, params);
+  const auto recorded = run(f, params, rec);
+  ASSERT_TRUE(fs::exists(rec));
+  const auto replayed = run(f, params, rec);
+  EXPECT_EQ(normal.value("functional", ""), "computed");
+  EXPECT_EQ(recorded.value("functional", ""), "recorded");
+  EXPECT_EQ(replayed.value("functional", ""), "replayed") << replayed.dump().substr(0, 400);
+  {
+    SCOPED_TRACE("recorded");
+    expect_same_run(normal, recorded);
+  }
+  {
+    SCOPED_TRACE("replayed");
+    expect_same_run(normal, replayed);
+  }
+}
+
+std::string error_of(const nlohmann::json& r) { return r.value("error", std::string()); }
+
+}  // namespace
+
+class RecordReplay : public ::testing::TestWithParam<std::tuple<std::string, std::string>> {};
+
+TEST_P(RecordReplay, EqualsANormalRun) {
+  const auto& [fidelity, mode] = GetParam();
+  expect_record_and_replay_alike(spheres(), {"sim.fidelity=" + fidelity, "sim.mode=" + mode}, fidelity + "_" + mode);
+}
+
+// Partial renders: a parameter buffer of about a third of the frame's.
+TEST_P(RecordReplay, EqualsANormalRunWithPartialRenders) {
+  const auto& [fidelity, mode] = GetParam();
+  const auto full = run(cubes(), {"sim.mode=" + mode});
+  ASSERT_FALSE(full.contains("error")) << full.dump().substr(0, 400);
+  const uint64_t pb = full["stats"]["totals"]["param_buffer_bytes"].get<uint64_t>();
+  const std::vector<std::string> params = {"sim.fidelity=" + fidelity, "sim.mode=" + mode,
+                                           "pb.capacity_bytes=" + std::to_string(pb / 3 + 1)};
+  const auto normal = run(cubes(), params);
+  ASSERT_FALSE(normal.contains("error")) << normal.dump().substr(0, 400);
+  EXPECT_GE(normal["stats"]["totals"]["partial_renders"].get<uint64_t>(), 2u);
+  expect_record_and_replay_alike(cubes(), params, "partial_" + fidelity + "_" + mode);
+}
+
+INSTANTIATE_TEST_SUITE_P(Levels, RecordReplay,
+                         ::testing::Combine(::testing::Values("analytic", "tile", "primitive", "auto"),
+                                            ::testing::Values("analytic", "hybrid", "hsr", "early_z", "none")),
+                         [](const auto& p) { return std::get<0>(p.param) + "_" + std::get<1>(p.param); });
+
+// Fidelity auto simulating a sample of the tiles (the quarter-resolution bunny, 16x16 tiles):
+// the replay resolves the recorded sample and gives the same estimate.
+TEST(RecordReplayAuto, ASampleOfTilesReplays) {
+  const trace::Frame f = simtest::shipped("bunny", 480, 270, 4);
+  for (const std::string mode : {"analytic", "hsr"}) {
+    SCOPED_TRACE(mode);
+    const std::vector<std::string> params = {"sim.fidelity=auto",  "sim.mode=" + mode,   "sim.tile_width=16",
+                                             "sim.tile_height=16", "sim.sample_first=4", "sim.error_budget=0.05"};
+    const auto normal = run(f, params);
+    ASSERT_FALSE(normal.contains("error")) << normal.dump().substr(0, 400);
+    EXPECT_LT(normal["stats"]["sampling"]["tiles_simulated"].get<uint64_t>(),
+              normal["stats"]["sampling"]["tiles"].get<uint64_t>());
+    expect_record_and_replay_alike(f, params, "auto_sample_" + mode);
+  }
+}
+
+// A record made at fidelity tile holds every tile: fidelity auto replays its sample from it,
+// with timing parameters that change the sample, as a normal auto run would.
+TEST(RecordReplayAuto, ASampleReplaysFromARecordOfEveryTile) {
+  const trace::Frame f = simtest::shipped("bunny", 480, 270, 4);
+  for (const std::string mode : {"analytic", "hsr"}) {
+    SCOPED_TRACE(mode);
+    const std::vector<std::string> common = {"sim.mode=" + mode, "sim.tile_width=16", "sim.tile_height=16"};
+    const fs::path rec = record_path("auto_from_tile_" + mode);
+    std::vector<std::string> tile = common;
+    tile.push_back("sim.fidelity=tile");
+    ASSERT_FALSE(run(f, tile, rec).contains("error"));
+    for (const std::string cores : {"1", "2"}) {
+      std::vector<std::string> sampled = common;
+      sampled.insert(sampled.end(), {"sim.fidelity=auto", "sim.sample_first=4", "sim.error_budget=0.05",
+                                     "sim.cores=" + cores, "memory.controller_latency_ns=" + cores + "00"});
+      const auto normal = run(f, sampled);
+      const auto replayed = run(f, sampled, rec);
+      ASSERT_FALSE(normal.contains("error")) << normal.dump().substr(0, 400);
+      EXPECT_LT(normal["stats"]["sampling"]["tiles_simulated"].get<uint64_t>(),
+                normal["stats"]["sampling"]["tiles"].get<uint64_t>());
+      EXPECT_EQ(replayed.value("functional", ""), "replayed");
+      expect_same_run(normal, replayed);
+    }
+  }
+}
+
+// With partial renders a tile's results depend on the depth its earlier resolves stored: a
+// sample that resolves a tile after other earlier segments than the record did is an error
+// naming the tile (or, where the samples agree, the normal run's outputs).
+TEST(RecordReplayAuto, PartialRendersReplayOnlyOnTheSameStoredDepth) {
+#if defined(__SANITIZE_ADDRESS__)
+  // The replay stops its SystemC run with an error, thrown after sc_start(): ASan, which does
+  // not know SystemC's coroutine stacks, reports a false stack overflow at that throw (its own
+  // warning says so: google/sanitizers#189).
+  GTEST_SKIP() << "stops a SystemC run with an error: a false ASan report (google/sanitizers#189)";
+#endif
+  const trace::Frame f = simtest::shipped("bunny", 480, 270, 4);
+  const std::vector<std::string> common = {"sim.tile_width=16", "sim.tile_height=16", "pb.capacity_bytes=200000"};
+  const fs::path rec = record_path("auto_partial");
+  std::vector<std::string> tile = common, sampled = common;
+  tile.push_back("sim.fidelity=tile");
+  sampled.insert(sampled.end(), {"sim.fidelity=auto", "sim.sample_first=4", "sim.error_budget=0.05"});
+  const auto recorded = run(f, tile, rec);
+  ASSERT_FALSE(recorded.contains("error")) << recorded.dump().substr(0, 400);
+  EXPECT_GE(recorded["stats"]["totals"]["partial_renders"].get<uint64_t>(), 2u);
+  const auto normal = run(f, sampled);
+  const auto replayed = run(f, sampled, rec);
+  if (replayed.contains("error"))
+    EXPECT_NE(error_of(replayed).find("lies on the stored depth of segment"), std::string::npos) << error_of(replayed);
+  else
+    expect_same_run(normal, replayed);
+}
+
+// The point of the record: timing parameters changed at replay give a normal run's cycles
+// with them (and they do change the cycles).
+TEST(RecordReplay, TimingParametersChangedAtReplayGiveANormalRunsCycles) {
+  for (const std::string fidelity : {"analytic", "tile", "primitive"})
+    for (const std::string mode : {"analytic", "hsr"}) {
+      SCOPED_TRACE(fidelity + " " + mode);
+      const std::vector<std::string> base = {"sim.fidelity=" + fidelity, "sim.mode=" + mode};
+      const fs::path rec = record_path("timing_" + fidelity + "_" + mode);
+      const auto recorded = run(spheres(), base, rec);
+      ASSERT_FALSE(recorded.contains("error")) << recorded.dump().substr(0, 400);
+      std::vector<std::string> slower = base;
+      slower.insert(slower.end(), {"memory.controller_latency_ns=400", "fetch.latency_cycles=200", "evu.reject.lanes=1",
+                                   "sim.cores=2"});
+      const auto normal = run(spheres(), slower);
+      const auto replayed = run(spheres(), slower, rec);
+      EXPECT_EQ(replayed.value("functional", ""), "replayed");
+      expect_same_run(normal, replayed);
+      EXPECT_NE(normal["cycles"], recorded["cycles"]);
+    }
+}
+
+TEST(RecordKey, AnotherTileSizeModeOrFrameIsAnErrorNamingIt) {
+  const fs::path rec = record_path("key");
+  ASSERT_FALSE(run(spheres(), {"sim.tile_width=32"}, rec).contains("error"));
+  const auto bytes = fs::file_size(rec);
+  const std::string tile = error_of(run(spheres(), {"sim.tile_width=16"}, rec));
+  EXPECT_NE(tile.find("sim.tile_width: the record has 32, this run 16"), std::string::npos) << tile;
+  const std::string mode = error_of(run(spheres(), {"sim.mode=hsr"}, rec));
+  EXPECT_NE(mode.find("sim.mode: the record has analytic, this run hsr"), std::string::npos) << mode;
+  const std::string frame = error_of(run(cubes(), {}, rec));
+  EXPECT_NE(frame.find("the frame (FNV-1a 64"), std::string::npos) << frame;
+  const std::string depth = error_of(run(spheres(), {"sim.depth_bits=16"}, rec));
+  EXPECT_NE(depth.find("sim.depth_bits"), std::string::npos) << depth;
+  // Another parameter-buffer size: other segments.
+  const std::string segments = error_of(run(spheres(), {"pb.capacity_bytes=20000"}, rec));
+  EXPECT_NE(segments.find("parameter-buffer segments differ"), std::string::npos) << segments;
+  // The record is left as it was: never recomputed nor overwritten.
+  EXPECT_EQ(fs::file_size(rec), bytes);
+  EXPECT_EQ(run(spheres(), {}, rec).value("functional", ""), "replayed");
+}
+
+TEST(RecordFile, TruncatedCorruptOrOtherFilesAreErrors) {
+  const fs::path rec = record_path("file");
+  ASSERT_FALSE(run(spheres(), {}, rec).contains("error"));
+  std::vector<char> bytes(fs::file_size(rec));
+  std::ifstream(rec, std::ios::binary).read(bytes.data(), std::streamsize(bytes.size()));
+  auto with = [&](const std::vector<char>& b) {
+    const fs::path p = record_path("file_variant");
+    std::ofstream(p, std::ios::binary).write(b.data(), std::streamsize(b.size()));
+    return error_of(run(spheres(), {}, p));
+  };
+  const std::string truncated = with(std::vector<char>(bytes.begin(), bytes.begin() + bytes.size() / 2));
+  EXPECT_NE(truncated.find("truncated or corrupt"), std::string::npos) << truncated;
+  const std::string tiny = with(std::vector<char>(bytes.begin(), bytes.begin() + 10));
+  EXPECT_NE(tiny.find("truncated"), std::string::npos) << tiny;
+  std::vector<char> flipped = bytes;
+  flipped[flipped.size() / 2] ^= 0x10;
+  const std::string corrupt = with(flipped);
+  EXPECT_NE(corrupt.find("corrupt"), std::string::npos) << corrupt;
+  std::vector<char> version = bytes;
+  version[8] = char(99);
+  const std::string old = with(version);
+  EXPECT_NE(old.find("format version 99"), std::string::npos) << old;
+  const std::string other =
+      with(std::vector<char>{'n', 'o', 't', ' ', 'a', ' ', 'r', 'e', 'c', 'o', 'r', 'd', '!', '!'});
+  EXPECT_NE(other.find("not a TileVis functional record"), std::string::npos) << other;
+  EXPECT_EQ(with({}).find("not a TileVis functional record") != std::string::npos, true);
+}
+
+TEST(RecordFile, AFailedRunWritesNoRecord) {
+  const fs::path rec = record_path("failed");
+  // A parameter buffer too small for one triangle stops the run after the functional model began.
+  const std::string e = error_of(run(spheres(), {"pb.capacity_bytes=1"}, rec));
+  EXPECT_FALSE(e.empty());
+  EXPECT_FALSE(fs::exists(rec));
+  for (const auto& entry : fs::directory_iterator(rec.parent_path()))  // nor a temporary file
+    EXPECT_EQ(entry.path().filename().string().rfind("failed.rec", 0), std::string::npos) << entry.path();
+  const std::string folder = error_of(run(spheres(), {}, rec.parent_path() / "no_such_folder" / "x.rec"));
+  EXPECT_NE(folder.find("no folder"), std::string::npos) << folder;
+  // Fidelity rtl refuses a record (a build without Verilator refuses rtl before).
+  const std::string rtl = error_of(run(spheres(), {"sim.fidelity=rtl"}, rec));
+  EXPECT_TRUE(rtl.find("not at fidelity rtl") != std::string::npos ||
+              rtl.find("this build has none") != std::string::npos)
+      << rtl;
+  EXPECT_FALSE(fs::exists(rec));
+}
