@@ -2,6 +2,7 @@
 // the timed runs), grow-and-retry when a device counter reports an overflow, and the result
 // brought back to the host in the canonical layout.
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cstdlib>
 #include <iterator>
@@ -12,6 +13,7 @@
 #include <cub/device/device_scan.cuh>
 
 #include "geom/tile_grid.h"
+#include "tilevis/fnv1a.h"
 #include "pieces.cuh"
 
 namespace tilevis::cuda {
@@ -1109,15 +1111,9 @@ std::vector<FrameTime> run_frames(const std::vector<trace::Frame>& frames, const
 
 }  // namespace
 
-uint64_t ids_hash(const std::vector<int32_t>& ids) {
-  uint64_t h = 1469598103934665603ull;
-  for (int32_t v : ids) {
-    for (int b = 0; b < 4; ++b) {
-      h ^= (uint32_t(v) >> (8 * b)) & 0xffu;
-      h *= 1099511628211ull;
-    }
-  }
-  return h;
+uint64_t ids_hash(const std::vector<int32_t>& ids) {  // the ids' little-endian bytes
+  static_assert(std::endian::native == std::endian::little);
+  return fnv1a64(ids.data(), ids.size() * sizeof(int32_t));
 }
 
 std::vector<FrameTime> run_cuda_frames(const std::vector<trace::Frame>& frames, const CudaConfig& cfg, uint32_t laps) {

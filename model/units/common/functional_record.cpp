@@ -11,6 +11,7 @@
 
 #include <unistd.h>
 
+#include "tilevis/fnv1a.h"
 #include "units/common/frame_work.h"
 
 namespace tilevis::sim {
@@ -20,23 +21,15 @@ static_assert(std::endian::native == std::endian::little, "the record is written
 
 constexpr char kMagic[8] = {'T', 'V', 'F', 'R', 'E', 'C', '\r', '\n'};
 
-uint64_t fnv1a64(const uint8_t* p, size_t n, uint64_t h = 1469598103934665603ull) {
-  for (size_t i = 0; i < n; ++i) {
-    h ^= p[i];
-    h *= 1099511628211ull;
-  }
-  return h;
-}
-
 // The record's checksum: FNV-1a's step on 64-bit little-endian words, then on the last bytes
 // (eight times fewer dependent multiplies than bytewise: a record is tens of megabytes).
 uint64_t word_fnv1a64(const uint8_t* p, size_t n) {
-  uint64_t h = 1469598103934665603ull;
+  uint64_t h = kFnv1a64Basis;
   size_t i = 0;
   for (; i + 8 <= n; i += 8) {
     uint64_t w;
     std::memcpy(&w, p + i, 8);
-    h = (h ^ w) * 1099511628211ull;
+    h = (h ^ w) * kFnv1a64Prime;
   }
   return fnv1a64(p + i, n - i, h);
 }

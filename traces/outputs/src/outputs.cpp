@@ -14,6 +14,8 @@
 #include <ImfThreading.h>
 #include <thread>
 
+#include "tilevis/fnv1a.h"
+
 namespace tilevis::outputs {
 namespace fs = std::filesystem;
 
@@ -201,14 +203,11 @@ TileTable read_tiles(const fs::path& file, uint32_t width, uint32_t height) {
 std::string file_fnv1a64(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
   if (!in) return {};
-  uint64_t h = 1469598103934665603ull;
+  uint64_t h = kFnv1a64Basis;
   std::vector<char> buf(1 << 20);
   while (in) {
     in.read(buf.data(), std::streamsize(buf.size()));
-    for (std::streamsize i = 0; i < in.gcount(); ++i) {
-      h ^= uint8_t(buf[size_t(i)]);
-      h *= 1099511628211ull;
-    }
+    h = fnv1a64(buf.data(), size_t(in.gcount()), h);
   }
   char hex[17];
   std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
