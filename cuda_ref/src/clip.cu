@@ -9,6 +9,8 @@
 // No hand-sized buffers (SVGPU §4.3's failure): piece slots and polygon edges come from pools
 // with device-side bump counters. An item that finds its pool exhausted stops and is counted;
 // the host grows the pools from the counters and runs the frame again.
+#include <cstdlib>
+
 #include "pipeline.cuh"
 
 namespace tilevis::cuda {
@@ -31,7 +33,8 @@ struct ClipArgs {
   uint64_t cand_cap;  // room in cand_edges / cand_sorted; offsets past it belong to an overflowed run
   uint64_t deep_cap;
   uint32_t* clip_items;
-  uint32_t* long_items;  // the items of kLongChain or more candidates (unordered), listed by cand_scatter
+  uint32_t* long_items;
+  uint32_t tree_stage;  // TEMPORARY A/B  // the items of kLongChain or more candidates (unordered), listed by cand_scatter
   uint32_t* item_slot;
   uint64_t* slot_poly;  // edge offset << 32 | edge count
   uint32_t* slot_item;  // the item of each used slot; kNone in reserved slots left unused
@@ -91,6 +94,12 @@ struct Piece {
       if (i < n) copy[i] = at[i];
     at = copy;
   }
+  TV_HD void load_staged(const PEdge<P>* stage, uint32_t edges) {  // edges <= kCopyEdges
+    n = edges;
+    for (uint32_t i = 0; i < kCopyEdges; ++i)
+      if (i < n) copy[i] = stage[i];
+    at = copy;
+  }
   TV_HD bool survives(const TileTri<P>& tt, const SilEdge<P>& e, Sides* sides) const {
     return tilevis::cuda::survives<P>(at, n, tt, e, sides);
   }
@@ -106,8 +115,8 @@ struct Piece {
 template <class P>
 TV_HD inline void split_piece(const Piece<P>& p, PEdge<P>* pool, uint64_t at, uint32_t m, const typename P::Line& line,
                               const Sides* sides, uint32_t& regularized, uint32_t& anomalies, uint64_t& in_slot,
-                              uint64_t& out_slot) {
-  PolyOut<P> in{pool + at, 0, m + 1, false}, out{pool + at + m + 1, 0, m + 1, false};
+                              uint64_t& out_slot, PEdge<P>* in_edges = nullptr) {
+  PolyOut<P> in{in_edges ? in_edges : pool + at, 0, m + 1, false}, out{pool + at + m + 1, 0, m + 1, false};
   bool regular = false;
   p.split(line, in, out, &regular, sides);
   regularized += regular ? 1 : 0;
@@ -452,7 +461,8 @@ __device__ uint64_t tree_edges(const ClipArgs<P>& a, TreeShared& ts, uint32_t k)
 }
 
 template <class P>
-__device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, uint8_t* smem, TreeShared& ts) {
+__device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, uint8_t* smem, TreeShared& ts,
+                               PEdge<P> (*wstage)[kCopyEdges], uint32_t* sidx) {
   uint64_t* const sp = reinterpret_cast<uint64_t*>(smem);                  // by piece id: polygon (pool << 32 | n)
   uint32_t* const parent = reinterpret_cast<uint32_t*>(sp + kTreeSlots);  // by piece id
   uint32_t* const born = parent + kTreeSlots;                             // candidate that cut it off
@@ -468,6 +478,7 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
     uint32_t r = 0;
     for (uint32_t m = 0; m < c; ++m) r += a.cand_edges[off + m] < x;
     a.cand_sorted[off + r] = x;
+    sidx[r] = x;
   }
   for (uint32_t k = t; k < want; k += blockDim.x) sp[k] = ~uint64_t{0};  // ids past want are never made
   for (uint32_t k = t; k <= c; k += blockDim.x) hist[k] = 0;
@@ -532,7 +543,7 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
       const uint32_t mine = ci + lane;
       Sides sides;
       bool flag = false;
-      if (mine < c) flag = piece.survives(tt, a.edges[a.cand_sorted[off + mine]], &sides);
+      if (mine < c) flag = piece.survives(tt, a.edges[a.tree_stage ? sidx[mine] : a.cand_sorted[off + mine]], &sides);
       const uint32_t mask = __ballot_sync(0xffffffffu, flag);
       if (mask == 0) {
         ci += 32;
@@ -540,7 +551,7 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
       }
       const uint32_t first = uint32_t(__ffs(mask)) - 1u;
       uint64_t next = 0;
-      uint32_t quit = 0;
+      uint32_t quit = 0, staged = 0;
       if (lane == first) {
         const uint32_t m = uint32_t(cur);
         const uint32_t child = sh_load(&ts.fail) ? kNone : atomicAdd(&ts.n_alloc, 1u);
@@ -559,8 +570,15 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
             quit = 1;
           } else {
             uint64_t out_slot = 0;
-            split_piece<P>(piece, a.pool, at, m, a.edges[a.cand_sorted[off + mine]].line, &sides, regularized, anomalies,
-                           next, out_slot);
+            // The inside part, which this warp walks on with, goes to the warp's stage first (its
+            // lanes read it there, not back from the pool) when it fits their copies.
+            PEdge<P>* const st = a.tree_stage && m < kCopyEdges ? wstage[t / 32] : nullptr;
+            split_piece<P>(piece, a.pool, at, m, a.edges[a.tree_stage ? sidx[mine] : a.cand_sorted[off + mine]].line, &sides,
+                           regularized, anomalies, next, out_slot, st);
+            if (st) {
+              for (uint32_t k = 0; k < uint32_t(next); ++k) a.pool[at + k] = st[k];
+              staged = 1;
+            }
             ++splits;
             sh_store(&parent[child], id);
             sh_store(&born[child], mine);
@@ -572,7 +590,12 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
       if (__shfl_sync(0xffffffffu, quit, first) != 0) break;  // the block failed: nothing more is kept
       cur = __shfl_sync(0xffffffffu, static_cast<unsigned long long>(next), first);
       __syncwarp();  // the inside part's edges, written by lane `first`, before the lanes read them
-      piece.load(a.pool, cur);
+      if (__shfl_sync(0xffffffffu, staged, first)) {
+        piece.load_staged(wstage[t / 32], uint32_t(cur));
+        __syncwarp();  // every lane has its copy before the stage is written again
+      } else {
+        piece.load(a.pool, cur);
+      }
       ci += first + 1;
     }
     if (lane == 0) {
@@ -643,6 +666,8 @@ __global__ void __launch_bounds__(kLongBlockOf<P>, 1) k_clip_long(ClipArgs<P> a,
   extern __shared__ __align__(16) uint8_t smem[];
   __shared__ LongShared sh;
   __shared__ TreeShared ts;
+  __shared__ PEdge<P> wstage[kLongBlockOf<P> / 32][kCopyEdges];
+  __shared__ uint32_t sidx[kTreeCands];
   __shared__ uint32_t taken;
   const uint64_t n = *count < cap ? *count : cap;
   // A block takes the next listed item when it is done with its last: the few long items are
@@ -660,7 +685,7 @@ __global__ void __launch_bounds__(kLongBlockOf<P>, 1) k_clip_long(ClipArgs<P> a,
     const uint32_t c = a.cand_count[j];
     if (candidates_overflowed(a) || uint64_t(a.cand_offset[j]) + c > a.cand_cap) continue;
     const uint64_t want = tmin<uint64_t>(piece_bound(c), uint64_t(a.slot_factor) * (c + 1));
-    if (want <= kTreeSlots && c <= kTreeCands) clip_item_tree<P>(a, j, want, smem, ts);
+    if (want <= kTreeSlots && c <= kTreeCands) clip_item_tree<P>(a, j, want, smem, ts, wstage, sidx);
     else clip_item_block<P>(a, j, reinterpret_cast<uint64_t*>(smem), sh);
   }
 }
@@ -765,6 +790,11 @@ bool stage_clip(Pipeline<P>& p) {
   a.deep_cap = p.caps.deep_pairs;
   a.clip_items = p.clip_items.get();  // listed by cull
   a.long_items = p.long_items.need(ni + 1);
+  static const uint32_t tree_stage = [] {  // TEMPORARY A/B
+    const char* e = std::getenv("TILEVIS_CLIP_STAGE");
+    return e ? uint32_t(std::atoi(e)) : 1u;
+  }();
+  a.tree_stage = tree_stage;
   a.item_slot = p.item_slot.need(ni + 1);
   a.slot_poly = p.slot_poly.need(p.caps.clip_slots);
   a.slot_item = p.slot_item.need(p.caps.clip_slots);
