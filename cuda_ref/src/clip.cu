@@ -9,8 +9,6 @@
 // No hand-sized buffers (SVGPU §4.3's failure): piece slots and polygon edges come from pools
 // with device-side bump counters. An item that finds its pool exhausted stops and is counted;
 // the host grows the pools from the counters and runs the frame again.
-#include <cstdlib>
-
 #include "pipeline.cuh"
 
 namespace tilevis::cuda {
@@ -33,8 +31,7 @@ struct ClipArgs {
   uint64_t cand_cap;  // room in cand_edges / cand_sorted; offsets past it belong to an overflowed run
   uint64_t deep_cap;
   uint32_t* clip_items;
-  uint32_t* long_items;
-  uint32_t tree_stage;  // TEMPORARY A/B  // the items of kLongChain or more candidates (unordered), listed by cand_scatter
+  uint32_t* long_items;  // the items of kLongChain or more candidates (unordered), listed by cand_scatter
   uint32_t* item_slot;
   uint64_t* slot_poly;  // edge offset << 32 | edge count
   uint32_t* slot_item;  // the item of each used slot; kNone in reserved slots left unused
@@ -477,8 +474,7 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
     const uint32_t x = a.cand_edges[off + k];
     uint32_t r = 0;
     for (uint32_t m = 0; m < c; ++m) r += a.cand_edges[off + m] < x;
-    a.cand_sorted[off + r] = x;
-    sidx[r] = x;
+    sidx[r] = x;  // the tree reads its candidates from shared memory only
   }
   for (uint32_t k = t; k < want; k += blockDim.x) sp[k] = ~uint64_t{0};  // ids past want are never made
   for (uint32_t k = t; k <= c; k += blockDim.x) hist[k] = 0;
@@ -543,7 +539,7 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
       const uint32_t mine = ci + lane;
       Sides sides;
       bool flag = false;
-      if (mine < c) flag = piece.survives(tt, a.edges[a.tree_stage ? sidx[mine] : a.cand_sorted[off + mine]], &sides);
+      if (mine < c) flag = piece.survives(tt, a.edges[sidx[mine]], &sides);
       const uint32_t mask = __ballot_sync(0xffffffffu, flag);
       if (mask == 0) {
         ci += 32;
@@ -572,8 +568,8 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
             uint64_t out_slot = 0;
             // The inside part, which this warp walks on with, goes to the warp's stage first (its
             // lanes read it there, not back from the pool) when it fits their copies.
-            PEdge<P>* const st = a.tree_stage && m < kCopyEdges ? wstage[t / 32] : nullptr;
-            split_piece<P>(piece, a.pool, at, m, a.edges[a.tree_stage ? sidx[mine] : a.cand_sorted[off + mine]].line, &sides,
+            PEdge<P>* const st = m < kCopyEdges ? wstage[t / 32] : nullptr;
+            split_piece<P>(piece, a.pool, at, m, a.edges[sidx[mine]].line, &sides,
                            regularized, anomalies, next, out_slot, st);
             if (st) {
               for (uint32_t k = 0; k < uint32_t(next); ++k) a.pool[at + k] = st[k];
@@ -790,11 +786,6 @@ bool stage_clip(Pipeline<P>& p) {
   a.deep_cap = p.caps.deep_pairs;
   a.clip_items = p.clip_items.get();  // listed by cull
   a.long_items = p.long_items.need(ni + 1);
-  static const uint32_t tree_stage = [] {  // TEMPORARY A/B
-    const char* e = std::getenv("TILEVIS_CLIP_STAGE");
-    return e ? uint32_t(std::atoi(e)) : 1u;
-  }();
-  a.tree_stage = tree_stage;
   a.item_slot = p.item_slot.need(ni + 1);
   a.slot_poly = p.slot_poly.need(p.caps.clip_slots);
   a.slot_item = p.slot_item.need(p.caps.clip_slots);
