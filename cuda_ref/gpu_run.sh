@@ -408,9 +408,12 @@ phase_report() {
   device="$(nvidia-smi --query-gpu=name --format=csv,noheader 2>/dev/null | head -n 1 || true)"
   [ -n "$device" ] || device="$(grep -h '^  "device":' "$WORK"/*/t*/exact/stats.json 2>/dev/null | head -n 1 | sed 's/.*"device": "\(.*\)".*/\1/')"
   [ -n "$device" ] || device=unknown-gpu
-  # .gpu/commit.txt first: prepare_gpu_run.sh wrote it from the checkout the traces and the
-  # tree came from (a copied tree's own .git, if any, may be older).
-  commit="$(cat .gpu/commit.txt 2>/dev/null || git rev-parse --verify -q HEAD 2>/dev/null || echo unknown)"
+  # The source's commit: .gpu/commit_src.txt, which the sender writes for the tree it sends (a
+  # copied tree's own .git, if any, may be older); else .gpu/commit.txt, the checkout that
+  # prepare_gpu_run.sh made the traces from. The traces' commit is named beside it.
+  commit="$(cat .gpu/commit_src.txt 2>/dev/null || cat .gpu/commit.txt 2>/dev/null ||
+    git rev-parse --verify -q HEAD 2>/dev/null || echo unknown)"
+  [ -f .gpu/commit.txt ] && [ "$(cat .gpu/commit.txt)" != "$commit" ] && commit="$commit (traces made at $(cat .gpu/commit.txt))"
   # Prebuilt binaries: the commit they were built at (and what was uncommitted then).
   [ -f "$WORK/meta/prebuilt_commit.txt" ] && commit="$(cat "$WORK/meta/prebuilt_commit.txt")"
   nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.max.sm,clocks.max.mem --format=csv,noheader \
