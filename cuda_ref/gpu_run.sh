@@ -341,6 +341,23 @@ phase_sanitize() {
       echo "$tool $p ($what): ${line:-no summary} (exit $rc)" >>"$WORK/meta/sanitizer.txt.tmp"
       say "$tool $p ($what): ${line:-no summary} (exit $rc)"
     done
+    # The clip stage's long chains (k_clip_long: the tree of walks, the per-warp stage, the list
+    # of long items) on a trace whose items reach them, the tool on that kernel only (the rest
+    # runs uninstrumented, so racecheck of float finishes): .gpu/tiny/teapot_stadium_320x240.tvt.
+    local long=.gpu/tiny/teapot_stadium_320x240.tvt
+    for p in exact float; do
+      [ -f "$long" ] || break
+      [ -z "${TILEVIS_SANITIZE_ONLY:-}" ] || [[ " $TILEVIS_SANITIZE_ONLY " == *" $tool:clip_long_$p "* ]] || continue
+      local log="$LOGS/sanitizer_${tool}_clip_long_$p.log" rc=0
+      timeout "${TILEVIS_SANITIZE_TIMEOUT:-300}" compute-sanitizer --tool "$tool" --kernel-name kns=k_clip_long \
+        --error-exitcode 3 "$BIN" cuda "$long" --tile 32 --precision "$p" --baselines off --runs 1 \
+        -o "$WORK/sanitize/${tool}_clip_long_$p" >"$log" 2>&1 || rc=$?
+      local line
+      line="$(grep -E "ERROR SUMMARY|RACECHECK SUMMARY" "$log" | tail -n 1 || true)"
+      [ "$rc" = 124 ] && line="did not finish in ${TILEVIS_SANITIZE_TIMEOUT:-300} s"
+      echo "$tool k_clip_long $p (teapot_stadium_320x240): ${line:-no summary} (exit $rc)" >>"$WORK/meta/sanitizer.txt.tmp"
+      say "$tool k_clip_long $p (teapot_stadium_320x240): ${line:-no summary} (exit $rc)"
+    done
     # The device-sized graph past its bounds (a launch that overflows: every later count 0, the
     # frame run again with host reads): the GPU test that makes it happen, under the tool.
     local log="$LOGS/sanitizer_${tool}_dev_overflow.log" rc=0 gt="$BUILD/tests/cuda/cuda_gpu_tests"
