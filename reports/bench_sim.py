@@ -16,6 +16,8 @@ Level "tile (replayed)" is fidelity tile replaying a recorded functional pass
 (sim.functional_record, issue 15): a recording run at fidelity tile (not measured) writes
 OUT/work/SCENE.rec, then the measured run replays it (setup, binning and visibility not
 computed; the same cycles and outputs). Its rows add the record's size and load seconds.
+Level "tile (detailed memory)" is fidelity tile with memory.model=detailed: the DRAM controller
+and DRAM model that fidelity primitive uses, where tile's own default is the bandwidth model.
 """
 import argparse
 import json
@@ -27,13 +29,18 @@ import sys
 import time
 from pathlib import Path
 
-LEVELS = ("analytic", "tile", "tile (replayed)", "primitive", "auto", "rtl")
+LEVELS = ("analytic", "tile", "tile (replayed)", "tile (detailed memory)", "primitive", "auto", "rtl")
 REPLAYED = "tile (replayed)"  # fidelity tile replaying the record a recording run wrote
+DETAILED = "tile (detailed memory)"  # fidelity tile with the DRAM controller and DRAM model (memory.model=detailed)
 
 
 def level_args(level):
-    """The fidelity a level runs at, and the folder name part it writes to."""
-    return ("tile", "tile_replayed") if level == REPLAYED else (level, level)
+    """The fidelity a level runs at, the folder name part it writes to, and its further parameters."""
+    if level == REPLAYED:
+        return "tile", "tile_replayed", []
+    if level == DETAILED:
+        return "tile", "tile_detailed_memory", ["-p", "memory.model=detailed"]
+    return level, level, []
 TARGETS = {("bunny", "tile"): 5.0, ("million", "tile"): 60.0}
 
 
@@ -59,7 +66,7 @@ def chart(rows, reference, path):
         print("bench_sim: no matplotlib, no chart", file=sys.stderr)
         return
     fig, ax = plt.subplots(figsize=(8, 5))
-    markers = {"analytic": "o", "tile": "s", REPLAYED: "P", "primitive": "^", "auto": "*", "rtl": "D"}
+    markers = {"analytic": "o", "tile": "s", REPLAYED: "P", DETAILED: "x", "primitive": "^", "auto": "*", "rtl": "D"}
     for level in LEVELS:
         pts = [(r["host_seconds"], max(100 * r["cycles_vs_reference"], 1e-3)) for r in rows if r["level"] == level]
         if pts:
@@ -112,13 +119,12 @@ def main():
             run_measured([a.bin, "trace", scene, "-q", "-o", trace])
         per = {}
         for level in LEVELS:
-            fidelity, folder = level_args(level)
+            fidelity, folder, extra = level_args(level)
             d = work / f"{scene.stem}_{folder}"
-            extra = []
             if level == REPLAYED:
                 record = work / f"{scene.stem}.rec"
                 record.unlink(missing_ok=True)
-                extra = ["-p", f"sim.functional_record={record}"]
+                extra = extra + ["-p", f"sim.functional_record={record}"]
                 run_measured([a.bin, "sim", trace, "--tile", a.tile, "-p", "sim.fidelity=tile", "-p", f"sim.mode={a.mode}",
                               *extra, "-o", work / f"{scene.stem}_tile_recording"])
             wall = run_measured([a.bin, "sim", trace, "--tile", a.tile, "-p", f"sim.fidelity={fidelity}",
@@ -207,7 +213,9 @@ def main():
              "reference's timing seconds / the level's. 'tile (replayed)' = fidelity tile replaying the functional pass "
              "a recording run at fidelity tile wrote (`-p sim.functional_record=FILE`, unmeasured; setup, binning and "
              "visibility not computed, the same cycles and outputs): its model seconds include loading the record, "
-             "listed with its size below the table. Cycles are the frame's; "
+             "listed with its size below the table. 'tile' and 'analytic' serve memory with the bandwidth model "
+             "(memory.model=auto: each channel's bus at 0.9 of its peak), 'tile (detailed memory)' with the DRAM "
+             "controller and DRAM model of primitive, rtl and auto. Cycles are the frame's; "
              "'error' is their deviation from the reference level's (rtl; primitive where a build has no "
              "Verilator); 'faster' = the reference's model seconds / the level's. auto: interval = its 95 % "
              "confidence interval, tiles = simulated / in the frame.", "",

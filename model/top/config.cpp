@@ -159,6 +159,16 @@ Registry::Registry() {
 
   // DRAM: JEDEC LPDDR4-4266 timings (units/memory/dram.h says where each comes from).
 #define JEDEC " (JESD209-4 LPDDR4-4266, as DRAMSys's JEDEC memspec gives it)"
+  add_enum<MemoryModel>("memory.model", "detailed: the DRAM controller and DRAM timing model (queues, write drains, "
+                        "banks, rows, refresh); bandwidth: each channel's bus as a server of bursts at "
+                        "memory.bandwidth_efficiency of its peak, reads paying the unloaded latency; auto: bandwidth at "
+                        "fidelity analytic and tile, detailed at primitive, rtl and auto (assumption: memory "
+                        "contention is the primitive level's)",
+                        {MemoryModel::automatic, MemoryModel::detailed, MemoryModel::bandwidth},
+                        +[](TilerConfig& c) -> MemoryModel& { return c.memory.model; });
+  TV_REAL("memory.bandwidth_efficiency", memory.bandwidth_efficiency, "ratio", 0.01, 1.0,
+          "memory.model=bandwidth: the share of the buses' peak rate that bursts get, for the row switches, refresh "
+          "and write batches of the detailed model (assumption: 0.9 fits it at fidelity tile on the built-in scenes)");
   TV_UINT("memory.channels", memory.dram.channels, "channels", 1, 64, "x16 DRAM channels (4: a 64-bit interface; assumption)");
   TV_UINT("memory.banks", memory.dram.banks, "banks", 1, 64, "banks per channel (JESD209-4: 8)");
   TV_UINT("memory.row_bytes", memory.dram.row_bytes, "bytes", 32, 1u << 20, "row (page) per bank (JESD209-4 x16: 2048)");

@@ -159,6 +159,7 @@ SimOutput simulate(const trace::Frame& frame, const TilerConfig& config, const S
              {"frame", options.frame_index},
              {"fidelity", to_string(config.sim.fidelity)},
              {"mode", to_string(config.sim.mode)},
+             {"memory_model", tiler.memory().bandwidth_only() ? "bandwidth" : "detailed"},  // memory.model as resolved
              {"config", to_json(config)},
              {"totals", totals},
              {"frame_seconds_at_clock", seconds},

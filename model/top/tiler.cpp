@@ -29,7 +29,10 @@ Tiler::Tiler(const sc_core::sc_module_name& name, const TilerConfig& config, Fra
   const int render_depth = per_primitive ? int(config.sim.fifo_primitives) : int(config.sim.fifo_tiles);
   const uint32_t batch = per_primitive ? 1 : config.sim.batch_triangles;
 
-  m_memory = std::make_unique<Memory>("memory", config.memory, m_env.period);
+  MemoryConfig memory = config.memory;
+  if (memory.model == MemoryModel::automatic)
+    memory.model = per_primitive ? MemoryModel::detailed : MemoryModel::bandwidth;
+  m_memory = std::make_unique<Memory>("memory", memory, m_env.period);
   m_front_end = std::make_unique<GeometryFrontEnd>("front_end", m_env, config.front_end, batch);
   m_setup = std::make_unique<PrimitiveSetup>("setup", m_env, config.setup);
   m_silhouette = std::make_unique<SilhouetteUnit>("silhouette", m_env, config.silhouette);

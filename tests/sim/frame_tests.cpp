@@ -354,6 +354,33 @@ TEST(Fidelity, AnalyticAndTileLevelsChargeEachTileTheSameUnitCycles) {
   }
 }
 
+TEST(Fidelity, TheMemoryModelFollowsTheLevelAndEitherCanBeAskedFor) {
+  // memory.model=auto: the bandwidth model at analytic and tile, the detailed one at primitive.
+  const auto t = run(spheres(), {"sim.fidelity=tile"});
+  const auto tb = run(spheres(), {"sim.fidelity=tile", "memory.model=bandwidth"});
+  const auto td = run(spheres(), {"sim.fidelity=tile", "memory.model=detailed"});
+  const auto a = run(spheres(), {"sim.fidelity=analytic"});
+  const auto p = run(spheres(), {"sim.fidelity=primitive"});
+  const auto pd = run(spheres(), {"sim.fidelity=primitive", "memory.model=detailed"});
+  EXPECT_EQ(t["memory_model"], "bandwidth");
+  EXPECT_EQ(a["memory_model"], "bandwidth");
+  EXPECT_EQ(td["memory_model"], "detailed");
+  EXPECT_EQ(p["memory_model"], "detailed");
+  EXPECT_EQ(t["totals"]["cycles"], tb["totals"]["cycles"]);
+  EXPECT_EQ(p["totals"]["cycles"], pd["totals"]["cycles"]);
+  // The same bytes either way; the bandwidth model counts bursts but no rows.
+  EXPECT_EQ(t["totals"]["dram_bytes"], td["totals"]["dram_bytes"]);
+  EXPECT_GT(unit_stat(t, "memory", "bursts"), 0.0);
+  EXPECT_EQ(unit_stat(t, "memory", "row_hits"), 0.0);
+  EXPECT_GT(unit_stat(td, "memory", "row_hits"), 0.0);
+  // The models differ in time, not in work: the units' busy cycles are the same.
+  for (const char* u : {"fetch", "evu.reject", "evu.clip", "evu.occlude", "writer"})
+    EXPECT_EQ(unit_stat(t, u, "busy_cycles"), unit_stat(td, u, "busy_cycles")) << u;
+  // A worse efficiency can only make the frame longer.
+  const auto slow = run(spheres(), {"sim.fidelity=tile", "memory.model=bandwidth", "memory.bandwidth_efficiency=0.2"});
+  EXPECT_GT(slow["totals"]["cycles"].get<double>(), t["totals"]["cycles"].get<double>());
+}
+
 TEST(Outputs, VcdTracesUnitBusyAndQueues) {
   const std::filesystem::path vcd =
       std::filesystem::temp_directory_path() / ("tilevis_sim_vcd_" + std::to_string(::getpid()) + ".vcd");

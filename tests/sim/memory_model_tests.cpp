@@ -1,5 +1,5 @@
 // The memory system's plain C++ parts: DRAM timing (rows, banks, channels, refresh), the
-// DRAM controller (read queue, write buffer, drains) and the stream cache. Expected times
+// DRAM controller (read queue, write buffer, drains), the bandwidth model and the stream cache. Expected times
 // are worked out here by hand from the LPDDR4-4266 timings in tCK (dram.h), not by
 // calling the model.
 #include <gtest/gtest.h>
@@ -7,6 +7,7 @@
 #include <random>
 #include <set>
 
+#include "units/memory/bandwidth_model.h"
 #include "units/memory/cache.h"
 #include "units/memory/dram.h"
 #include "units/memory/dram_controller.h"
@@ -303,6 +304,47 @@ TEST(DramController, SaturatedBandwidthIsThePeakLessRefreshAndRowOpenings) {
   EXPECT_LE(achieved, peak * (8341.0 - 812) / 8341);
   EXPECT_GE(achieved, peak * (8341.0 - 812 - 39 - 36 - 8) / 8341);
   EXPECT_GT(c.dram().counters().row_conflicts, 0u);
+}
+
+TEST(BandwidthModel, AStreamSpreadsOverTheChannelsAtTheEfficiencysRate) {
+  // 1,024 bytes from 0: four 256-byte blocks, one per channel, 8 bursts each; a burst takes
+  // ccd = 8 tCK at efficiency 1 and 8 / 0.5 at 0.5.
+  BandwidthModel full(DramConfig{}, 1.0), half(DramConfig{}, 0.5);
+  EXPECT_EQ(full.burst_ps(), tck(8));
+  EXPECT_EQ(half.burst_ps(), tck(16));
+  EXPECT_EQ(full.transfer(1000, 0, 1024), 1000 + 8 * tck(8));
+  EXPECT_EQ(half.transfer(1000, 0, 1024), 1000 + 8 * tck(16));
+  EXPECT_EQ(full.bursts(), 32u);
+  EXPECT_EQ(full.busy_ps(), 32 * tck(8));
+  for (uint32_t c = 0; c < 4; ++c) EXPECT_EQ(full.free_at(c), 1000 + 8 * tck(8));
+}
+
+TEST(BandwidthModel, OneChannelQueuesItsBurstsAndTheOthersStayFree) {
+  BandwidthModel m(DramConfig{}, 1.0);
+  // Channel 0's first block, then its second (address 1024), issued at the same time: the
+  // second waits for the first; a block of channel 1 (256) does not.
+  EXPECT_EQ(m.transfer(0, 0, 256), tck(64));
+  EXPECT_EQ(m.transfer(0, 1024, 64), tck(64 + 16));
+  EXPECT_EQ(m.transfer(0, 256, 32), tck(8));
+  EXPECT_EQ(m.free_at(2), 0u);
+  // Issued after the channel is free again: no wait behind earlier bursts.
+  EXPECT_EQ(m.transfer(tck(1000), 0, 32), tck(1000 + 8));
+}
+
+TEST(BandwidthModel, EveryBurstASpanTouchesCountsWhole) {
+  BandwidthModel m(DramConfig{}, 1.0);
+  EXPECT_EQ(m.transfer(0, 31, 1), tck(8));       // one byte: one burst
+  EXPECT_EQ(m.transfer(0, 31, 2), tck(8 + 16));  // across a burst boundary: two more
+  EXPECT_EQ(m.bursts(), 3u);
+  EXPECT_EQ(m.transfer(5, 0, 0), 5u);  // nothing moved, nothing counted
+  EXPECT_EQ(m.bursts(), 3u);
+  // A span across a block boundary (248 .. 263): one burst on channel 0, one on channel 1.
+  BandwidthModel n(DramConfig{}, 1.0);
+  EXPECT_EQ(n.transfer(0, 248, 16), tck(8));
+  EXPECT_EQ(n.free_at(0), tck(8));
+  EXPECT_EQ(n.free_at(1), tck(8));
+  EXPECT_THROW(BandwidthModel(DramConfig{}, 0.0), std::invalid_argument);
+  EXPECT_THROW(BandwidthModel(DramConfig{}, 1.5), std::invalid_argument);
 }
 
 TEST(Cache, LeastRecentlyUsedLineGoes) {

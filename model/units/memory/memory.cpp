@@ -6,6 +6,15 @@
 
 namespace tilevis::sim {
 
+const char* to_string(MemoryModel m) {
+  switch (m) {
+    case MemoryModel::automatic: return "auto";
+    case MemoryModel::detailed: return "detailed";
+    case MemoryModel::bandwidth: return "bandwidth";
+  }
+  return "?";
+}
+
 Memory::Memory(const sc_core::sc_module_name& name, const MemoryConfig& config, const sc_core::sc_time& period)
     : sc_core::sc_module(name),
       socket("socket"),
@@ -41,6 +50,7 @@ Memory::Memory(const sc_core::sc_module_name& name, const MemoryConfig& config, 
       m_read_queue_full(m_stats.add("read_queue_full_cycles", "cycles", "time read bursts waited for a read-queue slot", false)),
       m_read_bus_wait(m_stats.add("read_queue_wait_cycles", "cycles", "time read bursts waited in the read queue for the bus, behind earlier bursts", false)) {
   socket.register_b_transport(this, &Memory::b_transport);
+  if (config.model == MemoryModel::bandwidth) m_bw = std::make_unique<BandwidthModel>(config.dram, config.bandwidth_efficiency);
 }
 
 int Memory::attach(tlm_utils::simple_initiator_socket<UnitBase>& initiator, const std::string& stream) {
@@ -74,6 +84,19 @@ sc_core::sc_time Memory::occupy(const sc_core::sc_time& at, uint64_t address, ui
   // buffer is full. A read comes back through the fabric and controller; a latency-hidden
   // one waits only for its place on the bus.
   uint64_t wait = 0;
+  if (m_bw) {
+    // A posted write waits only for the room the write buffer's bursts give the bus; a read
+    // for its data and the unloaded latency beyond it (a latency-hidden one: its data only).
+    const uint64_t done = m_bw->transfer(at_ps, address, bytes);
+    if (!read) {
+      const uint64_t room = uint64_t(m_cfg.controller.write_buffer) * m_bw->burst_ps();
+      wait = done > at_ps + room ? done - at_ps - room : 0;
+    } else {
+      const DramConfig& d = m_cfg.dram;
+      wait = done - at_ps + (hidden ? 0 : m_controller_ps + uint64_t(d.rcd + d.rl) * d.tck_ps);
+    }
+    return sc_core::sc_time::from_value(wait * ps);
+  }
   if (!read) {
     wait = m_ctrl.write(at_ps, address, bytes) - at_ps;
   } else {
@@ -96,6 +119,13 @@ uint64_t Memory::service(uint64_t at, const Traffic& traffic, bool read, int str
 void Memory::finish(uint64_t frame_cycles) {
   // The writes still buffered at the frame's end go to the DRAM (after the frame: the
   // next one's traffic would find them there), so that every burst is counted.
+  if (m_bw) {  // bursts and bus time only: no rows, queues or drains in this model
+    const double cycle = double(m_period_ps);
+    m_bursts.value = double(m_bw->bursts());
+    m_busy.value = double(m_bw->busy_ps()) / cycle / double(m_cfg.dram.channels);
+    m_utilisation.value = frame_cycles ? m_busy.value / double(frame_cycles) : 0.0;
+    return;
+  }
   m_ctrl.flush();
   const DramCounters& n = m_ctrl.dram().counters();
   const ControllerCounters& q = m_ctrl.counters();

@@ -1,12 +1,14 @@
-// The memory system behind a TLM-2.0 target socket: the DRAM controller (dram_controller.h:
-// read queue, write buffer with combining and watermark drains, FR-FCFS) in front of the
-// DRAM timing model (dram.h: channels, banks, rows, refresh), shared by every requester,
-// plus the fabric and controller latency a read pays on top. Each requester binds through attach() under a
-// stream name, and the stats count its bytes. Timing only: no data is stored; the
+// The memory system behind a TLM-2.0 target socket, shared by every requester: at
+// memory.model=detailed the DRAM controller (dram_controller.h: read queue, write buffer with
+// combining and watermark drains, FR-FCFS) in front of the DRAM timing model (dram.h:
+// channels, banks, rows, refresh), plus the fabric and controller latency a read pays on top;
+// at memory.model=bandwidth each channel's bus alone (bandwidth_model.h), with the same read
+// latency and write buffer room. Each requester binds through attach() under a stream name, and the stats count its bytes. Timing only: no data is stored; the
 // transaction's address says where the bytes lie (traffic.h's regions), its length how
 // many.
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -16,6 +18,7 @@
 #include <tlm_utils/simple_initiator_socket.h>
 
 #include "units/common/stats.h"
+#include "units/memory/bandwidth_model.h"
 #include "units/memory/dram.h"
 #include "units/memory/dram_controller.h"
 #include "units/memory/traffic.h"
@@ -35,7 +38,19 @@ struct LatencyHidden : tlm::tlm_extension<LatencyHidden> {
   void copy_from(const tlm::tlm_extension_base&) override {}
 };
 
+// Which memory system serves the units: the DRAM controller and DRAM timing model
+// (detailed), or each channel's bus as a server of bursts (bandwidth_model.h); automatic:
+// bandwidth at fidelity analytic and tile, detailed at primitive, rtl and auto (the fidelity
+// ladder: memory contention is the primitive level's).
+enum class MemoryModel { automatic, detailed, bandwidth };
+const char* to_string(MemoryModel m);
+
 struct MemoryConfig {
+  MemoryModel model = MemoryModel::automatic;
+  // memory.model=bandwidth: the share of the buses' peak rate that bursts get. 0.9: on the 15
+  // built-in scenes at fidelity tile, the frame cycles with it against the detailed model's
+  // (reports/sim_bench: tile against tile (detailed memory)).
+  double bandwidth_efficiency = 0.9;
   DramConfig dram;
   ControllerConfig controller;
   // Interconnect and controller latency of a read beyond the DRAM's own (assumption: a
@@ -48,7 +63,9 @@ class Memory : public sc_core::sc_module {
  public:
   tlm_utils::multi_passthrough_target_socket<Memory> socket;
 
+  // `config.model` automatic is taken as detailed here (the tiler resolves it by fidelity).
   Memory(const sc_core::sc_module_name& name, const MemoryConfig& config, const sc_core::sc_time& period);
+  bool bandwidth_only() const { return m_bw != nullptr; }
   // Binds a requester's socket; its bytes are counted as `stream` (sockets may share a
   // stream). Returns the stream's index, for service().
   int attach(tlm_utils::simple_initiator_socket<UnitBase>& initiator, const std::string& stream);
@@ -73,6 +90,7 @@ class Memory : public sc_core::sc_module {
 
   MemoryConfig m_cfg;
   DramController m_ctrl;
+  std::unique_ptr<BandwidthModel> m_bw;  // memory.model=bandwidth: in place of m_ctrl
   sc_core::sc_time m_period;
   uint64_t m_period_ps, m_controller_ps;
   StatsGroup m_stats;
