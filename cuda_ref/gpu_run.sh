@@ -307,6 +307,21 @@ hw_ms() {  # the GL time of a scene in the current set, or nothing
   { grep -ho '"hw_raster_ms": [0-9.e+-]*' "$SET_WORK/$1/gl/stats.json" 2>/dev/null || true; } | head -n 1 | sed 's/.*: //'
 }
 
+# One compute-sanitizer run, its summary line into meta/sanitizer.txt (and said):
+#   sanitize_one TOOL LABEL LOG [the tool's own options] -- COMMAND...
+sanitize_one() {
+  local tool="$1" label="$2" log="$3" rc=0 line opts=()
+  shift 3
+  while [ "$1" != "--" ]; do opts+=("$1"); shift; done
+  shift
+  timeout "${TILEVIS_SANITIZE_TIMEOUT:-300}" compute-sanitizer --tool "$tool" "${opts[@]}" --error-exitcode 3 "$@" \
+    >"$log" 2>&1 || rc=$?
+  line="$(grep -E "ERROR SUMMARY|RACECHECK SUMMARY" "$log" | tail -n 1 || true)"
+  [ "$rc" = 124 ] && line="did not finish in ${TILEVIS_SANITIZE_TIMEOUT:-300} s"
+  echo "$tool $label: ${line:-no summary} (exit $rc)" >>"$WORK/meta/sanitizer.txt.tmp"
+  say "$tool $label: ${line:-no summary} (exit $rc)"
+}
+
 phase_sanitize() {
   [ -x "$BIN" ] || die "not built: run the build phase first"
   # TILEVIS_SANITIZE_TRACE: another trace in place of dragon 320x240 (say one whose items reach
@@ -315,11 +330,12 @@ phase_sanitize() {
   command -v compute-sanitizer >/dev/null || { echo "compute-sanitizer not found" >"$WORK/meta/sanitizer.txt"; return; }
   : >"$WORK/meta/sanitizer.txt.tmp"
   export TILEVIS_CUDA_NO_LAUNCH_PROBE=1  # no launch-cost probe (2,300 empty launches) under the tools
+  # TILEVIS_SANITIZE_ONLY: "tool:what ..." (what: a precision below, clip_long_exact,
+  # clip_long_float or dev_overflow) narrows the runs.
+  wanted() { [ -z "${TILEVIS_SANITIZE_ONLY:-}" ] || [[ " $TILEVIS_SANITIZE_ONLY " == *" $1:$2 "* ]]; }
   for tool in memcheck racecheck; do
     for p in exact float zb_tiled zb_naive hybrid_exact hybrid_float; do
-      # TILEVIS_SANITIZE_ONLY: "tool:what ..." (what: the above, or dev_overflow) narrows the runs.
-      [ -z "${TILEVIS_SANITIZE_ONLY:-}" ] || [[ " $TILEVIS_SANITIZE_ONLY " == *" $tool:$p "* ]] || continue
-      local log="$LOGS/sanitizer_${tool}_$p.log" rc=0
+      wanted "$tool" "$p" || continue
       local args=(--tile 32 --precision "$p" --baselines off)
       # Hybrid with small lists, so that tiles go per pixel (budget) and its kernels run.
       case "$p" in
@@ -328,48 +344,30 @@ phase_sanitize() {
       esac
       # racecheck of float hybrid did not finish on the 320x240 trace inside a lease: the 128x72
       # one (.gpu/tiny, prepare_gpu_run.sh) when carried.
-      local trace="$small" what
-      what="$(basename "$small" .tvt)"
+      local trace="$small"
       if [ "$tool $p" = "racecheck hybrid_float" ] && [ -f .gpu/tiny/dragon_128x72.tvt ]; then
-        trace=.gpu/tiny/dragon_128x72.tvt what="dragon_128x72"
+        trace=.gpu/tiny/dragon_128x72.tvt
       fi
-      timeout "${TILEVIS_SANITIZE_TIMEOUT:-300}" compute-sanitizer --tool "$tool" --error-exitcode 3 "$BIN" cuda "$trace" \
-        "${args[@]}" --runs 1 -o "$WORK/sanitize/${tool}_$p" >"$log" 2>&1 || rc=$?
-      local line
-      line="$(grep -E "ERROR SUMMARY|RACECHECK SUMMARY" "$log" | tail -n 1 || true)"
-      [ "$rc" = 124 ] && line="did not finish in ${TILEVIS_SANITIZE_TIMEOUT:-300} s"
-      echo "$tool $p ($what): ${line:-no summary} (exit $rc)" >>"$WORK/meta/sanitizer.txt.tmp"
-      say "$tool $p ($what): ${line:-no summary} (exit $rc)"
+      sanitize_one "$tool" "$p ($(basename "$trace" .tvt))" "$LOGS/sanitizer_${tool}_$p.log" -- \
+        "$BIN" cuda "$trace" "${args[@]}" --runs 1 -o "$WORK/sanitize/${tool}_$p"
     done
     # The clip stage's long chains (k_clip_long: the tree of walks, the per-warp stage, the list
     # of long items) on a trace whose items reach them, the tool on that kernel only (the rest
-    # runs uninstrumented, so racecheck of float finishes): .gpu/tiny/teapot_stadium_320x240.tvt.
+    # runs uninstrumented): .gpu/tiny/teapot_stadium_320x240.tvt.
     local long=.gpu/tiny/teapot_stadium_320x240.tvt
     for p in exact float; do
       [ -f "$long" ] || break
-      [ -z "${TILEVIS_SANITIZE_ONLY:-}" ] || [[ " $TILEVIS_SANITIZE_ONLY " == *" $tool:clip_long_$p "* ]] || continue
-      local log="$LOGS/sanitizer_${tool}_clip_long_$p.log" rc=0
-      timeout "${TILEVIS_SANITIZE_TIMEOUT:-300}" compute-sanitizer --tool "$tool" --kernel-name kns=k_clip_long \
-        --error-exitcode 3 "$BIN" cuda "$long" --tile 32 --precision "$p" --baselines off --runs 1 \
-        -o "$WORK/sanitize/${tool}_clip_long_$p" >"$log" 2>&1 || rc=$?
-      local line
-      line="$(grep -E "ERROR SUMMARY|RACECHECK SUMMARY" "$log" | tail -n 1 || true)"
-      [ "$rc" = 124 ] && line="did not finish in ${TILEVIS_SANITIZE_TIMEOUT:-300} s"
-      echo "$tool k_clip_long $p (teapot_stadium_320x240): ${line:-no summary} (exit $rc)" >>"$WORK/meta/sanitizer.txt.tmp"
-      say "$tool k_clip_long $p (teapot_stadium_320x240): ${line:-no summary} (exit $rc)"
+      wanted "$tool" "clip_long_$p" || continue
+      sanitize_one "$tool" "k_clip_long $p (teapot_stadium_320x240)" "$LOGS/sanitizer_${tool}_clip_long_$p.log" \
+        --kernel-name kns=k_clip_long -- \
+        "$BIN" cuda "$long" --tile 32 --precision "$p" --baselines off --runs 1 -o "$WORK/sanitize/${tool}_clip_long_$p"
     done
     # The device-sized graph past its bounds (a launch that overflows: every later count 0, the
     # frame run again with host reads): the GPU test that makes it happen, under the tool.
-    local log="$LOGS/sanitizer_${tool}_dev_overflow.log" rc=0 gt="$BUILD/tests/cuda/cuda_gpu_tests"
-    if [ -x "$gt" ] && { [ -z "${TILEVIS_SANITIZE_ONLY:-}" ] || [[ " $TILEVIS_SANITIZE_ONLY " == *" $tool:dev_overflow "* ]]; }; then
-      timeout "${TILEVIS_SANITIZE_TIMEOUT:-300}" compute-sanitizer --tool "$tool" --error-exitcode 3 "$gt" \
-        --gtest_filter=Gpu.DeviceSizedGraphPastItsBoundsRunsAgain >"$log" 2>&1 || rc=$?
-      local line
-      line="$(grep -E "ERROR SUMMARY|RACECHECK SUMMARY" "$log" | tail -n 1 || true)"
-      [ "$rc" = 124 ] && line="did not finish in ${TILEVIS_SANITIZE_TIMEOUT:-300} s"
-      echo "$tool device-sized overflow (cuda_gpu_tests DeviceSizedGraphPastItsBoundsRunsAgain, cubes 320x240): ${line:-no summary} (exit $rc)" \
-        >>"$WORK/meta/sanitizer.txt.tmp"
-      say "$tool dev_overflow: ${line:-no summary} (exit $rc)"
+    local gt="$BUILD/tests/cuda/cuda_gpu_tests"
+    if [ -x "$gt" ] && wanted "$tool" dev_overflow; then
+      sanitize_one "$tool" "device-sized overflow (cuda_gpu_tests DeviceSizedGraphPastItsBoundsRunsAgain, cubes 320x240)" \
+        "$LOGS/sanitizer_${tool}_dev_overflow.log" -- "$gt" --gtest_filter=Gpu.DeviceSizedGraphPastItsBoundsRunsAgain
     fi
   done
   paste -sd ';' "$WORK/meta/sanitizer.txt.tmp" >"$WORK/meta/sanitizer.txt"
