@@ -91,12 +91,6 @@ struct Piece {
       if (i < n) copy[i] = at[i];
     at = copy;
   }
-  TV_HD void load_staged(const PEdge<P>* stage, uint32_t edges) {  // edges <= kCopyEdges
-    n = edges;
-    for (uint32_t i = 0; i < kCopyEdges; ++i)
-      if (i < n) copy[i] = stage[i];
-    at = copy;
-  }
   TV_HD bool survives(const TileTri<P>& tt, const SilEdge<P>& e, Sides* sides) const {
     return tilevis::cuda::survives<P>(at, n, tt, e, sides);
   }
@@ -587,7 +581,7 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
       cur = __shfl_sync(0xffffffffu, static_cast<unsigned long long>(next), first);
       __syncwarp();  // the inside part's edges, written by lane `first`, before the lanes read them
       if (__shfl_sync(0xffffffffu, staged, first)) {
-        piece.load_staged(wstage[t / 32], uint32_t(cur));
+        piece.load(wstage[t / 32], uint32_t(cur));  // the stage holds the part from its edge 0
         __syncwarp();  // every lane has its copy before the stage is written again
       } else {
         piece.load(a.pool, cur);
