@@ -8,7 +8,8 @@
 #                         unpacked, not installed, there)
 #   .gpu/traces.tar.xz    every traces/scenes/*.json as a trace (`tilevis trace`), plus
 #                         small/dragon_320x240.tvt for compute-sanitizer (and .gpu/tiny/dragon_128x72.tvt,
-#                         .gpu/tiny/teapot_stadium_320x240.tvt for k_clip_long)
+#                         .gpu/tiny/teapot_stadium_320x240.tvt and
+#                         .gpu/tiny/clip_chain_64x64.tvt for k_clip_long)
 #   .gpu/commit.txt       the commit the traces were made at
 #   .gpu/prebuilt.tar.xz  with --prebuilt DIR: tilevis, cuda_gpu_tests, gl_raster, cuda_gpu_report
 #                         built here in DIR and the shared libraries they need (gpu_run.sh build
@@ -79,6 +80,8 @@ mkdir -p .gpu/tiny
 "$BIN" trace traces/scenes/dragon.json --viewport 128x72 -q -o .gpu/tiny/dragon_128x72.tvt
 # Items of 32 or more candidates at 32x32 tiles (k_clip_long), small enough for racecheck.
 "$BIN" trace traces/scenes/teapot_stadium.json --viewport 320x240 -q -o .gpu/tiny/teapot_stadium_320x240.tvt
+# A smaller one for racecheck of k_clip_long: one chain of clips, 4 tiles.
+"$BIN" trace cuda_ref/scenes/clip_chain.json -q -o .gpu/tiny/clip_chain_64x64.tvt
 
 # An 8-frame orbit of the bunny (the camera turning 360 degrees about y): per-frame times.
 say "trace bunny orbit (8 frames)"
