@@ -9,6 +9,10 @@
 // No hand-sized buffers (SVGPU §4.3's failure): piece slots and polygon edges come from pools
 // with device-side bump counters. An item that finds its pool exhausted stops and is counted;
 // the host grows the pools from the counters and runs the frame again.
+#include <cstdlib>
+#include <stdexcept>
+#include <string>
+
 #include "pipeline.cuh"
 
 namespace tilevis::cuda {
@@ -277,6 +281,24 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team, uint64_t* stag
 inline constexpr uint32_t kLongBlock = 512, kLongStage = 4096;
 template <class P>
 inline constexpr uint32_t kLongBlockOf = P::kExact ? kLongBlock / 2 : kLongBlock;
+// TILEVIS_CLIP_LONG_WARPS=N launches k_clip_long with N warps a block (1 to kLongBlockOf<P> / 32,
+// the default); the kernel reads its block size, so any N is the same code and the same output.
+// For compute-sanitizer's racecheck: float's 16 warps did not finish under it in 240 s on a
+// 4-tile trace (cuda_ref/scenes/clip_chain.json) where 8 took 15 s (H200).
+template <class P>
+uint32_t long_block() {
+  static const uint32_t block = [] {
+    const char* v = std::getenv("TILEVIS_CLIP_LONG_WARPS");
+    if (!v) return kLongBlockOf<P>;
+    char* end = nullptr;
+    const unsigned long w = std::strtoul(v, &end, 10);
+    if (end == v || *end != '\0' || w < 1 || w > kLongBlockOf<P> / 32)
+      throw std::runtime_error(std::string("TILEVIS_CLIP_LONG_WARPS=") + v + ": expected 1 to " +
+                               std::to_string(kLongBlockOf<P> / 32));
+    return uint32_t(w) * 32;
+  }();
+  return block;
+}
 
 struct LongShared {
   uint32_t wcnt[kLongBlock / 32], wneed[kLongBlock / 32];
@@ -805,7 +827,7 @@ bool stage_clip(Pipeline<P>& p) {
       return true;
     }();
     (void)smem_set;
-    k_clip_long<P><<<ex.grid_blocks / 2, kLongBlockOf<P>, kTreeSmem, ex.stream>>>(a, p.counters.get() + kLongItems, ni);
+    k_clip_long<P><<<ex.grid_blocks / 2, long_block<P>(), kTreeSmem, ex.stream>>>(a, p.counters.get() + kLongItems, ni);
     TV_CUDA(cudaGetLastError());
     ex.on_main();
     ++ex.queued;
