@@ -358,20 +358,23 @@ phase_sanitize() {
     # candidates, 1,205 pieces in one tile). racecheck of float's 16-warp blocks did not finish
     # in 240 s on the chain (exact's 8: 2 s): float is race-checked at 8 warps a block
     # (TILEVIS_CLIP_LONG_WARPS=8; the kernel reads its block size, the output is the same).
-    local long p warps
+    local long p name label
     for long in .gpu/tiny/teapot_stadium_320x240.tvt .gpu/tiny/clip_chain_64x64.tvt; do
       [ -f "$long" ] || continue
       for p in exact float; do
         wanted "$tool" "clip_long_$p" || continue
-        warps=""
-        [ "$tool $p" = "racecheck float" ] && warps=8 && export TILEVIS_CLIP_LONG_WARPS=8
-        sanitize_one "$tool" "k_clip_long $p ($(basename "$long" .tvt)${warps:+, $warps warps a block})" \
-          "$LOGS/sanitizer_${tool}_clip_long_${p}_$(basename "$long" .tvt).log" --kernel-name kns=k_clip_long -- \
-          "$BIN" cuda "$long" --tile 32 --precision "$p" --baselines off --warmup 1 --runs 1 \
-          -o "$WORK/sanitize/${tool}_clip_long_${p}_$(basename "$long" .tvt)"
+        name="clip_long_${p}_$(basename "$long" .tvt)"
+        label="k_clip_long $p ($(basename "$long" .tvt))"
         unset TILEVIS_CLIP_LONG_WARPS
+        if [ "$tool $p" = "racecheck float" ]; then
+          export TILEVIS_CLIP_LONG_WARPS=8
+          label="k_clip_long $p ($(basename "$long" .tvt), 8 warps a block)"
+        fi
+        sanitize_one "$tool" "$label" "$LOGS/sanitizer_${tool}_$name.log" --kernel-name kns=k_clip_long -- \
+          "$BIN" cuda "$long" --tile 32 --precision "$p" --baselines off --warmup 1 --runs 1 -o "$WORK/sanitize/${tool}_$name"
       done
     done
+    unset TILEVIS_CLIP_LONG_WARPS
     # The device-sized graph past its bounds (a launch that overflows: every later count 0, the
     # frame run again with host reads): the GPU test that makes it happen, under the tool.
     local gt="$BUILD/tests/cuda/cuda_gpu_tests"
