@@ -99,6 +99,66 @@ TEST(Sampler, AnExactLinearPopulationIsEstimatedExactlyWithZeroWidth) {
   EXPECT_EQ(e.tiles_observed, 48u);
 }
 
+TEST(Sampler, TakeAllClustersAreTheHeavyOnesAndTheClusterBeforeEachRun) {
+  // Clusters of 4: a unit of 1000 (mean 94.7; over 4x) in clusters 2 and 3, and in cluster 6.
+  std::vector<double> aux(32, 1.0);
+  aux[9] = aux[14] = aux[25] = 1000.0;
+  const std::vector<bool> c = take_all_clusters(aux, 4, 4.0);
+  EXPECT_EQ(take_all_clusters(aux, 4, 16.0), std::vector<bool>(8, false));  // 1000 < 16 x 94.7
+  EXPECT_EQ(c, (std::vector<bool>{false, true, true, true, false, true, true, false}));
+  EXPECT_EQ(take_all_clusters(std::vector<double>(32, 5.0), 4, 16.0), std::vector<bool>(8, false));
+  // A run at the start has no cluster before it; a cut last cluster counts.
+  std::vector<double> tail(10, 1.0);
+  tail[0] = tail[9] = 1000.0;
+  EXPECT_EQ(take_all_clusters(tail, 4, 2.0), (std::vector<bool>{true, true, true}));
+  EXPECT_THROW(take_all_clusters(tail, 0, 2.0), std::invalid_argument);
+}
+
+// Take-all clusters come in the first round beside the stratified draw, are in no stratum, and
+// are added as they are: where the rest is an exact linear population, the estimate is exact
+// however far from it the take-all clusters' occupancies lie, and the interval has no width.
+TEST(Sampler, TakeAllClustersAreAddedAsTheyAre) {
+  std::mt19937_64 rng(11);
+  const size_t n = 400;
+  std::vector<double> tris(n), occ(n);
+  for (size_t i = 0; i < n; ++i) {
+    tris[i] = double(rng() % 200);
+    occ[i] = 150.0 + 7.0 * tris[i];
+  }
+  std::vector<bool> certain(n / 4, false);
+  for (uint64_t c : {0, 17, 18, 60}) {
+    certain[c] = true;
+    for (size_t p = 4 * c; p < 4 * c + 4; ++p) occ[p] = 50000.0 + double(rng() % 9000);  // not linear
+  }
+  TileSampler s(tris, config(4, 1), 0, {}, {}, certain);
+  EXPECT_EQ(s.clusters(), 100u);
+  EXPECT_EQ(s.take_all(), 4u);
+  EXPECT_THROW(TileSampler(tris, config(4, 1), 0, {}, {}, std::vector<bool>(99, false)), std::invalid_argument);
+  const std::vector<uint64_t> round = s.next_round(12);
+  ASSERT_EQ(round.size(), 16u);
+  for (uint64_t c : {0, 17, 18, 60}) EXPECT_TRUE(std::binary_search(round.begin(), round.end(), c));
+  EXPECT_EQ(s.clusters_taken(), 16u);
+  bool first = true;
+  observe_round(s, round, occ, tris, first);
+  const RenderEstimate e = s.estimate(1);
+  // The fill is cluster 0's first tile (a take-all one); the take-all clusters' other tiles
+  // are summed; the regression's population is the other 384 tiles, less one average tile.
+  double exact = 0, sum_tris = 0;
+  for (size_t i = 1; i < n; ++i)
+    if (certain[i / 4]) exact += occ[i];
+  for (size_t i = 0; i < n; ++i)
+    if (!certain[i / 4]) sum_tris += tris[i];
+  const double m = 384;
+  const double expect = occ[0] + exact + (150.0 * m + 7.0 * sum_tris) * (m - 1) / m;
+  EXPECT_NEAR(e.cycles, expect, 1e-9 * expect);
+  EXPECT_NEAR(e.half_width, 0.0, 1e-6 * e.cycles);
+  EXPECT_EQ(e.clusters_observed, 16u);
+  EXPECT_EQ(e.tiles_observed, 64u);
+  // Later rounds draw the stratified clusters only, and all of them complete the sample.
+  for (uint64_t c : s.next_round(1000)) EXPECT_FALSE(s.is_take_all(c));
+  EXPECT_EQ(s.clusters_taken(), 100u);
+}
+
 // Tiles cut by the screen's bottom edge (a quarter of their rows gone) cost their share of a
 // full tile's fixed cost: with each tile's size as the regressor the estimate is exact from a
 // sample of full tiles alone; counting tiles, it would be a full tile's cost too high for each

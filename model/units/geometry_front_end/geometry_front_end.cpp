@@ -114,8 +114,9 @@ void GeometryFrontEnd::run() {
 SampledPart GeometryFrontEnd::sampled_part() const {
   SampledPart p;
   p.curve = m_sampler->variance_curve(1);
-  p.taken = m_sampler->clusters_taken();
-  p.clusters = m_sampler->clusters();
+  // The curve's clusters are the stratified ones: the take-all ones are taken in the first round.
+  p.taken = m_sampler->clusters_taken() - m_sampler->take_all();
+  p.clusters = m_sampler->clusters() - m_sampler->take_all();
   const RenderEstimate& e = m_estimate.estimate;
   p.cost = e.clusters_observed ? double(e.tiles_observed) / double(e.clusters_observed) : double(m_sampling.geometry_cluster);
   return p;
@@ -127,8 +128,10 @@ void GeometryFrontEnd::grow(uint64_t clusters) {
 }
 
 void GeometryFrontEnd::run_sampled() {
-  m_sampler = std::make_unique<TileSampler>(m_aux, m_sampling, ~uint64_t{0});
-  sample_round(std::min<uint64_t>(m_sampler->clusters(), std::max<uint32_t>(1, m_sampling.geometry_first)));
+  m_sampler = std::make_unique<TileSampler>(
+      m_aux, m_sampling, ~uint64_t{0}, std::vector<double>{}, std::vector<std::vector<double>>{},
+      take_all_clusters(m_aux, m_sampling.cluster_tiles, m_sampling.certainty_ratio));
+  sample_round(std::min<uint64_t>(m_sampler->clusters() - m_sampler->take_all(), std::max<uint32_t>(1, m_sampling.geometry_first)));
   while (!m_estimate.estimate.complete && !m_sampler->variance_curve(1).known)
     sample_round(m_sampler->clusters_needed(0.0, 1) - m_sampler->clusters_taken());
   m_estimate.rounds_before_render = m_estimate.rounds;
@@ -173,7 +176,7 @@ void GeometryFrontEnd::sample_round(uint64_t want) {
   uint64_t prev = round_start;
   bool first = true;
   for (uint64_t c : round) {
-    const bool cold = c == 0 || !in_round[c - 1];
+    const bool cold = !sampler.is_take_all(c) && c > 0 && !in_round[c - 1];
     const uint64_t b = sampler.cluster_begin(c), e = sampler.cluster_end(c);
     double y = 0, x = 0;
     uint64_t m = 0;

@@ -21,37 +21,64 @@ double student_quantile(double confidence, double dof) {
   return boost::math::quantile(boost::math::complement(boost::math::students_t(dof), (1.0 - confidence) / 2));
 }
 
+std::vector<bool> take_all_clusters(const std::vector<double>& aux, uint32_t cluster, double ratio) {
+  if (cluster == 0) throw std::invalid_argument("sampling: cluster_tiles must be at least 1");
+  const size_t n = (aux.size() + cluster - 1) / cluster;
+  double mean = 0;
+  for (double a : aux) mean += a;
+  mean /= double(std::max<size_t>(aux.size(), 1));
+  std::vector<bool> heavy(n, false);
+  for (size_t i = 0; i < aux.size(); ++i)
+    if (aux[i] > ratio * mean) heavy[i / cluster] = true;
+  std::vector<bool> certain = heavy;
+  for (size_t c = 1; c < n; ++c)
+    if (heavy[c] && !heavy[c - 1]) certain[c - 1] = true;
+  return certain;
+}
+
 TileSampler::TileSampler(std::vector<double> aux, const SamplingConfig& config, uint64_t stream,
-                         const std::vector<double>& size, const std::vector<std::vector<double>>& extra)
-    : m_tiles(aux.size()), m_cfg(config), m_z(normal_quantile(config.confidence)) {
+                         const std::vector<double>& size, const std::vector<std::vector<double>>& extra,
+                         std::vector<bool> certain)
+    : m_tiles(aux.size()), m_cfg(config), m_z(normal_quantile(config.confidence)), m_certain(std::move(certain)) {
   if (config.cluster_tiles == 0) throw std::invalid_argument("sampling: cluster_tiles must be at least 1");
   if (!size.empty() && size.size() != aux.size()) throw std::invalid_argument("sampling: one size per unit");
-  for (double t : aux) m_aux_total += t;
-  for (const std::vector<double>& z : extra) {
+  for (const std::vector<double>& z : extra)
     if (z.size() != aux.size()) throw std::invalid_argument("sampling: one value of each extra regressor per unit");
-    m_extra_total.push_back(0.0);
-    for (double t : z) m_extra_total.back() += t;
+  m_all_clusters = (m_tiles + config.cluster_tiles - 1) / config.cluster_tiles;
+  if (m_certain.empty()) m_certain.assign(m_all_clusters, false);
+  if (m_certain.size() != m_all_clusters) throw std::invalid_argument("sampling: one take-all flag per cluster");
+  // The population the regression estimates: the units of the clusters not taken whole.
+  m_extra_total.assign(extra.size(), 0.0);
+  for (uint64_t c = 0; c < m_all_clusters; ++c) {
+    if (m_certain[c]) {
+      m_certain_pending.push_back(c);
+      continue;
+    }
+    for (uint64_t p = cluster_begin(c); p < cluster_end(c); ++p) {
+      ++m_units;
+      m_aux_total += aux[p];
+      m_size_total += size.empty() ? 1.0 : size[p];
+      for (size_t k = 0; k < extra.size(); ++k) m_extra_total[k] += extra[k][p];
+    }
   }
-  m_size_total = double(m_tiles);
-  if (!size.empty()) {
-    m_size_total = 0;
-    for (double t : size) m_size_total += t;
-  }
-  m_clusters = (m_tiles + config.cluster_tiles - 1) / config.cluster_tiles;
+  m_certain_count = m_certain_pending.size();
+  m_clusters = m_all_clusters - m_certain_count;
   // Strata: the clusters sorted by their auxiliary (ties by position), cut where the running
   // total of (auxiliary + tiles) passes each equal share, at least two clusters a stratum:
   // a few heavy clusters get strata of their own instead of hiding among light ones.
-  std::vector<double> x(m_clusters, 0.0);
-  for (uint64_t c = 0; c < m_clusters; ++c)
+  std::vector<double> x(m_all_clusters, 0.0);
+  std::vector<uint64_t> by_x;
+  for (uint64_t c = 0; c < m_all_clusters; ++c) {
+    if (m_certain[c]) continue;
     for (uint64_t p = cluster_begin(c); p < cluster_end(c); ++p) x[c] += aux[p];
-  std::vector<uint64_t> by_x(m_clusters);
-  for (uint64_t c = 0; c < m_clusters; ++c) by_x[c] = c;
+    by_x.push_back(c);
+  }
   std::stable_sort(by_x.begin(), by_x.end(), [&](uint64_t a, uint64_t b) { return x[a] < x[b]; });
   const uint64_t h_count = std::max<uint64_t>(1, std::min<uint64_t>(std::max<uint32_t>(1, config.strata), m_clusters / 2));
   m_strata.resize(m_clusters ? h_count : 0);
-  m_stratum_of.assign(m_clusters, 0);
+  m_stratum_of.assign(m_all_clusters, kTakeAll);
   double total = 0;
-  for (uint64_t c = 0; c < m_clusters; ++c) total += x[c] + double(cluster_end(c) - cluster_begin(c));
+  for (uint64_t c : by_x) total += x[c] + double(cluster_end(c) - cluster_begin(c));
   double running = 0;
   uint32_t h = 0;
   for (uint64_t i = 0; i < m_clusters; ++i) {
@@ -110,7 +137,8 @@ std::vector<uint64_t> TileSampler::next_round(uint64_t count) {
     if (best == m_strata.size()) break;
     ++take[best];
   }
-  std::vector<uint64_t> r;
+  std::vector<uint64_t> r = std::move(m_certain_pending);
+  m_certain_pending.clear();
   for (size_t h = 0; h < m_strata.size(); ++h) {
     Stratum& st = m_strata[h];
     r.insert(r.end(), st.order.begin() + int64_t(st.taken), st.order.begin() + int64_t(st.taken + take[h]));
@@ -124,13 +152,15 @@ std::vector<uint64_t> TileSampler::next_round(uint64_t count) {
 void TileSampler::observe_cluster(uint64_t c, double occupancy_sum, double size, double aux,
                                   const std::vector<double>& extra) {
   if (extra.size() != m_extra_total.size()) throw std::invalid_argument("sampling: one sum per extra regressor");
+  if (m_certain.at(c)) {
+    m_exact_sum += occupancy_sum;
+    return;
+  }
   m_y.push_back(occupancy_sum);
   m_reg.push_back({size, aux});
   m_reg.back().insert(m_reg.back().end(), extra.begin(), extra.end());
   m_h.push_back(m_stratum_of.at(c));
 }
-
-void TileSampler::observe_exact(double cycles) { m_exact_sum += cycles; }
 
 void TileSampler::observe_fill(double cycles) {
   m_fill_sum += cycles;
@@ -229,8 +259,8 @@ TileSampler::Fit TileSampler::fit(uint32_t cores) const {
   }
   // The population's size and auxiliary less the cores' first tiles' (average tiles: their
   // cost is the fill).
-  const double c = std::min<double>(std::max<uint32_t>(cores, 1), double(m_tiles));
-  const double share = m_tiles ? (double(m_tiles) - c) / double(m_tiles) : 0.0;
+  const double c = std::min<double>(std::max<uint32_t>(cores, 1), double(m_units));
+  const double share = m_units ? (double(m_units) - c) / double(m_units) : 0.0;
   std::vector<double> totals = {m_size_total, m_aux_total};
   totals.insert(totals.end(), m_extra_total.begin(), m_extra_total.end());
   // The generalised regression estimator: the fit's prediction plus the residuals expanded
@@ -254,11 +284,14 @@ double TileSampler::variance(const Fit& f) const {
 RenderEstimate TileSampler::estimate(uint32_t cores) const {
   RenderEstimate e;
   e.tiles = m_tiles;
-  e.clusters = m_clusters;
-  e.clusters_observed = m_taken;
+  e.clusters = m_all_clusters;
+  e.clusters_observed = clusters_taken();
   for (const Stratum& st : m_strata)
     for (uint64_t i = 0; i < st.taken; ++i) e.tiles_observed += cluster_end(st.order[i]) - cluster_begin(st.order[i]);
-  e.complete = m_taken == m_clusters;
+  if (m_certain_pending.empty())
+    for (uint64_t c = 0; c < m_all_clusters; ++c)
+      if (m_certain[c]) e.tiles_observed += cluster_end(c) - cluster_begin(c);
+  e.complete = clusters_taken() == m_all_clusters;
   const Fit f = fit(cores);
   const double fill = m_fills ? m_fill_sum / double(m_fills) : 0.0;
   const double per_core = 1.0 / double(std::max<uint32_t>(cores, 1));
@@ -298,8 +331,8 @@ uint64_t TileSampler::clusters_needed(double target, uint32_t cores) const {
   p.curve = variance_curve(cores);
   p.taken = m_taken;
   p.clusters = m_clusters;
-  if (m_taken >= m_clusters) return m_clusters;
-  return std::max<uint64_t>(allocate({p}, target).front(), m_taken + 1);
+  if (m_taken >= m_clusters) return m_all_clusters;
+  return m_certain_count + std::max<uint64_t>(allocate({p}, target).front(), m_taken + 1);
 }
 
 std::vector<uint64_t> allocate(const std::vector<SampledPart>& parts, double target) {

@@ -99,6 +99,12 @@ inline double tile_work(uint32_t triangles, uint32_t edges, uint32_t reject_lane
   return double(triangles) * (rows > 1.0 ? rows : 1.0);
 }
 
+// Take-all clusters of units with auxiliaries `aux` in clusters of `cluster` consecutive
+// units: every cluster holding a unit with more than `ratio` times the mean auxiliary, and the
+// cluster before each run of them, where the run's cold start then falls (a heavy tile after an
+// unsimulated one was 35 % dearer on armadillo_box).
+std::vector<bool> take_all_clusters(const std::vector<double>& aux, uint32_t cluster, double ratio);
+
 // Two-sided standard-normal quantile: P(|Z| <= z) = confidence.
 double normal_quantile(double confidence);
 // Two-sided Student's t quantile with `dof` degrees of freedom: P(|T| <= t) = confidence.
@@ -142,12 +148,20 @@ class TileSampler {
   // simulated (tile_work; a geometry's bytes). `size`: per unit, its size regressor (a tile's
   // pixels over a full tile's); empty: 1 each.
   // `extra`: further regressors, each one value per unit (none: size and aux alone).
+  // `certain`: per cluster, taken whole in the first round (take_all_clusters; empty: none).
+  // Such a cluster is added as it is, not estimated: it is in no stratum, and the regression's
+  // population is the other clusters' units. It is measured from its first unit on (it has no
+  // warm-up: a measured cold start costs less than an estimated heavy one).
   TileSampler(std::vector<double> aux, const SamplingConfig& config, uint64_t stream,
-              const std::vector<double>& size = {}, const std::vector<std::vector<double>>& extra = {});
+              const std::vector<double>& size = {}, const std::vector<std::vector<double>>& extra = {},
+              std::vector<bool> certain = {});
 
   uint64_t tiles() const { return m_tiles; }
-  uint64_t clusters() const { return m_clusters; }
-  uint64_t clusters_taken() const { return m_taken; }
+  // Clusters in all and taken, the take-all ones included.
+  uint64_t clusters() const { return m_all_clusters; }
+  uint64_t clusters_taken() const { return m_taken + (m_certain_pending.empty() ? m_certain_count : 0); }
+  uint64_t take_all() const { return m_certain_count; }
+  bool is_take_all(uint64_t c) const { return m_certain[c]; }
   // Tile positions [begin, end) of cluster c in the scheduler's order.
   uint64_t cluster_begin(uint64_t c) const { return c * m_cfg.cluster_tiles; }
   uint64_t cluster_end(uint64_t c) const;
@@ -156,17 +170,17 @@ class TileSampler {
   uint64_t stratum_of(uint64_t c) const { return m_stratum_of[c]; }
 
   // The next round: `count` more clusters drawn at random within strata (without
-  // replacement; two per stratum first, then Neyman allocation), ascending.
+  // replacement; two per stratum first, then Neyman allocation), and in the first round every
+  // take-all cluster besides, ascending.
   std::vector<uint64_t> next_round(uint64_t count);
 
   // Observations: the occupancies of cluster c's tiles that were measured (not their core's
   // first in their round, not warm-up; their sum, and their size summed); each core's first
   // tile of a round as a fill. `aux` and `extra` (one per extra regressor): the auxiliary and
   // the extra regressors summed over the same tiles.
+  // A take-all cluster's occupancies are added as they are (its regressors are not used).
   void observe_cluster(uint64_t c, double occupancy_sum, double size, double aux, const std::vector<double>& extra = {});
   void observe_fill(double cycles);
-  // A take-all tile's occupancy (not its core's first): added as it is, not estimated.
-  void observe_exact(double cycles);
 
   RenderEstimate estimate(uint32_t cores) const;
   // Clusters needed in all (taken included) for a half-width of `target` cycles, from the
@@ -177,8 +191,9 @@ class TileSampler {
 
  private:
   uint64_t m_tiles;
-  double m_aux_total = 0;   // the population's auxiliary total
-  double m_size_total = 0;  // and its size total
+  uint64_t m_units = 0;     // the units of the clusters not taken whole
+  double m_aux_total = 0;   // their auxiliary total
+  double m_size_total = 0;  // and their size total
   SamplingConfig m_cfg;
   double m_z;
   struct Stratum {
@@ -186,8 +201,12 @@ class TileSampler {
     uint64_t taken = 0;
   };
   std::vector<Stratum> m_strata;
-  std::vector<uint32_t> m_stratum_of;  // per cluster
-  uint64_t m_clusters = 0, m_taken = 0;
+  static constexpr uint32_t kTakeAll = ~uint32_t{0};
+  std::vector<uint32_t> m_stratum_of;  // per cluster (kTakeAll: in none)
+  std::vector<bool> m_certain;         // per cluster: taken whole
+  std::vector<uint64_t> m_certain_pending;  // take-all clusters not yet drawn
+  uint64_t m_all_clusters = 0, m_certain_count = 0;
+  uint64_t m_clusters = 0, m_taken = 0;  // the stratified clusters: in all, taken
   std::vector<double> m_extra_total;  // per extra regressor: the population's total
   std::vector<double> m_y;             // per observed cluster: occupancy sum
   std::vector<std::vector<double>> m_reg;  // per observed cluster: size, auxiliary, extra regressors

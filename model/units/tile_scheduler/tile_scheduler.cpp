@@ -99,23 +99,14 @@ void TileScheduler::dispatch() {
 void TileScheduler::dispatch_sampled(uint32_t segment, const std::vector<uint32_t>& tiles) {
   // The take-all stratum: heavy tiles (tile_sampler.h); the others are sampled in clusters.
   std::vector<double> work(tiles.size());
-  double mean = 0;
   for (size_t i = 0; i < tiles.size(); ++i)
-    mean += work[i] = tile_work(m_work.tile_triangle_count(tiles[i]), m_work.tile_edge_count(tiles[i]),
-                                     m_cfg.sampling.reject_lanes);
-  mean /= double(std::max<size_t>(tiles.size(), 1));
-  // Whole clusters are taken: a heavy tile keeps the tiles before it in its cluster, whose
-  // overlap with it is part of its cost (a heavy tile after an unsimulated one was 35 % dearer
-  // on armadillo_box), and each run of such clusters keeps the cluster before it, so that the
-  // run's cold start falls on lighter tiles (the disturbance lasts about eight tiles). The
-  // other clusters keep their boundaries in the sampled population.
+    work[i] = tile_work(m_work.tile_triangle_count(tiles[i]), m_work.tile_edge_count(tiles[i]), m_cfg.sampling.reject_lanes);
+  // Whole clusters are taken (take_all_clusters): a heavy tile keeps the tiles before it in its
+  // cluster, whose overlap with it is part of its cost, and each run of such clusters keeps the
+  // cluster before it, so that the run's cold start falls on lighter tiles (the disturbance lasts
+  // about eight tiles). The other clusters keep their boundaries in the sampled population.
   const size_t ct = m_cfg.sampling.cluster_tiles;
-  std::vector<bool> heavy_cluster((tiles.size() + ct - 1) / ct, false);
-  for (size_t i = 0; i < tiles.size(); ++i)
-    if (work[i] > m_cfg.sampling.certainty_ratio * mean) heavy_cluster[i / ct] = true;
-  std::vector<bool> certain_cluster = heavy_cluster;
-  for (size_t c = 1; c < heavy_cluster.size(); ++c)
-    if (heavy_cluster[c] && !heavy_cluster[c - 1]) certain_cluster[c - 1] = true;
+  const std::vector<bool> certain_cluster = take_all_clusters(work, m_cfg.sampling.cluster_tiles, m_cfg.sampling.certainty_ratio);
   // A tile's size: its pixels over a full tile's (the screen's right and bottom edges cut tiles).
   const geom::TileGrid& grid = m_work.grid();
   std::vector<double> size(tiles.size());
@@ -130,30 +121,18 @@ void TileScheduler::dispatch_sampled(uint32_t segment, const std::vector<uint32_
     extra[0][i] = double(m_work.tile_triangle_count(tiles[i]));
     extra[1][i] = double(m_work.tile_pair_tests(tiles[i]));
   }
-  std::vector<size_t> sampled_pos, certain_pos;
-  std::vector<double> sampled_work, sampled_size;
-  std::vector<std::vector<double>> sampled_extra(extra.size());
-  for (size_t i = 0; i < tiles.size(); ++i) {
-    if (certain_cluster[i / ct]) {
-      certain_pos.push_back(i);
-    } else {
-      sampled_pos.push_back(i);
-      sampled_work.push_back(work[i]);
-      sampled_size.push_back(size[i]);
-      for (size_t k = 0; k < extra.size(); ++k) sampled_extra[k].push_back(extra[k][i]);
-    }
-  }
-  TileSampler sampler(sampled_work, m_cfg.sampling, segment, sampled_size, sampled_extra);
+  TileSampler sampler(work, m_cfg.sampling, segment, size, extra, certain_cluster);
   SegmentSample rec;
   rec.segment = segment;
-  rec.certain_tiles = certain_pos.size();
+  for (size_t i = 0; i < tiles.size(); ++i) rec.certain_tiles += certain_cluster[i / ct];
   rec.start_cycle = cycles(sc_core::sc_time_stamp());
   const uint64_t warm = uint64_t(m_cfg.sampling.warm_tiles) * m_cfg.cores;
   // A segment of at most twice the first round's clusters is simulated whole, in one round:
   // the rounds' fills and warm-ups that a sample of it would leave to the estimate cost more
   // accuracy than the few tiles saved (elephant, 245 tiles in 8 rounds: -2.9 %).
   const uint64_t first = std::max<uint32_t>(1, m_cfg.sampling.first_clusters);
-  uint64_t want = sampler.clusters() <= 2 * first ? sampler.clusters() : first;
+  const uint64_t stratified = sampler.clusters() - sampler.take_all();
+  uint64_t want = stratified <= 2 * first ? stratified : first;
   bool first_round = true;
   const uint64_t geometry_before = m_geometry ? m_geometry->geometry_estimate().simulated : 0;
   for (;;) {
@@ -162,27 +141,21 @@ void TileScheduler::dispatch_sampled(uint32_t segment, const std::vector<uint32_
       const uint64_t round_start = cycles(sc_core::sc_time_stamp());
       struct Sent {
         size_t pos;        // in the scheduler's order
-        uint64_t cluster;  // kCertain: a take-all tile
+        uint64_t cluster;
         bool warmup;       // simulated, not measured (detailed warming)
         uint32_t tile = 0, core = 0;
         bool operator<(const Sent& o) const { return pos < o.pos; }
       };
-      constexpr uint64_t kCertain = ~uint64_t{0};
-      // This round's tiles in the scheduler's order: its clusters, and in the first round every take-all tile.
+      // This round's tiles in the scheduler's order (in the first round, every take-all cluster too).
       std::vector<Sent> sent;
       std::vector<bool> in_round(tiles.size(), false);
       for (uint64_t c : round)
-        for (uint64_t q = sampler.cluster_begin(c); q < sampler.cluster_end(c); ++q) in_round[sampled_pos[q]] = true;
-      if (first_round)
-        for (size_t p : certain_pos) {
-          in_round[p] = true;
-          sent.push_back({p, kCertain, false});
-        }
+        for (uint64_t q = sampler.cluster_begin(c); q < sampler.cluster_end(c); ++q) in_round[q] = true;
       for (uint64_t c : round) {
-        // A cluster that does not follow a tile of the round begins with its warm-up tiles.
+        // A sampled cluster that does not follow a tile of the round begins with its warm-up tiles.
         const uint64_t b = sampler.cluster_begin(c);
-        const bool cold = sampled_pos[b] == 0 || !in_round[sampled_pos[b] - 1];
-        for (uint64_t q = b; q < sampler.cluster_end(c); ++q) sent.push_back({sampled_pos[q], c, cold && q - b < warm});
+        const bool cold = !sampler.is_take_all(c) && b > 0 && !in_round[b - 1];
+        for (uint64_t q = b; q < sampler.cluster_end(c); ++q) sent.push_back({q, c, cold && q - b < warm});
       }
       std::sort(sent.begin(), sent.end());
       first_round = false;
@@ -192,7 +165,7 @@ void TileScheduler::dispatch_sampled(uint32_t segment, const std::vector<uint32_
       for (size_t i = 0; i < sent.size(); ++i) {
         sent[i].tile = tiles[sent[i].pos];
         sent[i].core = send(segment, sent[i].tile, i);
-        if (sent[i].cluster != kCertain)
+        if (!sampler.is_take_all(sent[i].cluster))
           rec.cost += m_cfg.sampling.tile_triangle_cost * double(m_work.tile_triangle_count(sent[i].tile));
       }
       // The round ends when its last tile is written: every core empty again.
@@ -218,8 +191,6 @@ void TileScheduler::dispatch_sampled(uint32_t segment, const std::vector<uint32_
           started[s.core] = true;
         } else if (s.warmup) {
           ++rec.warmup_tiles;
-        } else if (s.cluster == kCertain) {
-          sampler.observe_exact(occupancy);
         } else {
           Sums& v = clusters[s.cluster];
           v.y += occupancy;
@@ -230,8 +201,6 @@ void TileScheduler::dispatch_sampled(uint32_t segment, const std::vector<uint32_
       }
       for (const auto& [c, v] : clusters) sampler.observe_cluster(c, v.y, v.m, v.x, v.z);
       rec.estimate = sampler.estimate(m_cfg.cores);
-      rec.estimate.tiles += certain_pos.size();
-      rec.estimate.tiles_observed += certain_pos.size();
     }
     // The whole segment in one round: simulated, not estimated.
     const bool whole = rec.estimate.complete && rec.rounds == 1;
@@ -255,8 +224,8 @@ void TileScheduler::dispatch_sampled(uint32_t segment, const std::vector<uint32_
     if (std::hypot(geometry_half, render_half) <= target) break;
     SampledPart r;
     r.curve = sampler.variance_curve(m_cfg.cores);
-    r.taken = whole ? sampler.clusters() : sampler.clusters_taken();
-    r.clusters = sampler.clusters();
+    r.taken = whole ? stratified : sampler.clusters_taken() - sampler.take_all();
+    r.clusters = stratified;
     r.cost = r.taken ? rec.cost / double(r.taken) : 1.0;
     const SampledPart g = m_geometry->sampled_part();
     const std::vector<uint64_t> n = allocate({g, r}, target);
