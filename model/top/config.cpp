@@ -131,7 +131,9 @@ Registry::Registry() {
   TV_UINT("sim.sample_geometry_warm", scheduler.sampling.geometry_warm, "triangles", 0, 1u << 24,
           "fidelity auto: triangles at the start of a geometry cluster that follows an unsimulated one, simulated but not measured");
   TV_REAL("sim.sample_certainty", scheduler.sampling.certainty_ratio, "ratio", 1.0, 1e9,
-          "fidelity auto: tiles with more than this many times the mean binned work (triangles x the EVU's edge rows) are all simulated");
+          "fidelity auto: tiles with more than this many times the mean binned work (triangles x the EVU's edge rows) or pairs (through test 6) are all simulated; geometry: triangles with this many times the mean bytes");
+  TV_UINT("sim.sample_lead", scheduler.sampling.take_all_lead, "clusters", 0, 1u << 20,
+          "fidelity auto: clusters before each run of take-all tiles, simulated with it (the run's cold start falls on them)");
   TV_REAL("sim.sample_tile_cost", scheduler.sampling.tile_triangle_cost, "ratio", 1e-3, 1e3,
           "fidelity auto: host cost of a tile's binned triangle against a geometry triangle's, by which the budget is shared between a sampled geometry and the render (measured: 2.4 bunny, 3.0 million)");
   TV_UINT("sim.sample_seed", scheduler.sampling.seed, "", 0, std::numeric_limits<uint64_t>::max(),

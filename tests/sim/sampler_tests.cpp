@@ -99,19 +99,27 @@ TEST(Sampler, AnExactLinearPopulationIsEstimatedExactlyWithZeroWidth) {
   EXPECT_EQ(e.tiles_observed, 48u);
 }
 
-TEST(Sampler, TakeAllClustersAreTheHeavyOnesAndTheClusterBeforeEachRun) {
+TEST(Sampler, TakeAllClustersAreTheHeavyOnesAndTheClustersBeforeEachRun) {
   // Clusters of 4: a unit of 1000 (mean 94.7; over 4x) in clusters 2 and 3, and in cluster 6.
   std::vector<double> aux(32, 1.0);
   aux[9] = aux[14] = aux[25] = 1000.0;
-  const std::vector<bool> c = take_all_clusters(aux, 4, 4.0);
-  EXPECT_EQ(take_all_clusters(aux, 4, 16.0), std::vector<bool>(8, false));  // 1000 < 16 x 94.7
+  const std::vector<bool> c = take_all_clusters({aux}, 4, 4.0);
+  EXPECT_EQ(take_all_clusters({aux}, 4, 16.0), std::vector<bool>(8, false));  // 1000 < 16 x 94.7
   EXPECT_EQ(c, (std::vector<bool>{false, true, true, true, false, true, true, false}));
-  EXPECT_EQ(take_all_clusters(std::vector<double>(32, 5.0), 4, 16.0), std::vector<bool>(8, false));
+  EXPECT_EQ(take_all_clusters({std::vector<double>(32, 5.0)}, 4, 16.0), std::vector<bool>(8, false));
+  // Two clusters before each run: cluster 0 too.
+  EXPECT_EQ(take_all_clusters({aux}, 4, 4.0, 2), (std::vector<bool>{true, true, true, true, true, true, true, false}));
+  // Any auxiliary may make a unit heavy: a second one with a peak in cluster 7.
+  std::vector<double> pairs(32, 2.0);
+  pairs[30] = 500.0;
+  EXPECT_EQ(take_all_clusters({aux, pairs}, 4, 4.0),
+            (std::vector<bool>{false, true, true, true, false, true, true, true}));
   // A run at the start has no cluster before it; a cut last cluster counts.
   std::vector<double> tail(10, 1.0);
   tail[0] = tail[9] = 1000.0;
-  EXPECT_EQ(take_all_clusters(tail, 4, 2.0), (std::vector<bool>{true, true, true}));
-  EXPECT_THROW(take_all_clusters(tail, 0, 2.0), std::invalid_argument);
+  EXPECT_EQ(take_all_clusters({tail}, 4, 2.0), (std::vector<bool>{true, true, true}));
+  EXPECT_THROW(take_all_clusters({tail}, 0, 2.0), std::invalid_argument);
+  EXPECT_THROW(take_all_clusters({tail, aux}, 4, 2.0), std::invalid_argument);
 }
 
 // Take-all clusters come in the first round beside the stratified draw, are in no stratum, and

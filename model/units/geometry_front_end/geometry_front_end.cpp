@@ -130,7 +130,7 @@ void GeometryFrontEnd::grow(uint64_t clusters) {
 void GeometryFrontEnd::run_sampled() {
   m_sampler = std::make_unique<TileSampler>(
       m_aux, m_sampling, ~uint64_t{0}, std::vector<double>{}, std::vector<std::vector<double>>{},
-      take_all_clusters(m_aux, m_sampling.cluster_tiles, m_sampling.certainty_ratio));
+      take_all_clusters({m_aux}, m_sampling.cluster_tiles, m_sampling.certainty_ratio, 1));
   sample_round(std::min<uint64_t>(m_sampler->clusters() - m_sampler->take_all(), std::max<uint32_t>(1, m_sampling.geometry_first)));
   while (!m_estimate.estimate.complete && !m_sampler->variance_curve(1).known)
     sample_round(m_sampler->clusters_needed(0.0, 1) - m_sampler->clusters_taken());

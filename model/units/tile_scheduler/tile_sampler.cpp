@@ -21,18 +21,24 @@ double student_quantile(double confidence, double dof) {
   return boost::math::quantile(boost::math::complement(boost::math::students_t(dof), (1.0 - confidence) / 2));
 }
 
-std::vector<bool> take_all_clusters(const std::vector<double>& aux, uint32_t cluster, double ratio) {
+std::vector<bool> take_all_clusters(const std::vector<std::vector<double>>& aux, uint32_t cluster, double ratio,
+                                    uint32_t lead) {
   if (cluster == 0) throw std::invalid_argument("sampling: cluster_tiles must be at least 1");
-  const size_t n = (aux.size() + cluster - 1) / cluster;
-  double mean = 0;
-  for (double a : aux) mean += a;
-  mean /= double(std::max<size_t>(aux.size(), 1));
+  const size_t units = aux.empty() ? 0 : aux.front().size();
+  const size_t n = (units + cluster - 1) / cluster;
   std::vector<bool> heavy(n, false);
-  for (size_t i = 0; i < aux.size(); ++i)
-    if (aux[i] > ratio * mean) heavy[i / cluster] = true;
+  for (const std::vector<double>& a : aux) {
+    if (a.size() != units) throw std::invalid_argument("sampling: one value of each auxiliary per unit");
+    double mean = 0;
+    for (double v : a) mean += v;
+    mean /= double(std::max<size_t>(units, 1));
+    for (size_t i = 0; i < units; ++i)
+      if (a[i] > ratio * mean) heavy[i / cluster] = true;
+  }
   std::vector<bool> certain = heavy;
   for (size_t c = 1; c < n; ++c)
-    if (heavy[c] && !heavy[c - 1]) certain[c - 1] = true;
+    if (heavy[c] && !heavy[c - 1])
+      for (size_t k = 1; k <= lead && k <= c; ++k) certain[c - k] = true;
   return certain;
 }
 

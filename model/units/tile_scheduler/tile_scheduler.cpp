@@ -101,12 +101,7 @@ void TileScheduler::dispatch_sampled(uint32_t segment, const std::vector<uint32_
   std::vector<double> work(tiles.size());
   for (size_t i = 0; i < tiles.size(); ++i)
     work[i] = tile_work(m_work.tile_triangle_count(tiles[i]), m_work.tile_edge_count(tiles[i]), m_cfg.sampling.reject_lanes);
-  // Whole clusters are taken (take_all_clusters): a heavy tile keeps the tiles before it in its
-  // cluster, whose overlap with it is part of its cost, and each run of such clusters keeps the
-  // cluster before it, so that the run's cold start falls on lighter tiles (the disturbance lasts
-  // about eight tiles). The other clusters keep their boundaries in the sampled population.
   const size_t ct = m_cfg.sampling.cluster_tiles;
-  const std::vector<bool> certain_cluster = take_all_clusters(work, m_cfg.sampling.cluster_tiles, m_cfg.sampling.certainty_ratio);
   // A tile's size: its pixels over a full tile's (the screen's right and bottom edges cut tiles).
   const geom::TileGrid& grid = m_work.grid();
   std::vector<double> size(tiles.size());
@@ -121,6 +116,11 @@ void TileScheduler::dispatch_sampled(uint32_t segment, const std::vector<uint32_
     extra[0][i] = double(m_work.tile_triangle_count(tiles[i]));
     extra[1][i] = double(m_work.tile_pair_tests(tiles[i]));
   }
+  // Take-all: tiles whose work or whose pairs are more than sample_certainty times the mean (a
+  // clip-bound tile of slivers, 242 triangles and 480 edges, has 12x the mean work and 33x the
+  // mean pairs, and costs 120,240 cycles, as much as tiles of 200x the work).
+  const std::vector<bool> certain_cluster = take_all_clusters(
+      {work, extra[1]}, m_cfg.sampling.cluster_tiles, m_cfg.sampling.certainty_ratio, m_cfg.sampling.take_all_lead);
   TileSampler sampler(work, m_cfg.sampling, segment, size, extra, certain_cluster);
   SegmentSample rec;
   rec.segment = segment;
