@@ -40,6 +40,17 @@ void observe_round(TileSampler& s, const std::vector<uint64_t>& round, const std
   }
 }
 
+// n tiles of 0 to 199 triangles each, occupancy 150 + 7 a triangle (exactly linear).
+void linear_population(uint64_t seed, size_t n, std::vector<double>& tris, std::vector<double>& occ) {
+  std::mt19937_64 rng(seed);
+  tris.resize(n);
+  occ.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    tris[i] = double(rng() % 200);
+    occ[i] = 150.0 + 7.0 * tris[i];
+  }
+}
+
 }  // namespace
 
 TEST(Sampler, NormalQuantile) {
@@ -75,13 +86,9 @@ TEST(Sampler, RoundsDrawEveryClusterOnceAscendingAndTheSeedFixesThem) {
 }
 
 TEST(Sampler, AnExactLinearPopulationIsEstimatedExactlyWithZeroWidth) {
-  std::mt19937_64 rng(3);
   const size_t n = 400;
-  std::vector<double> tris(n), occ(n);
-  for (size_t i = 0; i < n; ++i) {
-    tris[i] = double(rng() % 200);
-    occ[i] = 150.0 + 7.0 * tris[i];
-  }
+  std::vector<double> tris, occ;
+  linear_population(3, n, tris, occ);
   TileSampler s(tris, config(4, 1), 0);
   bool first = true;
   const std::vector<uint64_t> round = s.next_round(12);
@@ -128,11 +135,8 @@ TEST(Sampler, TakeAllClustersAreTheHeavyOnesAndTheClustersBeforeEachRun) {
 TEST(Sampler, TakeAllClustersAreAddedAsTheyAre) {
   std::mt19937_64 rng(11);
   const size_t n = 400;
-  std::vector<double> tris(n), occ(n);
-  for (size_t i = 0; i < n; ++i) {
-    tris[i] = double(rng() % 200);
-    occ[i] = 150.0 + 7.0 * tris[i];
-  }
+  std::vector<double> tris, occ;
+  linear_population(11, n, tris, occ);
   std::vector<bool> certain(n / 4, false);
   for (uint64_t c : {0, 17, 18, 60}) {
     certain[c] = true;
