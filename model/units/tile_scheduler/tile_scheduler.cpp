@@ -144,9 +144,9 @@ void TileScheduler::dispatch_sampled(uint32_t segment, const std::vector<uint32_
         uint64_t cluster;
         bool warmup;       // simulated, not measured (detailed warming)
         uint32_t tile = 0, core = 0;
-        bool operator<(const Sent& o) const { return pos < o.pos; }
       };
-      // This round's tiles in the scheduler's order (in the first round, every take-all cluster too).
+      // This round's tiles in the scheduler's order (in the first round, every take-all cluster
+      // too): the round's clusters come ascending.
       std::vector<Sent> sent;
       std::vector<bool> in_round(tiles.size(), false);
       for (uint64_t c : round)
@@ -157,7 +157,6 @@ void TileScheduler::dispatch_sampled(uint32_t segment, const std::vector<uint32_
         const bool cold = !sampler.is_take_all(c) && b > 0 && !in_round[b - 1];
         for (uint64_t q = b; q < sampler.cluster_end(c); ++q) sent.push_back({q, c, cold && q - b < warm});
       }
-      std::sort(sent.begin(), sent.end());
       first_round = false;
       std::vector<uint32_t> ahead(sent.size());
       for (size_t i = 0; i < sent.size(); ++i) ahead[i] = tiles[sent[i].pos];
