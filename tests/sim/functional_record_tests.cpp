@@ -14,6 +14,7 @@
 #include "sim_support.h"
 #include "test_cases.h"
 #include "top/simulate.h"
+#include "units/common/functional_record.h"
 
 using namespace tilevis;
 using namespace tilevis::sim;
@@ -282,6 +283,65 @@ TEST(RecordFile, TruncatedCorruptOrOtherFilesAreErrors) {
       with(std::vector<char>{'n', 'o', 't', ' ', 'a', ' ', 'r', 'e', 'c', 'o', 'r', 'd', '!', '!'});
   EXPECT_NE(other.find("not a TileVis functional record"), std::string::npos) << other;
   EXPECT_EQ(with({}).find("not a TileVis functional record") != std::string::npos, true);
+}
+
+// The file format alone: a saved record loads with each resolved tile kept encoded, and each
+// decodes to what was saved (triangle work, samples as runs of equal values, areas), in any
+// order and more than once.
+TEST(RecordFile, EachTileDecodesToWhatWasSaved) {
+  FunctionalRecord saved;
+  saved.key.tile_w = saved.key.tile_h = 16;
+  saved.segment_plan = {0, 2};
+  saved.segments.resize(2);
+  uint32_t v = 1;
+  for (RecordedSegment& s : saved.segments)
+    for (int k = 0; k < 3; ++k) {
+      s.resolved.push_back(uint32_t(7 * k + 1));
+      RecordedTile& t = s.results.emplace_back();
+      t.per_pixel = uint8_t(k & 1);
+      t.detection_tests = v * 1000003ull;
+      for (int i = 0; i < k + 1; ++i) {
+        TriangleWork& w = t.tris.emplace_back();
+        w.id = v++ * 977, w.draw = uint32_t(i);
+        w.pair_tests = int64_t(v) << 33;  // wider than 32 bits
+        w.pieces = -int64_t(v);           // negative (zigzag)
+        w.shape.crossing_edges = v;
+        w.fragments_shaded = v * 3;
+      }
+      // Runs of one, of many, and a negative id (no triangle).
+      t.samples = {5, -1, -1, -1, 9, 9, 2, int32_t(v), int32_t(v)};
+      t.areas = {{v, 0.25 * v}, {v + 1, 1.0 / 3.0}};
+      t.visible_triangles = v;
+    }
+  const fs::path rec = record_path("format");
+  saved.save(rec);
+  const FunctionalRecord loaded = FunctionalRecord::load(rec);
+  ASSERT_EQ(loaded.segments.size(), 2u);
+  RecordedTile scratch;
+  for (uint32_t s : {1u, 0u, 1u})
+    for (uint32_t i : {2u, 0u, 1u}) {
+      const RecordedSegment& ls = loaded.segments[s];
+      EXPECT_TRUE(ls.results.empty());  // kept encoded
+      ASSERT_EQ(ls.result_count(), 3u);
+      EXPECT_EQ(ls.resolved, saved.segments[s].resolved);
+      const RecordedTile& a = saved.segments[s].results[i];
+      const RecordedTile& b = loaded.tile(s, i, scratch);
+      EXPECT_EQ(b.per_pixel, a.per_pixel);
+      EXPECT_EQ(b.detection_tests, a.detection_tests);
+      EXPECT_EQ(b.samples, a.samples);
+      EXPECT_EQ(b.areas, a.areas);
+      EXPECT_EQ(b.visible_triangles, a.visible_triangles);
+      ASSERT_EQ(b.tris.size(), a.tris.size());
+      for (size_t k = 0; k < a.tris.size(); ++k) {
+        EXPECT_EQ(static_cast<const vis::TileCounters&>(b.tris[k]), static_cast<const vis::TileCounters&>(a.tris[k]));
+        EXPECT_EQ(b.tris[k].id, a.tris[k].id);
+        EXPECT_EQ(b.tris[k].draw, a.tris[k].draw);
+        EXPECT_EQ(b.tris[k].shape.crossing_edges, a.tris[k].shape.crossing_edges);
+        EXPECT_EQ(b.tris[k].fragments_shaded, a.tris[k].fragments_shaded);
+      }
+    }
+  // A loaded record is not written again (its tiles are not decoded into it).
+  EXPECT_THROW(loaded.save(record_path("format_again")), std::logic_error);
 }
 
 TEST(RecordFile, AFailedRunWritesNoRecord) {

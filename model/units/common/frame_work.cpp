@@ -369,7 +369,7 @@ void FrameWork::prepare_segment(uint32_t k) {
   const size_t n = rs.tiles.size();
   if (rs.triangle_count.size() != n || rs.pair_tests.size() != n || rs.list_begin.size() != n + 1 ||
       rs.list_begin.back() != rs.list.size() || rs.edge_count.size() != (uses_evu(m_cfg.mode) ? tile_count() : 0) ||
-      rs.results.size() != rs.resolved.size())
+      rs.result_count() != rs.resolved.size())
     throw std::runtime_error("the functional record's segment " + std::to_string(k) + " is inconsistent");
   for (uint32_t s : rs.list)
     if (s >= m_setup.triangles.size()) throw std::runtime_error("the functional record's tile lists exceed its setup");
@@ -741,7 +741,7 @@ void FrameWork::replay_tile(TileWork& w) {
                 last(m_recorded_last[w.tile]) + ", this run's on that of segment " + last(m_replayed_last[w.tile]) +
                 " (fidelity auto sampled other tiles in earlier partial renders)");
   m_replayed_last[w.tile] = w.segment;
-  const RecordedTile& r = m_rec.segments[m_seg->index].results[i];
+  const RecordedTile& r = m_rec.tile(m_seg->index, i, m_replayed_tile);
   const vis::zbuffer::PixelRect px = vis::zbuffer::tile_pixels(m_grid, w.tile);
   const size_t row = size_t(px.x1 - px.x0) * samples();
   if (r.samples.size() != row * (px.y1 - px.y0) || r.tris.size() != w.ids.size())

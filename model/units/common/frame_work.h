@@ -199,6 +199,7 @@ class FrameWork {
   std::unique_ptr<Segment> m_seg;
   std::vector<uint32_t> m_seg_tiles;
   std::vector<uint32_t> m_seg_pos;       // per tile: its place in the open segment's tiles, kNone
+  RecordedTile m_replayed_tile;          // replay: the tile being replayed, decoded from the record
   std::vector<uint32_t> m_seg_result;    // replay, per tile: its place in the open segment's results, kNone
   // Replay, per tile: the last earlier segment that resolved it, in the record and in this run.
   std::vector<uint32_t> m_recorded_last, m_replayed_last;

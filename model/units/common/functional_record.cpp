@@ -9,6 +9,9 @@
 #include <stdexcept>
 #include <type_traits>
 
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "tilevis/fnv1a.h"
@@ -75,12 +78,12 @@ void fields(A& a, std::pair<uint32_t, double>& p) {
 template <typename A>
 void fields(A& a, RecordedTile& t) {
   a.io(t.per_pixel), a.io(t.detection_screens), a.io(t.detection_tests);
-  a.io(t.tris), a.io(t.samples), a.io(t.areas), a.io(t.visible_triangles);
+  a.io(t.tris), a.io_runs(t.samples), a.io(t.areas), a.io(t.visible_triangles);
 }
 template <typename A>
 void fields(A& a, RecordedSegment& s) {
   a.io(s.tiles), a.io(s.triangle_count), a.io(s.edge_count), a.io(s.pair_tests), a.io(s.list_begin), a.io(s.list);
-  a.io(s.resolved), a.io(s.results);
+  a.io(s.resolved), a.io_results(s);
 }
 template <typename A>
 void fields(A& a, FunctionalKey& k) {
@@ -104,6 +107,18 @@ constexpr bool kVarint = std::is_integral_v<T> && sizeof(T) > 1;
 class Writer {
  public:
   std::vector<uint8_t> bytes;
+  // A tile's samples as runs of equal values (count, then value and run length per run): a
+  // tile is mostly a few triangles' runs, and samples were most of a record's bytes.
+  void io_runs(const std::vector<int32_t>& v) {
+    io(uint64_t(v.size()));
+    for (size_t i = 0; i < v.size();) {
+      size_t j = i + 1;
+      while (j < v.size() && v[j] == v[i]) ++j;
+      io(v[i]);
+      io(uint64_t(j - i));
+      i = j;
+    }
+  }
   template <typename T>
   requires std::is_arithmetic_v<T>
   void io(const T& v) {
@@ -114,6 +129,19 @@ class Writer {
     } else {
       const auto* p = reinterpret_cast<const uint8_t*>(&v);
       bytes.insert(bytes.end(), p, p + sizeof v);
+    }
+  }
+  // Each resolved tile after its length, so that a loaded record finds a tile without decoding
+  // the ones before it.
+  void io_results(const RecordedSegment& s) {
+    if (!s.encoded.empty()) throw std::logic_error("functional record: a loaded record is not written again");
+    io(uint64_t(s.results.size()));
+    Writer tile;
+    for (const RecordedTile& r : s.results) {
+      tile.bytes.clear();
+      fields(tile, const_cast<RecordedTile&>(r));
+      io(uint64_t(tile.bytes.size()));
+      bytes.insert(bytes.end(), tile.bytes.begin(), tile.bytes.end());
     }
   }
   template <typename T>
@@ -138,12 +166,24 @@ class Reader {
   void io(T& v) {
     if constexpr (kVarint<T>) {
       uint64_t u = 0;
-      for (int shift = 0;; shift += 7) {
-        need(1, "a value");
-        const uint8_t b = m_p[m_at++];
-        if (shift == 63 && b > 1) fail("an integer over 64 bits");
-        u |= uint64_t(b & 0x7f) << shift;
-        if (!(b & 0x80)) break;
+      if (m_n - m_at >= 10) {  // the longest varint fits: no bound to check per byte
+        const uint8_t* p = m_p + m_at;
+        uint8_t b = *p++;
+        u = b & 0x7f;
+        for (int shift = 7; b & 0x80; shift += 7) {
+          b = *p++;
+          if (shift == 63 && b > 1) fail("an integer over 64 bits");
+          u |= uint64_t(b & 0x7f) << shift;
+        }
+        m_at = size_t(p - m_p);
+      } else {
+        for (int shift = 0;; shift += 7) {
+          need(1, "a value");
+          const uint8_t b = m_p[m_at++];
+          if (shift == 63 && b > 1) fail("an integer over 64 bits");
+          u |= uint64_t(b & 0x7f) << shift;
+          if (!(b & 0x80)) break;
+        }
       }
       if constexpr (std::is_signed_v<T>) {
         const int64_t x = int64_t(u >> 1) ^ -int64_t(u & 1);
@@ -178,6 +218,37 @@ class Reader {
       for (T& x : v) fields(*this, x);
     }
   }
+  // The tiles' places only (decoded when replayed: FunctionalRecord::tile).
+  void io_results(RecordedSegment& s) {
+    uint64_t n = 0;
+    io(n);
+    if (n > m_n - m_at) fail("a list of " + std::to_string(n) + " tiles, beyond the file's end");
+    s.results.clear();
+    s.encoded.resize(size_t(n));
+    for (auto& e : s.encoded) {
+      uint64_t len = 0;
+      io(len);
+      need(len, "a tile");
+      e = {uint64_t(m_at), len};
+      m_at += size_t(len);
+    }
+  }
+  void io_runs(std::vector<int32_t>& v) {
+    uint64_t n = 0;
+    io(n);
+    // Every run takes at least two bytes and holds at least one sample.
+    if (n > uint64_t(std::numeric_limits<uint32_t>::max())) fail("a tile of " + std::to_string(n) + " samples");
+    v.resize(size_t(n));
+    for (size_t i = 0; i < v.size();) {
+      int32_t x = 0;
+      uint64_t run = 0;
+      io(x);
+      io(run);
+      if (run == 0 || run > v.size() - i) fail("a run of " + std::to_string(run) + " samples past its tile's " + std::to_string(n));
+      std::fill_n(v.begin() + ptrdiff_t(i), size_t(run), x);
+      i += size_t(run);
+    }
+  }
   size_t at() const { return m_at; }
   [[noreturn]] void fail(const std::string& what) const {
     throw std::runtime_error(m_file + ": offset " + std::to_string(m_at) + ": " + what);
@@ -199,7 +270,7 @@ FunctionalKey functional_key(const trace::Frame& frame, const FrameWorkConfig& c
   t.frames.push_back(frame);
   const std::vector<uint8_t> bytes = trace::encode(t);
   FunctionalKey k;
-  k.frame_fnv1a64 = fnv1a64(bytes.data(), bytes.size());
+  k.frame_fnv1a64 = word_fnv1a64(bytes.data(), bytes.size());
   k.mode = uint32_t(c.mode);
   k.tile_w = c.tile_w;
   k.tile_h = c.tile_h;
@@ -221,7 +292,7 @@ std::string key_differences(const FunctionalKey& r, const FunctionalKey& n) {
     std::snprintf(s, sizeof s, "%016llx", static_cast<unsigned long long>(h));
     return std::string(s);
   };
-  differ("the frame (FNV-1a 64 of its trace encoding)", hex(r.frame_fnv1a64), hex(n.frame_fnv1a64));
+  differ("the frame (FNV-1a 64 of its trace encoding, by words)", hex(r.frame_fnv1a64), hex(n.frame_fnv1a64));
   differ("sim.mode", to_string(Mode(r.mode)), to_string(Mode(n.mode)));
   differ("sim.tile_width", std::to_string(r.tile_w), std::to_string(n.tile_w));
   differ("sim.tile_height", std::to_string(r.tile_h), std::to_string(n.tile_h));
@@ -260,34 +331,84 @@ void FunctionalRecord::save(const std::filesystem::path& path) const {
   std::filesystem::rename(tmp, path);
 }
 
+namespace {
+
+// The record's file mapped read-only (no copy into a zeroed buffer: records are tens of
+// megabytes, and fresh pages cost more than the decoding).
+class MappedFile {
+ public:
+  explicit MappedFile(const std::string& name) {
+    const int fd = ::open(name.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) throw std::runtime_error(name + ": cannot read the functional record");
+    struct stat st {};
+    if (::fstat(fd, &st) != 0) {
+      ::close(fd);
+      throw std::runtime_error(name + ": cannot read the functional record");
+    }
+    m_size = size_t(std::max<off_t>(st.st_size, 0));
+    if (m_size > 0) {
+      void* p = ::mmap(nullptr, m_size, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0);
+      if (p == MAP_FAILED) {
+        ::close(fd);
+        throw std::runtime_error(name + ": reading the functional record failed");
+      }
+      m_data = static_cast<const uint8_t*>(p);
+    }
+    ::close(fd);
+  }
+  ~MappedFile() {
+    if (m_data) ::munmap(const_cast<uint8_t*>(m_data), m_size);
+  }
+  MappedFile(const MappedFile&) = delete;
+  MappedFile& operator=(const MappedFile&) = delete;
+  const uint8_t* data() const { return m_data; }
+  size_t size() const { return m_size; }
+
+ private:
+  const uint8_t* m_data = nullptr;
+  size_t m_size = 0;
+};
+
+}  // namespace
+
 FunctionalRecord FunctionalRecord::load(const std::filesystem::path& path) {
   const std::string name = path.string();
-  std::ifstream in(path, std::ios::binary | std::ios::ate);
-  if (!in) throw std::runtime_error(name + ": cannot read the functional record");
-  const std::streamoff size = in.tellg();
-  in.seekg(0);
-  std::vector<uint8_t> bytes(size_t(std::max<std::streamoff>(size, 0)));
-  if (!in.read(reinterpret_cast<char*>(bytes.data()), std::streamsize(bytes.size())))
-    throw std::runtime_error(name + ": reading the functional record failed");
+  const auto file = std::make_shared<const MappedFile>(name);
+  const uint8_t* const bytes = file->data();
+  const size_t size = file->size();
   const size_t head = sizeof kMagic + sizeof(uint32_t), tail = sizeof(uint64_t);
-  if (bytes.size() < sizeof kMagic || std::memcmp(bytes.data(), kMagic, sizeof kMagic) != 0)
+  if (size < sizeof kMagic || std::memcmp(bytes, kMagic, sizeof kMagic) != 0)
     throw std::runtime_error(name + ": not a TileVis functional record (no \"TVFREC\" magic)");
-  if (bytes.size() < head + tail)
-    throw std::runtime_error(name + ": truncated functional record (" + std::to_string(bytes.size()) + " bytes)");
+  if (size < head + tail)
+    throw std::runtime_error(name + ": truncated functional record (" + std::to_string(size) + " bytes)");
   uint32_t version = 0;
-  std::memcpy(&version, bytes.data() + sizeof kMagic, sizeof version);
+  std::memcpy(&version, bytes + sizeof kMagic, sizeof version);
   if (version != kVersion)
     throw std::runtime_error(name + ": functional record format version " + std::to_string(version) +
                              ", this build reads version " + std::to_string(kVersion) + " (record it again)");
   uint64_t sum = 0;
-  std::memcpy(&sum, bytes.data() + bytes.size() - tail, tail);
-  if (sum != word_fnv1a64(bytes.data(), bytes.size() - tail))
+  std::memcpy(&sum, bytes + size - tail, tail);
+  if (sum != word_fnv1a64(bytes, size - tail))
     throw std::runtime_error(name + ": functional record is truncated or corrupt (checksum mismatch)");
-  Reader r(name, bytes.data() + head, bytes.size() - head - tail);
+  Reader r(name, bytes + head, size - head - tail);
   FunctionalRecord rec;
   fields(r, rec);
-  if (r.at() != bytes.size() - head - tail) r.fail("bytes after the record's end");
+  if (r.at() != size - head - tail) r.fail("bytes after the record's end");
+  rec.m_mapping = file;
+  rec.m_bytes = bytes + head;
+  rec.m_file = name;
   return rec;
+}
+
+const RecordedTile& FunctionalRecord::tile(uint32_t segment, uint32_t i, RecordedTile& scratch) const {
+  const RecordedSegment& s = segments.at(segment);
+  if (s.encoded.empty()) return s.results.at(i);
+  const auto [offset, bytes] = s.encoded.at(i);
+  Reader r(m_file, m_bytes + offset, size_t(bytes));
+  scratch.tris.clear();  // decoded into elements made anew (the fields not recorded at their defaults)
+  fields(r, scratch);
+  if (r.at() != bytes) r.fail("bytes after a tile's end");
+  return scratch;
 }
 
 }  // namespace tilevis::sim

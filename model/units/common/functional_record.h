@@ -12,12 +12,14 @@
 //
 // File: magic "TVFREC\r\n", format version (u32), the key, the payload, and a checksum of
 // every byte before it (u64: FNV-1a 64's step on 64-bit words); little-endian, integers wider
-// than a byte as LEB128 varints (signed: zigzag). Written to a
+// than a byte as LEB128 varints (signed: zigzag), a tile's samples as runs of equal values, each
+// resolved tile after its length in bytes (a replay decodes a tile when it reaches it). Written to a
 // temporary file beside the target and renamed: an interrupted run leaves no partial record.
 #pragma once
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -34,7 +36,7 @@ struct FrameWorkConfig;
 // buffer hands it over): the frame's content and the parameters FrameWork passes to setup,
 // binning and the resolvers.
 struct FunctionalKey {
-  uint64_t frame_fnv1a64 = 0;  // FNV-1a 64 of the frame's trace encoding (trace::encode, this frame alone)
+  uint64_t frame_fnv1a64 = 0;  // FNV-1a 64's step on 64-bit words of the frame's trace encoding (trace::encode, this frame alone)
   uint32_t mode = 0, tile_w = 0, tile_h = 0, depth_bits = 0;
   uint32_t evu_triangle_entries = 0, evu_edge_entries = 0;
   uint64_t hybrid_pair_budget = 0;
@@ -70,11 +72,16 @@ struct RecordedSegment {
   std::vector<uint32_t> list_begin;  // tiles.size() + 1 offsets into list
   std::vector<uint32_t> list;
   std::vector<uint32_t> resolved;     // tiles whose visibility was recorded, as resolved
-  std::vector<RecordedTile> results;  // beside resolved
+  std::vector<RecordedTile> results;  // beside resolved: a recording run's
+  // Beside resolved, a loaded record's: each tile's bytes in the mapped file, decoded only when
+  // a replay reaches the tile (FunctionalRecord::tile). A record holds every tile's triangle
+  // work, hundreds of megabytes decoded on a large frame; a run holds one tile's at a time.
+  std::vector<std::pair<uint64_t, uint64_t>> encoded;  // (offset, bytes)
+  size_t result_count() const { return results.size() + encoded.size(); }
 };
 
 struct FunctionalRecord {
-  static constexpr uint32_t kVersion = 2;  // 2: varint integers
+  static constexpr uint32_t kVersion = 3;  // 2: varint integers; 3: the frame hashed by words, samples as runs
 
   FunctionalKey key;
   vis::Setup setup;
@@ -84,12 +91,21 @@ struct FunctionalRecord {
   std::vector<uint32_t> segment_plan;
   std::vector<RecordedSegment> segments;
 
+  // Segment `segment`'s i-th resolved tile: results[i] as recorded, or a loaded record's tile
+  // decoded into `scratch` (throws std::runtime_error naming the file if it does not decode).
+  const RecordedTile& tile(uint32_t segment, uint32_t i, RecordedTile& scratch) const;
+
   // Throws std::runtime_error naming the file on any write failure; `path` appears whole or
   // not at all.
   void save(const std::filesystem::path& path) const;
   // Throws std::runtime_error naming the file and what is wrong: unreadable, another format or
   // version, truncated, corrupt (checksum), trailing bytes.
   static FunctionalRecord load(const std::filesystem::path& path);
+
+ private:
+  std::shared_ptr<const void> m_mapping;  // a loaded record's file, mapped while tiles are decoded from it
+  const uint8_t* m_bytes = nullptr;
+  std::string m_file;
 };
 
 }  // namespace tilevis::sim

@@ -85,6 +85,7 @@ void SilhouetteUnit::prepare() {
     // The draw's looked-up edges in order, each as a dense id of its key (vertex pair), so
     // that the hash's contents are a state per id: 0 absent, 1 on chip, 2 spilled.
     uses.clear();
+    uses.reserve(3 * size_t(id - first));
     for (uint32_t t = first; t < id; ++t) {
       if (m_work.setup_begin(t) == m_work.setup_begin(t + 1)) continue;  // frustum-culled: no edges
       ops[t] = 3;
