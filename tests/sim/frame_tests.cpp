@@ -487,7 +487,12 @@ TEST(FidelityAuto, ASampleOfTilesBracketsThePrimitiveLevelsCycles) {
   // 69,666 triangles in one segment: the geometry is sampled too, and the frame's parameter
   // buffer is still reported whole.
   ASSERT_FALSE(s["geometry"].is_null());
-  EXPECT_LT(s["geometry"]["triangles_simulated"].get<uint64_t>(), s["geometry"]["triangles"].get<uint64_t>());
+  const uint64_t geometry_simulated = s["geometry"]["triangles_simulated"], triangles = s["geometry"]["triangles"];
+  EXPECT_LT(geometry_simulated, triangles);
+  // The stream's last cluster (its only partial one: 69,666 = 272 x 256 + 34) is taken whole.
+  const uint64_t cluster = 256;  // sim.sample_geometry_cluster
+  ASSERT_NE(triangles % cluster, 0u);
+  EXPECT_EQ(geometry_simulated % cluster, triangles % cluster);
   EXPECT_GT(s["geometry"]["half_width_cycles"].get<double>(), 0.0);
   EXPECT_EQ(a["totals"]["param_buffer_bytes"], p["totals"]["param_buffer_bytes"]);
   // The geometry's estimate against the primitive level's geometry (where its one segment
