@@ -355,9 +355,10 @@ phase_sanitize() {
     # of long items), the tool on that kernel only (the rest runs uninstrumented), one warm-up,
     # on .gpu/tiny/teapot_stadium_320x240.tvt and .gpu/tiny/clip_chain_64x64.tvt
     # (cuda_ref/scenes/clip_chain.json: 48 stacked quads in 4 tiles, back triangles of up to 94
-    # candidates, 1,205 pieces in one tile). racecheck of float's 16-warp blocks did not finish
-    # in 240 s on the chain (exact's 8: 2 s): float is race-checked at 8 warps a block
-    # (TILEVIS_CLIP_LONG_WARPS=8; the kernel reads its block size, the output is the same).
+    # candidates, 1,205 pieces in one tile). Under racecheck the tree's waiting warps sleep
+    # 20 us between looks (TILEVIS_CLIP_SPIN_NS; 32 ns natively): with float's 16 warps a block
+    # and 32 ns or 1 us the run made no progress in 120-400 s (the waiters' instrumented looks
+    # crowd out the warp that makes the piece), with 20 us the chain takes 42 s (H200).
     local long p name label
     for long in .gpu/tiny/teapot_stadium_320x240.tvt .gpu/tiny/clip_chain_64x64.tvt; do
       [ -f "$long" ] || continue
@@ -365,16 +366,16 @@ phase_sanitize() {
         wanted "$tool" "clip_long_$p" || continue
         name="clip_long_${p}_$(basename "$long" .tvt)"
         label="k_clip_long $p ($(basename "$long" .tvt))"
-        unset TILEVIS_CLIP_LONG_WARPS
-        if [ "$tool $p" = "racecheck float" ]; then
-          export TILEVIS_CLIP_LONG_WARPS=8
-          label="k_clip_long $p ($(basename "$long" .tvt), 8 warps a block)"
+        unset TILEVIS_CLIP_SPIN_NS
+        if [ "$tool" = racecheck ]; then
+          export TILEVIS_CLIP_SPIN_NS=20000
+          label="k_clip_long $p ($(basename "$long" .tvt), waiting warps sleep 20 us)"
         fi
         sanitize_one "$tool" "$label" "$LOGS/sanitizer_${tool}_$name.log" --kernel-name kns=k_clip_long -- \
           "$BIN" cuda "$long" --tile 32 --precision "$p" --baselines off --warmup 1 --runs 1 -o "$WORK/sanitize/${tool}_$name"
       done
     done
-    unset TILEVIS_CLIP_LONG_WARPS
+    unset TILEVIS_CLIP_SPIN_NS
     # The device-sized graph past its bounds (a launch that overflows: every later count 0, the
     # frame run again with host reads): the GPU test that makes it happen, under the tool.
     local gt="$BUILD/tests/cuda/cuda_gpu_tests"

@@ -46,6 +46,7 @@ struct ClipArgs {
   uint64_t* counters;
   uint32_t slot_factor;
   uint64_t n_items;
+  uint32_t spin_ns;  // k_clip_long's tree: a warp's sleep between looks at a piece it waits for
 };
 
 // A run whose candidate list overflowed has per-item counts without all their records: it is
@@ -281,23 +282,22 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team, uint64_t* stag
 inline constexpr uint32_t kLongBlock = 512, kLongStage = 4096;
 template <class P>
 inline constexpr uint32_t kLongBlockOf = P::kExact ? kLongBlock / 2 : kLongBlock;
-// TILEVIS_CLIP_LONG_WARPS=N launches k_clip_long with N warps a block (1 to kLongBlockOf<P> / 32,
-// the default); the kernel reads its block size, so any N is the same code and the same output.
-// For compute-sanitizer's racecheck: float's 16 warps did not finish under it in 240 s on a
-// 4-tile trace (cuda_ref/scenes/clip_chain.json) where 8 took 15 s (H200).
-template <class P>
-uint32_t long_block() {
-  static const uint32_t block = [] {
-    const char* v = std::getenv("TILEVIS_CLIP_LONG_WARPS");
-    if (!v) return kLongBlockOf<P>;
+// TILEVIS_CLIP_SPIN_NS=N: the tree's waiting warps (clip_item_tree) sleep N ns between looks at
+// the piece they wait for (default 32; 1 to 1,000,000). For compute-sanitizer's racecheck: with
+// float's 16 warps a block and 32 ns or 1 us, the waiters' instrumented looks crowded out the
+// warp making the piece, and the run made no progress in 120-400 s, on chains of 24, 32 and 48
+// quads alike (8 warps: 9-15 s); with 20 us the 48-quad chain takes 42 s, clean (H200).
+inline uint32_t clip_spin_ns() {
+  static const uint32_t ns = [] {
+    const char* v = std::getenv("TILEVIS_CLIP_SPIN_NS");
+    if (!v) return 32u;
     char* end = nullptr;
-    const unsigned long w = std::strtoul(v, &end, 10);
-    if (end == v || *end != '\0' || w < 1 || w > kLongBlockOf<P> / 32)
-      throw std::runtime_error(std::string("TILEVIS_CLIP_LONG_WARPS=") + v + ": expected 1 to " +
-                               std::to_string(kLongBlockOf<P> / 32));
-    return uint32_t(w) * 32;
+    const unsigned long n = std::strtoul(v, &end, 10);
+    if (end == v || *end != '\0' || n < 1 || n > 1000000)
+      throw std::runtime_error(std::string("TILEVIS_CLIP_SPIN_NS=") + v + ": expected 1 to 1000000");
+    return uint32_t(n);
   }();
-  return block;
+  return ns;
 }
 
 struct LongShared {
@@ -539,7 +539,7 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
         if (id < want && (cur = sh_load(&sp[id])) != ~uint64_t{0}) break;
         const uint32_t fin = sh_load(&ts.finished);
         if (fin == sh_load(&ts.n_alloc)) break;
-        __nanosleep(32);
+        __nanosleep(a.spin_ns);
       }
     }
     id = __shfl_sync(0xffffffffu, id, 0);
@@ -812,6 +812,7 @@ bool stage_clip(Pipeline<P>& p) {
   a.counters = p.counters.get();
   a.slot_factor = p.caps.slot_factor;
   a.n_items = ni;
+  a.spin_ns = clip_spin_ns();
 
   ex.exclusive_scan(a.cand_count, p.cand_offset.get(), p.N(kSzItems, ni), ni);
   ex.launch_dyn(k_cand_scatter<P>, cand_scatter<P>, p.counters.get() + kCandidates, p.caps.candidates, a);
@@ -827,7 +828,7 @@ bool stage_clip(Pipeline<P>& p) {
       return true;
     }();
     (void)smem_set;
-    k_clip_long<P><<<ex.grid_blocks / 2, long_block<P>(), kTreeSmem, ex.stream>>>(a, p.counters.get() + kLongItems, ni);
+    k_clip_long<P><<<ex.grid_blocks / 2, kLongBlockOf<P>, kTreeSmem, ex.stream>>>(a, p.counters.get() + kLongItems, ni);
     TV_CUDA(cudaGetLastError());
     ex.on_main();
     ++ex.queued;
