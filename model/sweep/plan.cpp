@@ -2,6 +2,7 @@
 // the traces they read, the command lines of traces and points, and their done markers.
 #include <algorithm>
 #include <set>
+#include <tuple>
 
 #include <fmt/format.h>
 
@@ -67,6 +68,16 @@ Plan make_plan(const Sweep& sw) {
       for (size_t k = 0; k < w.frames.size(); ++k)
         add_points(sw, g, name, w.frames[k].viewport, w.frames[k].samples, plan, by_dir, traces, static_cast<int>(k));
     }
+  // Points that may share a functional pass: a record is kept only where another point could
+  // replay it (a record is megabytes, and writing one costs a run more).
+  std::map<std::tuple<fs::path, int, Size, uint32_t, std::string>, size_t> functional;
+  auto functional_key = [](const Point& p) { return std::make_tuple(p.trace, p.frame, p.tile, p.samples, p.mode); };
+  auto uses_cache = [&](const Point& p) {
+    return sw.producer(p.producer).command.find("{functional_cache}") != std::string::npos;
+  };
+  for (const Point& p : plan.points)
+    if (uses_cache(p)) ++functional[functional_key(p)];
+  for (Point& p : plan.points) p.shares_functional = uses_cache(p) && functional[functional_key(p)] > 1;
   plan_compares(sw, plan);
   return plan;
 }
@@ -103,6 +114,7 @@ Command point_command(const Sweep& sw, const Point& p, const std::string& tilevi
     s = replace_all(s, "{tilevis}", tilevis);
     s = replace_all(s, "{trace}", (out / p.trace).string());
     s = replace_all(s, "{out}", (out / p.dir).string());
+    s = replace_all(s, "{functional_cache}", p.shares_functional ? (out / "functional_cache").string() : "");
     s = replace_all(s, "{tile}", p.tile.text());
     s = replace_all(s, "{samples}", std::to_string(p.samples));
     s = replace_all(s, "{mode}", p.mode);

@@ -153,6 +153,9 @@ struct Point {
   uint32_t samples = 1;
   std::filesystem::path dir, trace;  // dir relative to the sweep output; trace likewise (absolute for a workload's trace)
   int frame = -1;                    // a workload's trace frame; -1: a scene's trace, made by the sweep (frame 0)
+  // Another point of a producer with {functional_cache} has this one's trace, frame, tile size,
+  // samples and mode: {functional_cache} is the sweep's cache folder (else empty: no record kept).
+  bool shares_functional = false;
 };
 
 struct CompareJob {

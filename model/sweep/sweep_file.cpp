@@ -91,7 +91,8 @@ std::vector<T> list_of(const Node& n, F f) {
 
 const std::vector<std::string>& placeholders() {
   static const std::vector<std::string> names = {"tilevis", "trace", "out",   "tile",       "samples",
-                                                 "mode",    "params", "scene", "resolution", "frame"};
+                                                 "mode",    "params", "scene", "resolution", "frame",
+                                                 "functional_cache"};
   return names;
 }
 
@@ -106,7 +107,7 @@ void check_template(const Node& n, const std::string& text, bool is_probe) {
     if (is_probe ? name != "tilevis" : std::find(known.begin(), known.end(), name) == known.end())
       n.fail(fmt::format("unknown placeholder {{{}}} (expected {})", name,
                          is_probe ? "{tilevis}" : "{tilevis}, {trace}, {out}, {tile}, {samples}, {mode}, {params}, "
-                                                  "{scene}, {resolution}, {frame}"));
+                                                  "{scene}, {resolution}, {frame}, {functional_cache}"));
     pos = end + 1;
   }
   if (!is_probe && (text.find("{out}") == std::string::npos || text.find("{trace}") == std::string::npos))
@@ -139,8 +140,11 @@ bool Producer::uses_frame() const { return command.find("{frame}") != std::strin
 
 std::vector<Producer> builtin_producers() {
   const std::string golden = "{tilevis} golden {trace} --frame {frame} --tile {tile} --samples {samples}";
+  // The sweep's points of one trace, frame, tile size, mode and functional parameters share one
+  // functional pass (sim.functional_cache): the first computes it, the others replay it.
   const std::string sim =
-      "{tilevis} sim {trace} --frame {frame} --tile {tile} --samples {samples} -p sim.mode={mode} -p sim.fidelity=";
+      "{tilevis} sim {trace} --frame {frame} --tile {tile} --samples {samples} -p sim.mode={mode} "
+      "-p sim.functional_cache={functional_cache} -p sim.fidelity=";
   const std::string cuda = "{tilevis} cuda {trace} --frame {frame} --tile {tile} --samples {samples} --precision ";
   const std::string sim_probe = "{tilevis} sim --list-params";  // fails where the build has no SystemC model
   std::vector<Producer> p = {

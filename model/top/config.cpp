@@ -149,6 +149,11 @@ Registry::Registry() {
              "there; present, the run replays it (same frame and functional parameters, else an error; any "
              "fidelity but rtl) and only the timing is simulated; empty: off",
              +[](TilerConfig& c) -> std::string& { return c.sim.functional_record; });
+  add_string("sim.functional_cache", "path",
+             "folder of recorded functional passes, one per frame and functional parameters (their hash names "
+             "the file): a run replays its own if there, else computes it and adds it (not at fidelity auto: a "
+             "sample); not used at fidelity rtl; made if missing; empty: off",
+             +[](TilerConfig& c) -> std::string& { return c.sim.functional_cache; });
   TV_REAL("sim.clock_mhz", sim.clock_mhz, "MHz", 1.0, 10000.0, "GPU clock; every latency below is in its cycles");
   TV_UINT("sim.batch_triangles", sim.batch_triangles, "triangles", 1, kMaxU32, "geometry transaction size at fidelity tile");
   TV_UINT("sim.fifo_tiles", sim.fifo_tiles, "tiles", 1, 1024, "queue depth between render units at fidelity tile");

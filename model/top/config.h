@@ -45,6 +45,10 @@ struct SimulationConfig {
   // A recorded functional pass (units/common/functional_record.h): written here when absent,
   // replayed when present; empty: off.
   std::string functional_record;
+  // A folder of recorded functional passes, one file per frame and functional configuration
+  // (named by their hash): a run replays its own if there, else computes it and adds it (not at
+  // fidelity auto, whose record holds its sample only); not used at fidelity rtl. Empty: off.
+  std::string functional_cache;
 };
 
 // Energy proxy (stats.json totals.energy): events times per-event energies, to rank

@@ -78,11 +78,28 @@ SimOutput simulate(const trace::Frame& frame, const TilerConfig& config, const S
     fc.rtl = rtl.get();
   }
   // sim.functional_record: replay the file if it exists, else compute and write it at the end.
-  const std::filesystem::path record_path = config.sim.functional_record;
+  // sim.functional_cache: the same with a file of the cache named by the record's key and the
+  // parameter buffer's parameters (its segment plan is checked too); a sample is not added.
+  std::filesystem::path record_path = config.sim.functional_record;
   std::unique_ptr<FunctionalRecord> replay;
   const char* functional = "computed";
   double record_seconds = 0;
-  if (!record_path.empty()) {
+  FunctionalKey key;
+  bool cache_only_reads = false;
+  if (!config.sim.functional_cache.empty() && config.sim.fidelity != Fidelity::rtl) {
+    if (!record_path.empty())
+      throw std::invalid_argument("sim.functional_cache and sim.functional_record: give one or the other");
+    const std::filesystem::path dir = config.sim.functional_cache;
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    if (!std::filesystem::is_directory(dir))
+      throw std::invalid_argument("sim.functional_cache: " + dir.string() + ": not a folder and cannot be made");
+    key = functional_key(frame, fc);
+    fc.key = &key;
+    record_path = dir / cache_file_name(key, to_json(config).at("pb").dump());
+    cache_only_reads = fc.sampled;
+  }
+  if (!record_path.empty() && !(cache_only_reads && !std::filesystem::exists(record_path))) {
     if (config.sim.fidelity == Fidelity::rtl)
       throw std::invalid_argument("sim.functional_record: not at fidelity rtl (the Verilated EVU checks every tile "
                                   "against the computed one); run rtl without it");

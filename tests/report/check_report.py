@@ -103,6 +103,38 @@ def check_crossover(out):
     print(f"check_report: crossover {want}")
 
 
+def check_functional_cache(out):
+    """The sim points of one trace, tile size and mode share a functional pass: where several do,
+    each recorded it (the first, or several run at once) or replayed it, with the same answers
+    (a point interrupted after its record was written replays it when resumed); a point alone
+    computed it and kept nothing."""
+    groups = {}
+    for st in out.glob("points/*/*/sim_*-*/*/stats.json"):
+        mode = st.parts[-3].split("-", 1)[1]
+        tile = st.parent.name.split("-")[0]
+        groups.setdefault((st.parts[-5], st.parts[-4], mode, tile), []).append(json.loads(st.read_text()))
+    shared = alone = 0
+    seen = set()
+    for key, points in groups.items():
+        how = sorted(p["functional"] for p in points)
+        if len(points) == 1:
+            alone += 1
+            if how != ["computed"]:
+                fail(f"{key}: a point alone should compute its functional pass and keep nothing, got {how}")
+            continue
+        shared += 1
+        seen |= set(how)
+        if set(how) - {"recorded", "replayed"}:
+            fail(f"{key}: points sharing a functional pass should record it and replay it, got {how}")
+        ids = {p["totals"]["fragments_shaded"] for p in points if p["config"]["sim"]["fidelity"] != "auto"}
+        if len(ids) != 1:
+            fail(f"{key}: points replaying one functional pass shade different fragments: {sorted(ids)}")
+    if shared == 0 or alone == 0 or seen != {"recorded", "replayed"} or not list((out / "functional_cache").glob("*.rec")):
+        fail(f"expected points sharing a functional pass and points alone, and records in {out / 'functional_cache'}: "
+             f"{shared} shared, {alone} alone")
+    print(f"check_report: functional pass: {shared} groups of sim points shared one, {alone} points alone")
+
+
 def make_captured(a, out):
     """OUT/captured/two_pass.tvt: dragon at 160x90, then glass at 128x96, as a two-pass capture."""
     scenes = Path(a.sweep).resolve().parents[2] / "traces" / "scenes"
@@ -204,6 +236,7 @@ def main():
 
     check_crossover(out)
     check_captured(out)
+    check_functional_cache(out)
 
     title, images, errors, requests = open_in_chromium(a, index, out / "screenshot.png")
     if errors:

@@ -66,6 +66,7 @@ nlohmann::json run(const trace::Frame& frame, std::vector<std::string> params, c
     for (auto it = stats.begin(); it != stats.end();)
       it = it.key().rfind("host_", 0) == 0 || it.key() == "functional" ? stats.erase(it) : std::next(it);
     stats["config"]["sim"].erase("functional_record");
+    stats["config"]["sim"].erase("functional_cache");
     r["stats"] = stats;
     r["cycles"] = out.cycles;
     r["ids"] = out.result.ids;
@@ -235,6 +236,47 @@ TEST(RecordReplay, TimingParametersChangedAtReplayGiveANormalRunsCycles) {
       expect_same_run(normal, replayed);
       EXPECT_NE(normal["cycles"], recorded["cycles"]);
     }
+}
+
+// sim.functional_cache: a folder of records named by what they must match. A run replays its
+// own, or computes it and adds it; a sample (fidelity auto) reads the cache but adds nothing;
+// another tile size or parameter buffer is another file; the outputs are a normal run's.
+TEST(RecordCache, EachFrameAndConfigurationHasItsRecordAndRunsReplayIt) {
+  const fs::path dir = record_folder() / "cache";
+  fs::remove_all(dir);
+  const std::string cache = "sim.functional_cache=" + (dir / "made").string();  // made by the first run
+  auto records = [&] {
+    size_t n = 0;
+    if (fs::is_directory(dir / "made"))
+      for (const auto& e : fs::directory_iterator(dir / "made")) n += e.path().extension() == ".rec";
+    return n;
+  };
+  const auto sampled = run(cubes(), {"sim.fidelity=auto", cache});
+  EXPECT_EQ(sampled.value("functional", ""), "computed") << sampled.dump().substr(0, 400);
+  EXPECT_EQ(records(), 0u);
+  const auto normal = run(cubes(), {"sim.fidelity=tile"});
+  const auto recorded = run(cubes(), {"sim.fidelity=tile", cache});
+  EXPECT_EQ(recorded.value("functional", ""), "recorded");
+  EXPECT_EQ(records(), 1u);
+  expect_same_run(normal, recorded);
+  // Another level and timing parameters: the same record.
+  const std::vector<std::string> slower = {"sim.fidelity=primitive", "memory.controller_latency_ns=400", "sim.cores=2"};
+  std::vector<std::string> slower_cached = slower;
+  slower_cached.push_back(cache);
+  const auto replayed = run(cubes(), slower_cached);
+  EXPECT_EQ(replayed.value("functional", ""), "replayed");
+  expect_same_run(run(cubes(), slower), replayed);
+  const auto sample_replayed = run(cubes(), {"sim.fidelity=auto", cache});
+  EXPECT_EQ(sample_replayed.value("functional", ""), "replayed");
+  expect_same_run(sampled, sample_replayed);
+  EXPECT_EQ(records(), 1u);
+  // Another tile size, another parameter buffer: records of their own.
+  EXPECT_EQ(run(cubes(), {"sim.fidelity=tile", "sim.tile_width=16", cache}).value("functional", ""), "recorded");
+  EXPECT_EQ(run(cubes(), {"sim.fidelity=tile", "pb.capacity_bytes=20000", cache}).value("functional", ""), "recorded");
+  EXPECT_EQ(records(), 3u);
+  // Not with a record of its own.
+  const std::string both = error_of(run(cubes(), {"sim.fidelity=tile", cache}, record_path("both")));
+  EXPECT_NE(both.find("one or the other"), std::string::npos) << both;
 }
 
 TEST(RecordKey, AnotherTileSizeModeOrFrameIsAnErrorNamingIt) {

@@ -282,6 +282,16 @@ FunctionalKey functional_key(const trace::Frame& frame, const FrameWorkConfig& c
   return k;
 }
 
+std::string cache_file_name(const FunctionalKey& key, const std::string& plan_parameters) {
+  Writer w;
+  fields(w, const_cast<FunctionalKey&>(key));
+  w.io(uint32_t(FunctionalRecord::kVersion));
+  w.bytes.insert(w.bytes.end(), plan_parameters.begin(), plan_parameters.end());
+  char s[21];
+  std::snprintf(s, sizeof s, "%016llx.rec", static_cast<unsigned long long>(word_fnv1a64(w.bytes.data(), w.bytes.size())));
+  return s;
+}
+
 std::string key_differences(const FunctionalKey& r, const FunctionalKey& n) {
   std::string out;
   auto differ = [&](const char* what, const std::string& a, const std::string& b) {

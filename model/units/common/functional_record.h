@@ -45,6 +45,9 @@ struct FunctionalKey {
 };
 
 FunctionalKey functional_key(const trace::Frame& frame, const FrameWorkConfig& config);
+// sim.functional_cache's file for a key and the run's other parameters a record must match
+// (`plan_parameters`: those the parameter buffer's segment plan follows): 16 hex digits, ".rec".
+std::string cache_file_name(const FunctionalKey& key, const std::string& plan_parameters);
 // "sim.tile_width: the record has 16, this run 32; ..." (empty when equal).
 std::string key_differences(const FunctionalKey& recorded, const FunctionalKey& run);
 
