@@ -68,6 +68,9 @@ int run_sim(const SimArgs& a) {
     scope = fmt::format(" in the {} of {} tiles simulated", s.at("tiles_simulated").get<uint64_t>(),
                         s.at("tiles").get<uint64_t>());
   }
+  // A recorded functional pass: say which file it came from or went to.
+  if (const std::string how = out.result.stats.at("functional"); how != "computed")
+    scope += fmt::format(", functional pass {} ({})", how, out.result.stats.at("functional_record_file").get<std::string>());
   fmt::print("sim {} frame {} ({} mode, fidelity {}, {}x{} tiles): {}, {} fragments shaded of {} generated{}, "
              "parameter buffer {} B ({} partial renders), DRAM {} B, {:.3f} s host -> {}\n",
              a.trace, a.frame, sim::to_string(cfg.sim.mode), sim::to_string(cfg.sim.fidelity), cfg.sim.tile_width,

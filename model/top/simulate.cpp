@@ -194,6 +194,9 @@ SimOutput simulate(const trace::Frame& frame, const TilerConfig& config, const S
              // "replayed"; the seconds spent loading or writing the record (not in host_seconds
              // when written, at the end).
              {"functional", functional},
+             // The record written or replayed (sim.functional_record, or sim.functional_cache's file).
+             {"functional_record_file", std::string(functional) == "computed" ? nlohmann::json(nullptr)
+                                                                              : nlohmann::json(record_path.string())},
              {"host_functional_record_seconds", record_seconds}};
   return out;
 }

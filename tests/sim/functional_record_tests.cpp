@@ -63,8 +63,11 @@ nlohmann::json run(const trace::Frame& frame, std::vector<std::string> params, c
     nlohmann::json stats = out.result.stats;
     nlohmann::json r;
     r["functional"] = stats["functional"];
+    r["functional_record_file"] = stats["functional_record_file"];
     for (auto it = stats.begin(); it != stats.end();)
-      it = it.key().rfind("host_", 0) == 0 || it.key() == "functional" ? stats.erase(it) : std::next(it);
+      it = it.key().rfind("host_", 0) == 0 || it.key() == "functional" || it.key() == "functional_record_file"
+               ? stats.erase(it)
+               : std::next(it);
     stats["config"]["sim"].erase("functional_record");
     stats["config"]["sim"].erase("functional_cache");
     r["stats"] = stats;
@@ -258,6 +261,9 @@ TEST(RecordCache, EachFrameAndConfigurationHasItsRecordAndRunsReplayIt) {
   const auto recorded = run(cubes(), {"sim.fidelity=tile", cache});
   EXPECT_EQ(recorded.value("functional", ""), "recorded");
   EXPECT_EQ(records(), 1u);
+  EXPECT_TRUE(normal["functional_record_file"].is_null());
+  ASSERT_TRUE(recorded["functional_record_file"].is_string());
+  EXPECT_EQ(fs::path(recorded["functional_record_file"].get<std::string>()).parent_path(), dir / "made");
   expect_same_run(normal, recorded);
   // Another level and timing parameters: the same record.
   const std::vector<std::string> slower = {"sim.fidelity=primitive", "memory.controller_latency_ns=400", "sim.cores=2"};
@@ -265,6 +271,7 @@ TEST(RecordCache, EachFrameAndConfigurationHasItsRecordAndRunsReplayIt) {
   slower_cached.push_back(cache);
   const auto replayed = run(cubes(), slower_cached);
   EXPECT_EQ(replayed.value("functional", ""), "replayed");
+  EXPECT_EQ(replayed["functional_record_file"], recorded["functional_record_file"]);
   expect_same_run(run(cubes(), slower), replayed);
   const auto sample_replayed = run(cubes(), {"sim.fidelity=auto", cache});
   EXPECT_EQ(sample_replayed.value("functional", ""), "replayed");
