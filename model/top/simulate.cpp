@@ -84,22 +84,25 @@ SimOutput simulate(const trace::Frame& frame, const TilerConfig& config, const S
   std::unique_ptr<FunctionalRecord> replay;
   const char* functional = "computed";
   double record_seconds = 0;
-  FunctionalKey key;
-  bool cache_only_reads = false;
-  if (!config.sim.functional_cache.empty() && config.sim.fidelity != Fidelity::rtl) {
-    if (!record_path.empty())
-      throw std::invalid_argument("sim.functional_cache and sim.functional_record: give one or the other");
+  const bool cached = !config.sim.functional_cache.empty() && config.sim.fidelity != Fidelity::rtl;
+  if (cached && !record_path.empty())
+    throw std::invalid_argument("sim.functional_cache and sim.functional_record: give one or the other");
+  FunctionalKey key;  // the record's, computed once here (FrameWork checks a replay against it)
+  if (cached || !record_path.empty()) {
+    key = functional_key(frame, fc);
+    fc.key = &key;
+  }
+  if (cached) {
     const std::filesystem::path dir = config.sim.functional_cache;
     std::error_code ec;
     std::filesystem::create_directories(dir, ec);
     if (!std::filesystem::is_directory(dir))
       throw std::invalid_argument("sim.functional_cache: " + dir.string() + ": not a folder and cannot be made");
-    key = functional_key(frame, fc);
-    fc.key = &key;
     record_path = dir / cache_file_name(key, to_json(config).at("pb").dump());
-    cache_only_reads = fc.sampled;
+    // A sample's record would hold its tiles only: without the file, the run keeps nothing.
+    if (fc.sampled && !std::filesystem::exists(record_path)) record_path.clear();
   }
-  if (!record_path.empty() && !(cache_only_reads && !std::filesystem::exists(record_path))) {
+  if (!record_path.empty()) {
     if (config.sim.fidelity == Fidelity::rtl)
       throw std::invalid_argument("sim.functional_record: not at fidelity rtl (the Verilated EVU checks every tile "
                                   "against the computed one); run rtl without it");

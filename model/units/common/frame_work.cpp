@@ -127,7 +127,8 @@ FrameWork::FrameWork(const trace::Frame& frame, const FrameWorkConfig& config,
     if (config.rtl)
       throw std::invalid_argument("sim.functional_record: fidelity rtl takes the EVU's clocks from the Verilated RTL, "
                                   "which needs the computed tiles; run it without a record");
-    m_rec.key = config.key ? *config.key : functional_key(frame, config);
+    if (!config.key) throw std::logic_error("FrameWork: recording or replaying needs the record's key (FrameWorkConfig::key)");
+    m_rec.key = *config.key;
   }
   if (replay) {
     const std::string differ = key_differences(replay->key, m_rec.key);

@@ -58,7 +58,7 @@ struct FrameWorkConfig {
   std::function<void(uint64_t, uint64_t)> progress;
   // Keep every tile's visibility in record() (sim.functional_record: a run that records).
   bool record = false;
-  // The record's key when the caller has computed it (functional_key(frame, *this)); null: made here.
+  // The record's key (functional_key(frame, *this)): needed to record or replay (not owned).
   const FunctionalKey* key = nullptr;
 };
 

@@ -236,7 +236,7 @@ class Reader {
   void io_runs(std::vector<int32_t>& v) {
     uint64_t n = 0;
     io(n);
-    // Every run takes at least two bytes and holds at least one sample.
+    // A tile's samples count in 32 bits: more is corruption, not an allocation to try.
     if (n > uint64_t(std::numeric_limits<uint32_t>::max())) fail("a tile of " + std::to_string(n) + " samples");
     v.resize(size_t(n));
     for (size_t i = 0; i < v.size();) {
@@ -282,14 +282,22 @@ FunctionalKey functional_key(const trace::Frame& frame, const FrameWorkConfig& c
   return k;
 }
 
+namespace {
+
+std::string hex64(uint64_t h) {
+  char s[17];
+  std::snprintf(s, sizeof s, "%016llx", static_cast<unsigned long long>(h));
+  return s;
+}
+
+}  // namespace
+
 std::string cache_file_name(const FunctionalKey& key, const std::string& plan_parameters) {
   Writer w;
   fields(w, const_cast<FunctionalKey&>(key));
   w.io(uint32_t(FunctionalRecord::kVersion));
   w.bytes.insert(w.bytes.end(), plan_parameters.begin(), plan_parameters.end());
-  char s[21];
-  std::snprintf(s, sizeof s, "%016llx.rec", static_cast<unsigned long long>(word_fnv1a64(w.bytes.data(), w.bytes.size())));
-  return s;
+  return hex64(word_fnv1a64(w.bytes.data(), w.bytes.size())) + ".rec";
 }
 
 std::string key_differences(const FunctionalKey& r, const FunctionalKey& n) {
@@ -297,12 +305,7 @@ std::string key_differences(const FunctionalKey& r, const FunctionalKey& n) {
   auto differ = [&](const char* what, const std::string& a, const std::string& b) {
     if (a != b) out += std::string(out.empty() ? "" : "; ") + what + ": the record has " + a + ", this run " + b;
   };
-  auto hex = [](uint64_t h) {
-    char s[17];
-    std::snprintf(s, sizeof s, "%016llx", static_cast<unsigned long long>(h));
-    return std::string(s);
-  };
-  differ("the frame (FNV-1a 64 of its trace encoding, by words)", hex(r.frame_fnv1a64), hex(n.frame_fnv1a64));
+  differ("the frame (FNV-1a 64 of its trace encoding, by words)", hex64(r.frame_fnv1a64), hex64(n.frame_fnv1a64));
   differ("sim.mode", to_string(Mode(r.mode)), to_string(Mode(n.mode)));
   differ("sim.tile_width", std::to_string(r.tile_w), std::to_string(n.tile_w));
   differ("sim.tile_height", std::to_string(r.tile_h), std::to_string(n.tile_h));
