@@ -1,5 +1,7 @@
 #include "geom/polygon.h"
 
+#include <algorithm>
+
 namespace tilevis::geom {
 
 ConvexPolygon ConvexPolygon::from_triangle(Point p0, Point p1, Point p2) {
@@ -104,6 +106,29 @@ Rect bounding_box(const ConvexPolygon& poly) {
   }
   // Vertices of a polygon built from in-band points lie in their convex hull: int32.
   return {static_cast<int32_t>(x0), static_cast<int32_t>(y0), static_cast<int32_t>(x1), static_cast<int32_t>(y1)};
+}
+
+
+namespace {
+int64_t floor_div64(int64_t n, int64_t d) {  // d > 0
+  const int64_t q = n / d;
+  return q - ((n % d != 0) && (n < 0));
+}
+}  // namespace
+
+PixelSpan covered_span(const ConvexPolygon& poly, int32_t sx, int32_t sy, int32_t sb, int64_t px0, int64_t px1) {
+  if (poly.empty()) return {};
+  int64_t lo = px0, hi = px1;
+  for (const auto& e : poly.edges()) {
+    const Line& l = e.line;
+    const int64_t a = l.a * (int64_t{1} << sb);
+    const int64_t k = int64_t{l.owns_boundary() ? 0 : 1} - (l.a * sx + l.b * sy + l.c);  // a px >= k
+    if (a > 0) lo = std::max(lo, -floor_div64(-k, a));
+    else if (a < 0) hi = std::min(hi, floor_div64(-k, -a));
+    else if (k > 0) return {};
+    if (lo > hi) return {};
+  }
+  return {lo, hi};
 }
 
 }  // namespace tilevis::geom

@@ -68,6 +68,18 @@ inline bool covers(const ConvexPolygon& poly, Point s) {
   return true;
 }
 
+// The samples of one row that the polygon covers, as a range of pixels: pixel px's sample is
+// ((px << sb) + sx, sy), a snapped point. Returns [lo, hi] within [px0, px1] (lo > hi: none),
+// exactly the px for which covers(poly, sample) holds, without testing each: a line's
+// condition a x + b y + c >= t (t = 0 where it owns its boundary, else 1: the tie rule) is
+// A px >= t - B with A = a 2^sb, B = a sx + b sy + c, one exact integer bound on px (convexity:
+// the covered pixels of a row are one range). |A px| = |a (px << sb)| <= 2^47 and |B| < 2^49
+// (predicates.h's bounds): int64.
+struct PixelSpan {
+  int64_t lo = 0, hi = -1;
+};
+PixelSpan covered_span(const ConvexPolygon& poly, int32_t sx, int32_t sy, int32_t sb, int64_t px0, int64_t px1);
+
 inline bool contains(const ConvexPolygon& poly, const RationalPoint& p) {
   if (poly.empty()) return false;
   for (const auto& e : poly.edges())

@@ -13,7 +13,6 @@ namespace tilevis::vis {
 namespace {
 
 using geom::ConvexPolygon;
-using geom::Point;
 using geom::Rect;
 
 class AnalyticResolver final : public TileResolver {
@@ -131,11 +130,14 @@ class AnalyticResolver final : public TileResolver {
       const int64_t py0 = std::max<int64_t>(ty * g.tile_h, (int64_t(b.y0) >> sb));
       const int64_t py1 = std::min<int64_t>((ty + 1) * g.tile_h - 1, int64_t(b.y1) >> sb);
       int64_t covered = 0;
+      const int64_t px_end = std::min<int64_t>(px1, int64_t(s.width) - 1);
       for (int64_t py = py0; py <= py1 && py < s.height; ++py)
-        for (int64_t px = px0; px <= px1 && px < s.width; ++px)
-          for (uint32_t k = 0; k < n_samples; ++k) {
-            const Point p{int32_t((px << sb) + s.samples[k].x), int32_t((py << sb) + s.samples[k].y)};
-            if (!geom::covers(piece, p)) continue;
+        for (uint32_t k = 0; k < n_samples; ++k) {
+          // The row's covered samples of sample position k, one span (geom::covered_span: the
+          // same samples as geom::covers, without a test each).
+          const geom::PixelSpan span =
+              geom::covered_span(piece, s.samples[k].x, int32_t((py << sb) + s.samples[k].y), sb, px0, px_end);
+          for (int64_t px = span.lo; px <= span.hi; ++px) {
             ++covered;
             if (owns) out.ids[(size_t(py) * s.width + size_t(px)) * n_samples + k] = int32_t(tt.t->id);
             if (visible) {
@@ -144,6 +146,7 @@ class AnalyticResolver final : public TileResolver {
               stamp = m_serial;
             }
           }
+        }
       c.fragments_generated += covered;
       if (!visible) continue;
       ++c.visible_pieces;

@@ -143,6 +143,49 @@ TEST(Split, RecursivePiecesPartitionTheTriangle) {
   }
 }
 
+// covered_span gives each row's covered samples as one pixel range: exactly the pixels whose
+// sample covers() accepts, on pieces of split triangles, with samples on their lines (small
+// integer coordinates: ties everywhere), every sub-pixel offset, and at the full range.
+TEST(Coverage, SpanIsWhatCoversAccepts) {
+  std::mt19937_64 rng(94);
+  int64_t covered = 0, ties = 0;
+  for (int it = 0; it < tilevis::test::cases(300); ++it) {
+    const bool wide = it % 10 == 9;
+    const int32_t lim = wide ? kCoordLimit : 60;
+    const Point a = random_point(rng, -lim, lim), b = random_point(rng, -lim, lim), c = random_point(rng, -lim, lim);
+    ConvexPolygon piece = ConvexPolygon::from_triangle(a, b, c);
+    for (int k = 0; k < 3 && !piece.empty(); ++k) {
+      SplitResult r = split(piece, random_line_in(rng, -lim, lim));
+      piece = std::move(rng() % 2 ? r.inside : r.outside);
+      if (piece.empty()) piece = ConvexPolygon::from_triangle(a, b, c);
+    }
+    if (piece.empty()) continue;
+    const int32_t sb = int32_t(rng() % 5);  // sub-pixel bits 0..4
+    const int32_t sx = int32_t(rng() % (1u << sb)), sy = int32_t(rng() % (1u << sb));
+    // Rows and pixels around the piece's box (at the full range: a window of it).
+    const Rect box = bounding_box(piece);
+    const int64_t x0 = (int64_t{box.x0} >> sb) - 2, y0 = (int64_t{box.y0} >> sb) - 2;
+    const int64_t x1 = std::min<int64_t>((int64_t{box.x1} >> sb) + 2, x0 + 200);
+    const int64_t y1 = std::min<int64_t>((int64_t{box.y1} >> sb) + 2, y0 + 200);
+    for (int64_t py = y0; py <= y1; ++py) {
+      const int64_t y = (py << sb) + sy;
+      if (y < -kCoordLimit || y > kCoordLimit) continue;
+      const PixelSpan span = covered_span(piece, sx, int32_t(y), sb, x0, x1);
+      for (int64_t px = x0; px <= x1; ++px) {
+        const int64_t x = (px << sb) + sx;
+        if (x < -kCoordLimit || x > kCoordLimit) continue;
+        const Point s{int32_t(x), int32_t(y)};
+        const bool in = covers(piece, s);
+        ASSERT_EQ(in, px >= span.lo && px <= span.hi) << "piece " << it << " sample " << x << "," << y;
+        covered += in;
+        for (const auto& e : piece.edges()) ties += e.line.eval(s) == 0;
+      }
+    }
+  }
+  EXPECT_GT(covered, tilevis::test::cases(10000));
+  EXPECT_GT(ties, tilevis::test::cases(100));  // samples on the pieces' lines were tested
+}
+
 // Large coordinates (full guard band): exact conservation through the wide bounds.
 TEST(Split, ConservesAreaAtFullRange) {
   std::mt19937_64 rng(93);
