@@ -57,8 +57,8 @@ TV_HD inline bool candidates_overflowed(const ClipArgs<P>& a) {
 }
 
 // Items of kLongChain or more candidates are clipped by a block each (k_clip_long, below, says
-// why 32). The candidate that is an item's kLongChain-th to be scattered lists the item for it.
-inline constexpr uint32_t kLongChain = 32;
+// why 24). The candidate that is an item's kLongChain-th to be scattered lists the item for it.
+inline constexpr uint32_t kLongChain = 24;
 
 template <class P>
 TV_HD void cand_scatter(const ClipArgs<P>& a, uint64_t k) {
@@ -276,7 +276,13 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team, uint64_t* stag
 // against 1.450 / 2.690, dragon_bunnies 1.462 / 2.994 against 1.708 / 3.344, the others
 // alike. The rounds alone (no tree; every long item in rounds) were slower at 32 and at 96
 // on every scene but million and bunny (H100, with the thread-per-walk tree: interpenetrating
-// float 1.45 against 1.16 ms).
+// float 1.45 against 1.16 ms). 24 against 32 (H200, 2026-11-28, two calls, each the same
+// build with the threshold set at run time; new frame ms, float / exact, 5 runs, outputs
+// byte-identical): elephant 0.618 / 1.107 and 0.616 / 1.096 against 0.693 / 1.149 and
+// 0.700 / 1.146; bunny 0.446 / 0.729 and 0.452 / 0.729 against 0.471 / 0.745 and 0.469 / 0.751;
+// million exact 6.653 and 6.683 against 6.528 and 6.591 (float alike); the other 12 scenes
+// within 2.5 %. At 16 million was 2 % (float) and 7 % (exact) slower, at 12 8 % and 11 %; at
+// 48, elephant and bunny as at 32 and dragon_bunnies float 12 % slower.
 // Exact's block is half float's: its 255 registers a thread (wide arithmetic) fill the SM's
 // register file at 256 threads; 512 would spill.
 inline constexpr uint32_t kLongBlock = 512, kLongStage = 4096;
