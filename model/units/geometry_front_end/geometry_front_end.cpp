@@ -130,11 +130,16 @@ void GeometryFrontEnd::grow(uint64_t clusters) {
 void GeometryFrontEnd::run_sampled() {
   std::vector<bool> certain = take_all_clusters({m_aux}, m_sampling.cluster_tiles, m_sampling.certainty_ratio, 1);
   // The stream's last cluster is taken whole too: it is the one partial cluster, and the end of
-  // the stream is where stack's geometry stalls once for 14,520 cycles (trace triangle 19,990 of
-  // 20,000; 4.4 % of its geometry, every other span 39 cycles). Missed by the sample, that frame
-  // was 0.01-0.03 % low outside a +/-0.01 % interval on 7 of 8 seeds; over seeds 1-8 on the 15
-  // built-in scenes the interval held the primitive level in 106 of 120 runs, 96 before (the
-  // geometry's own in 80 of 88, 72 before).
+  // a draw is where the silhouette unit reads back the hash entries it spilled (its last
+  // triangle's cost). stack's one draw spills 35,904 entries (574 KB), and its geometry stalls
+  // once for 14,520 cycles there (trace triangle 19,990 of 20,000; 4.4 % of its geometry, every
+  // other span 39 cycles; with a hash that spills nothing it ends 38,988 cycles sooner). Missed
+  // by the sample, that frame was 0.01-0.03 % low outside a +/-0.01 % interval on 7 of 8 seeds;
+  // over seeds 1-8 on the 15 built-in scenes the interval held the primitive level in 106 of 120
+  // runs, 96 before (the geometry's own in 80 of 88, 72 before). Earlier draws' ends need no
+  // rule of their own: the next draw's first cluster is heavy (its streams start), and the
+  // cluster before a heavy one is taken whole (take_all_clusters' lead); on four draws of 6,000
+  // separate quads, each spilling, taking every read-back's cluster whole changed no cluster.
   if (!certain.empty()) certain.back() = true;
   m_sampler = std::make_unique<TileSampler>(
       m_aux, m_sampling, ~uint64_t{0}, std::vector<double>{}, std::vector<std::vector<double>>{},
