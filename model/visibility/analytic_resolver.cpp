@@ -137,14 +137,14 @@ class AnalyticResolver final : public TileResolver {
           // same samples as geom::covers, without a test each).
           const geom::PixelSpan span =
               geom::covered_span(piece, s.samples[k].x, int32_t((py << sb) + s.samples[k].y), sb, px0, px_end);
+          if (span.lo > span.hi) continue;
+          covered += span.hi - span.lo + 1;
+          if (!visible) continue;  // a hidden piece's samples are counted, nothing else
           for (int64_t px = span.lo; px <= span.hi; ++px) {
-            ++covered;
             if (owns) out.ids[(size_t(py) * s.width + size_t(px)) * n_samples + k] = int32_t(tt.t->id);
-            if (visible) {
-              uint64_t& stamp = m_stamp[size_t(py - ty * g.tile_h) * g.tile_w + size_t(px - tx * g.tile_w)];
-              shaded += stamp != m_serial || tt.t->sample_rate;  // sample rate: every sample
-              stamp = m_serial;
-            }
+            uint64_t& stamp = m_stamp[size_t(py - ty * g.tile_h) * g.tile_w + size_t(px - tx * g.tile_w)];
+            shaded += stamp != m_serial || tt.t->sample_rate;  // sample rate: every sample
+            stamp = m_serial;
           }
         }
       c.fragments_generated += covered;
