@@ -73,16 +73,18 @@ class AnalyticResolver final : public TileResolver {
     uint64_t shaded = 0;
     // Candidate edges (tests 1–6 against the triangle's tile polygon), in ascending id.
     m_candidates.clear();
-    for (const PairEdge& pe : m_sorted_edges) {
-      if (svgpu::edge_behind(pe.z_min, tt)) {  // test 6: and so is every later edge
-        m_shape.test6_stop = 1;
-        break;
-      }
-      ++c.pair_tests;
-      if (svgpu::boxes_apart(pe.bbox, tt.bbox)) continue;  // test 2 (boxes)
-      const svgpu::Edge& e = f.edges()[pe.index];
+    // Test 6 on edges by nearest depth: the first edge behind the triangle ends the pairs (so
+    // is every later one), found by a binary search; the pairs before it are tested.
+    const auto pairs_end = std::upper_bound(m_sorted_edges.begin(), m_sorted_edges.end(), tt,
+                                            [](const FrontTriangle& t, const PairEdge& pe) { return svgpu::edge_behind(pe.z_min, t); });
+    if (pairs_end != m_sorted_edges.end()) m_shape.test6_stop = 1;
+    c.pair_tests += pairs_end - m_sorted_edges.begin();
+    const geom::Rect tb = tt.bbox;
+    for (auto pe = m_sorted_edges.begin(); pe != pairs_end; ++pe) {
+      if (svgpu::boxes_apart(pe->bbox, tb)) continue;  // test 2 (boxes)
+      const svgpu::Edge& e = f.edges()[pe->index];
       if (svgpu::shares_edge(e, tt.tri)) continue;  // test 4
-      if (svgpu::survives(poly, tt, e)) m_candidates.push_back(pe.index);
+      if (svgpu::survives(poly, tt, e)) m_candidates.push_back(pe->index);
     }
     std::sort(m_candidates.begin(), m_candidates.end());
     c.candidate_pairs += int64_t(m_candidates.size());
