@@ -108,7 +108,6 @@ Rect bounding_box(const ConvexPolygon& poly) {
   return {static_cast<int32_t>(x0), static_cast<int32_t>(y0), static_cast<int32_t>(x1), static_cast<int32_t>(y1)};
 }
 
-
 namespace {
 int64_t floor_div64(int64_t n, int64_t d) {  // d > 0
   const int64_t q = n / d;
