@@ -83,12 +83,14 @@ double doubled_area(const ConvexPolygon& poly) {
 }
 
 namespace {
-Int128 floor_div(Int128 n, int64_t d) {  // d > 0
-  Int128 q = n / d;
+template <class T>  // Int128 or int64_t
+T floor_div(T n, int64_t d) {  // d > 0
+  T q = n / d;
   if (n % d < 0) q -= 1;
   return q;
 }
-Int128 ceil_div(Int128 n, int64_t d) { return -floor_div(-n, d); }
+template <class T>
+T ceil_div(T n, int64_t d) { return -floor_div(-n, d); }
 }  // namespace
 
 Rect bounding_box(const ConvexPolygon& poly) {
@@ -108,13 +110,6 @@ Rect bounding_box(const ConvexPolygon& poly) {
   return {static_cast<int32_t>(x0), static_cast<int32_t>(y0), static_cast<int32_t>(x1), static_cast<int32_t>(y1)};
 }
 
-namespace {
-int64_t floor_div64(int64_t n, int64_t d) {  // d > 0
-  const int64_t q = n / d;
-  return q - ((n % d != 0) && (n < 0));
-}
-}  // namespace
-
 PixelSpan covered_span(const ConvexPolygon& poly, int32_t sx, int32_t sy, int32_t sb, int64_t px0, int64_t px1) {
   if (poly.empty()) return {};
   int64_t lo = px0, hi = px1;
@@ -122,8 +117,8 @@ PixelSpan covered_span(const ConvexPolygon& poly, int32_t sx, int32_t sy, int32_
     const Line& l = e.line;
     const int64_t a = l.a * (int64_t{1} << sb);
     const int64_t k = int64_t{l.owns_boundary() ? 0 : 1} - (l.a * sx + l.b * sy + l.c);  // a px >= k
-    if (a > 0) lo = std::max(lo, -floor_div64(-k, a));
-    else if (a < 0) hi = std::min(hi, floor_div64(-k, -a));
+    if (a > 0) lo = std::max(lo, ceil_div(k, a));
+    else if (a < 0) hi = std::min(hi, floor_div(-k, -a));
     else if (k > 0) return {};
     if (lo > hi) return {};
   }
