@@ -12,10 +12,12 @@
 # scene and precision under each NAME:VAR=VALUE[,VAR=VALUE...] in turn (interleaved, TILEVIS_QUICK_PASSES times,
 # default 1), checks that ids.exr, tiles.csv and visible_area.bin are the same bytes under every
 # variant, and tables each variant's times. A variant may run another build's tool:
-# TILEVIS_QUICK_BIN=PATH among its assignments. Phase `base` builds the tree of
-# .gpu/base_src.tar.xz (`git archive BASE | xz >.gpu/base_src.tar.xz` on the sender) beside this
-# one, so that "base:TILEVIS_QUICK_BIN=/tmp/base_src/build-gpu/model/app/tilevis new:" compares
-# a change with the commit before it, outputs byte for byte. Phase `gl` (before bench; .gl carried)
+# TILEVIS_QUICK_BIN=PATH among its assignments. Phase `base` builds the tree of every
+# .gpu/NAME_src.tar.xz (`git archive REV | xz >.gpu/NAME_src.tar.xz` on the sender) beside this
+# one, in /tmp/NAME_src, and runs its GPU tests (label gpu; not base's), so that
+# "base:TILEVIS_QUICK_BIN=/tmp/base_src/build-gpu/model/app/tilevis new:" compares a change with
+# the commit before it, outputs byte for byte, and more trees (other branches) can be timed in
+# the same call. Phase `gl` (before bench; .gl carried)
 # times the GPU's own rasteriser (gl_raster --runs 20) on the same scenes, and the bench table
 # then gives each run's new frame over it (/ GL). With .gpu carried
 # (prepare_gpu_run.sh) and the commit in .gpu/commit_src.txt (the sender writes it). $OUT gets
@@ -45,10 +47,19 @@ for ph in "${phases[@]}"; do
       say "host emulation tests: $(grep -E 'tests passed|tests failed' "$OUT/emulation.log" | tail -n 1)"
       grep -E "\*\*\*Failed|FAILED" "$OUT/emulation.log" | head -n 20 ;;
     base)
-      rm -rf /tmp/base_src && mkdir -p /tmp/base_src && tar -C /tmp/base_src -xJf .gpu/base_src.tar.xz &&
-        ln -s "$ROOT/.gpu" /tmp/base_src/.gpu &&
-        (cd /tmp/base_src && OUT=/tmp/base_out bash cuda_ref/gpu_run.sh build 2>&1 | tail -n 2)
-      say "base build done: $(ls /tmp/base_src/build-gpu/model/app/tilevis 2>&1)" ;;
+      for tarball in .gpu/*_src.tar.xz; do
+        [ -f "$tarball" ] || { say "no .gpu/NAME_src.tar.xz to build"; break; }
+        name="$(basename "$tarball" _src.tar.xz)" dir="/tmp/$(basename "$tarball" .tar.xz)"
+        rm -rf "$dir" && mkdir -p "$dir" && tar -C "$dir" -xJf "$tarball" && ln -s "$ROOT/.gpu" "$dir/.gpu" &&
+          (cd "$dir" && OUT="/tmp/${name}_out" bash cuda_ref/gpu_run.sh build 2>&1 | tail -n 2)
+        say "$name build done: $(ls "$dir/build-gpu/model/app/tilevis" 2>&1)"
+        [ "$name" = base ] && continue  # the reference: its tests ran where it was committed
+        log="/tmp/${name}_gpu_tests.log"
+        TILEVIS_GPU_TRACES="$dir/build-gpu/gpu_traces" ctest --test-dir "$dir/build-gpu" -L gpu -j 4 \
+          --output-on-failure >"$log" 2>&1
+        say "$name GPU tests: $(grep -E 'tests passed|tests failed' "$log" | tail -n 1)"
+        grep -E "\*\*\*Failed|FAILED" "$log" | head -n 20
+      done ;;
     gl)
       if [ -d .gl ] && ! ldconfig -p | grep -q libEGL.so.1; then
         for f in .gl/*.deb; do dpkg -x "$f" /; done
