@@ -577,13 +577,18 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
         continue;
       }
       const uint32_t first = uint32_t(__ffs(mask)) - 1u;
-      uint64_t next = 0;
-      uint32_t quit = 0;
+      uint64_t next = 0, e_at = 0;
+      uint32_t quit = 0, child = 0;
       // The inside part, which this warp walks on with, goes to the other stage when it fits
       // (m + 1 edges at most), and to the pool after it; else to the pool alone.
       PEdge<P>* const st = m < kCopyEdges ? ws[b ^ 1u] : nullptr;
+      // Float splits a piece of up to kSideCap edges with the whole warp (lane i makes edge i's
+      // share, split_edge); exact, and longer pieces, with lane `first` alone (exact's wide
+      // arithmetic in every lane would spill).
+      bool by_warp = false;
+      if constexpr (!P::kExact) by_warp = m <= kSideCap;
       if (lane == first) {
-        const uint32_t child = sh_load(&ts.fail) ? kNone : atomicAdd(&ts.n_alloc, 1u);
+        child = sh_load(&ts.fail) ? kNone : atomicAdd(&ts.n_alloc, 1u);
         if (child == kNone) {
           quit = 1;
         } else if (child >= want || child >= kTreeSlots) {
@@ -592,12 +597,12 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
           atomicAdd(&ts.finished, 1u);  // the id taken stands for no piece
           quit = 1;
         } else {
-          const uint64_t e_at = tree_edges(a, ts, 2 * (m + 1));
+          e_at = tree_edges(a, ts, 2 * (m + 1));
           if (e_at == ~uint64_t{0}) {
             sh_store(&ts.fail, 1u);
             atomicAdd(&ts.finished, 1u);
             quit = 1;
-          } else {
+          } else if (!by_warp) {
             uint64_t out_slot = 0;
             split_piece<P>(at, a.pool, e_at, m, a.edges[sidx[mine]].line, &sides, regularized, anomalies, next,
                            out_slot, st);
@@ -610,6 +615,49 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
         }
       }
       if (__shfl_sync(0xffffffffu, quit, first) != 0) break;  // the block failed: nothing more is kept
+      if constexpr (!P::kExact) if (by_warp) {
+        // Lane `first`'s sides (regularized as split() does, the same in every lane), its line,
+        // and each edge's share placed by prefix sums of the counts: split_sides' polygons.
+        e_at = __shfl_sync(0xffffffffu, static_cast<unsigned long long>(e_at), first);
+        Sides sg;
+        sg.pos = __shfl_sync(0xffffffffu, sides.pos, first);
+        sg.neg = __shfl_sync(0xffffffffu, sides.neg, first);
+        const bool regular = sg.regularize(m);
+        const typename P::Line& line = a.edges[sidx[ci + first]].line;
+        const uint32_t cnt = lane < m ? split_counts(m, sg, lane) : 0u;
+        const uint32_t incl = WarpTeam{}.scan(cnt);  // both halves: no carry, 2 x 32 < 2^16
+        const uint32_t total = __shfl_sync(0xffffffffu, incl, 31);
+        uint32_t in_at = (incl - cnt) & 0xffffu, out_at = (incl - cnt) >> 16;
+        const uint32_t cap = m + 1;
+        PEdge<P>* const in_e = st ? st : a.pool + e_at;
+        PEdge<P>* const out_e = a.pool + e_at + m + 1;
+        if (lane < m) {
+          const typename P::Line lf = line.flipped();
+          split_edge<P>(
+              at, m, line, lf, sg, lane,
+              [&](const typename P::Line& e, const typename P::V& v) {
+                if (in_at < cap) in_e[in_at] = {e, v};
+                ++in_at;
+              },
+              [&](const typename P::Line& e, const typename P::V& v) {
+                if (out_at < cap) out_e[out_at] = {e, v};
+                ++out_at;
+              });
+        }
+        const uint32_t n_in = total & 0xffffu, n_out = total >> 16;
+        next = (e_at << 32) | tmin(n_in, cap);
+        __threadfence_block();  // each lane's edges (global) before the warp's barrier
+        __syncwarp();  // every lane's edges are written before the outside part is published
+        if (lane == first) {
+          regularized += regular ? 1 : 0;
+          if (n_in > cap || n_out > cap) ++anomalies;  // only float arithmetic can break convexity
+          ++splits;
+          sh_store(&parent[child], id);
+          sh_store(&born[child], ci + first);
+          __threadfence_block();  // the outside part's edges (global) and record before its polygon word
+          sh_store(&sp[child], ((e_at + m + 1) << 32) | tmin(n_out, cap));
+        }
+      }
       cur = __shfl_sync(0xffffffffu, static_cast<unsigned long long>(next), first);
       __syncwarp();  // the inside part's edges, written by lane `first`, before the lanes read them
       if (st) {
