@@ -99,22 +99,18 @@ struct Piece {
   TV_HD bool survives(const TileTri<P>& tt, const SilEdge<P>& e, Sides* sides) const {
     return tilevis::cuda::survives<P>(at, n, tt, e, sides);
   }
-  TV_HD void split(const typename P::Line& l, PolyOut<P>& in, PolyOut<P>& out, bool* regularized,
-                   const Sides* sides) const {
-    tilevis::cuda::split<P>(at, n, l, in, out, regularized, sides);
-  }
 };
 
 // Piece p (m edges) split by a candidate's line into the pool at `at`: the inside part's edges
 // first, the outside part's after them (m + 1 edges each at most). Returns the two polygons' slot
 // words (pool offset << 32 | edge count) in `in_slot` and `out_slot`.
 template <class P>
-TV_HD inline void split_piece(const Piece<P>& p, PEdge<P>* pool, uint64_t at, uint32_t m, const typename P::Line& line,
+TV_HD inline void split_piece(const PEdge<P>* poly, PEdge<P>* pool, uint64_t at, uint32_t m, const typename P::Line& line,
                               const Sides* sides, uint32_t& regularized, uint32_t& anomalies, uint64_t& in_slot,
                               uint64_t& out_slot, PEdge<P>* in_edges = nullptr) {
   PolyOut<P> in{in_edges ? in_edges : pool + at, 0, m + 1, false}, out{pool + at + m + 1, 0, m + 1, false};
   bool regular = false;
-  p.split(line, in, out, &regular, sides);
+  split<P>(poly, m, line, in, out, &regular, sides);
   regularized += regular ? 1 : 0;
   if (in.overflow || out.overflow) {
     ++anomalies;  // only float arithmetic can break convexity
@@ -232,7 +228,7 @@ TV_HD void clip_item(const ClipArgs<P>& a, uint64_t w, Team team, uint64_t* stag
       const uint64_t step_at = mask ? take(team.sum(need)) : 0;
       bool fail = flag && (!room || step_at == ~uint64_t{0});
       if (flag && !fail) {
-        split_piece<P>(piece, a.pool, step_at + incl - need, m, e.line, &sides, regularized, anomalies, slots[k],
+        split_piece<P>(piece.at, a.pool, step_at + incl - need, m, e.line, &sides, regularized, anomalies, slots[k],
                        slots[dst]);
         ++splits;
       }
@@ -410,7 +406,7 @@ __device__ void clip_item_block(const ClipArgs<P>& a, uint32_t j, uint64_t* stag
       const uint64_t step_at = total ? sh.step_at : 0;
       const bool fail = flag && (!room || step_at == ~uint64_t{0});
       if (flag && !fail) {
-        split_piece<P>(piece, a.pool, step_at + need_before + incl - need, m, e.line, &sides, regularized, anomalies,
+        split_piece<P>(piece.at, a.pool, step_at + need_before + incl - need, m, e.line, &sides, regularized, anomalies,
                        slots[k], slots[dst]);
         ++splits;
       }
@@ -481,7 +477,7 @@ __device__ uint64_t tree_edges(const ClipArgs<P>& a, TreeShared& ts, uint32_t k)
 
 template <class P>
 __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, uint8_t* smem, TreeShared& ts,
-                               PEdge<P> (*wstage)[kCopyEdges], uint32_t* sidx) {
+                               PEdge<P> (*wstage)[2][kCopyEdges], uint32_t* sidx) {
   uint64_t* const sp = reinterpret_cast<uint64_t*>(smem);                  // by piece id: polygon (pool << 32 | n)
   uint32_t* const parent = reinterpret_cast<uint32_t*>(sp + kTreeSlots);  // by piece id
   uint32_t* const born = parent + kTreeSlots;                             // candidate that cut it off
@@ -551,28 +547,48 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
     id = __shfl_sync(0xffffffffu, id, 0);
     cur = __shfl_sync(0xffffffffu, static_cast<unsigned long long>(cur), 0);
     if (cur == ~uint64_t{0}) break;
-    Piece<P> piece;
-    piece.load(a.pool, cur);
+    // The walked piece lives in one of the warp's two stages in shared memory (its lanes copy
+    // it there, an edge each): every lane tests it there and the splitting lane reads it there,
+    // with no copy of its own. (A Piece is a copy in each lane's local memory: with it here the
+    // kernel's stack frame was 848 bytes a thread in float and 2,752 in exact, 434 KB and 704 KB
+    // a block, more than the L1 beside the tree's shared memory; 544 and 1,776 bytes without,
+    // ptxas -v for sm_90.) A piece of more than kCopyEdges edges is read from the pool.
+    PEdge<P>(*const ws)[kCopyEdges] = wstage[t / 32];
+    uint32_t b = 0;
+    const PEdge<P>* at = a.pool + (cur >> 32);
+    if (uint32_t(cur) <= kCopyEdges) {
+      if (lane < uint32_t(cur)) ws[b][lane] = at[lane];
+      at = ws[b];
+    }
+    __syncwarp();
     // The warp's lanes test the next 32 candidates at once; the lowest that the piece survives is
     // the next that splits it (those before it leave it as it is), and its lane splits it.
     uint32_t ci = (lane == 0 ? sh_load(&born[id]) : 0u);
     ci = __shfl_sync(0xffffffffu, ci, 0) + 1;  // the root's kNone + 1 = 0
     while (ci < c) {
       const uint32_t mine = ci + lane;
+      const uint32_t m = uint32_t(cur);
       Sides sides;
       bool flag = false;
-      if (mine < c) flag = piece.survives(tt, a.edges[sidx[mine]], &sides);
+      if (mine < c) flag = survives<P>(at, m, tt, a.edges[sidx[mine]], &sides);
       const uint32_t mask = __ballot_sync(0xffffffffu, flag);
       if (mask == 0) {
         ci += 32;
         continue;
       }
       const uint32_t first = uint32_t(__ffs(mask)) - 1u;
-      uint64_t next = 0;
-      uint32_t quit = 0, staged = 0;
+      uint64_t next = 0, e_at = 0;
+      uint32_t quit = 0, child = 0;
+      // The inside part, which this warp walks on with, goes to the other stage when it fits
+      // (m + 1 edges at most), and to the pool after it; else to the pool alone.
+      PEdge<P>* const st = m < kCopyEdges ? ws[b ^ 1u] : nullptr;
+      // Float splits a piece of up to kSideCap edges with the whole warp (lane i makes edge i's
+      // share, split_edge); exact, and longer pieces, with lane `first` alone (exact's wide
+      // arithmetic in every lane would spill).
+      bool by_warp = false;
+      if constexpr (!P::kExact) by_warp = m <= kSideCap;
       if (lane == first) {
-        const uint32_t m = uint32_t(cur);
-        const uint32_t child = sh_load(&ts.fail) ? kNone : atomicAdd(&ts.n_alloc, 1u);
+        child = sh_load(&ts.fail) ? kNone : atomicAdd(&ts.n_alloc, 1u);
         if (child == kNone) {
           quit = 1;
         } else if (child >= want || child >= kTreeSlots) {
@@ -581,22 +597,15 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
           atomicAdd(&ts.finished, 1u);  // the id taken stands for no piece
           quit = 1;
         } else {
-          const uint64_t at = tree_edges(a, ts, 2 * (m + 1));
-          if (at == ~uint64_t{0}) {
+          e_at = tree_edges(a, ts, 2 * (m + 1));
+          if (e_at == ~uint64_t{0}) {
             sh_store(&ts.fail, 1u);
             atomicAdd(&ts.finished, 1u);
             quit = 1;
-          } else {
+          } else if (!by_warp) {
             uint64_t out_slot = 0;
-            // The inside part, which this warp walks on with, goes to the warp's stage first (its
-            // lanes read it there, not back from the pool) when it fits their copies.
-            PEdge<P>* const st = m < kCopyEdges ? wstage[t / 32] : nullptr;
-            split_piece<P>(piece, a.pool, at, m, a.edges[sidx[mine]].line, &sides,
-                           regularized, anomalies, next, out_slot, st);
-            if (st) {
-              for (uint32_t k = 0; k < uint32_t(next); ++k) a.pool[at + k] = st[k];
-              staged = 1;
-            }
+            split_piece<P>(at, a.pool, e_at, m, a.edges[sidx[mine]].line, &sides, regularized, anomalies, next,
+                           out_slot, st);
             ++splits;
             sh_store(&parent[child], id);
             sh_store(&born[child], mine);
@@ -606,16 +615,63 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
         }
       }
       if (__shfl_sync(0xffffffffu, quit, first) != 0) break;  // the block failed: nothing more is kept
+      if constexpr (!P::kExact) if (by_warp) {
+        // Lane `first`'s sides (regularized as split() does, the same in every lane), its line,
+        // and each edge's share placed by prefix sums of the counts: split_sides' polygons.
+        e_at = __shfl_sync(0xffffffffu, static_cast<unsigned long long>(e_at), first);
+        Sides sg;
+        sg.pos = __shfl_sync(0xffffffffu, sides.pos, first);
+        sg.neg = __shfl_sync(0xffffffffu, sides.neg, first);
+        const bool regular = sg.regularize(m);
+        const typename P::Line& line = a.edges[sidx[ci + first]].line;
+        const uint32_t cnt = lane < m ? split_counts(m, sg, lane) : 0u;
+        const uint32_t incl = WarpTeam{}.scan(cnt);  // both halves: no carry, 2 x 32 < 2^16
+        const uint32_t total = __shfl_sync(0xffffffffu, incl, 31);
+        uint32_t in_at = (incl - cnt) & 0xffffu, out_at = (incl - cnt) >> 16;
+        const uint32_t cap = m + 1;
+        PEdge<P>* const in_e = st ? st : a.pool + e_at;
+        PEdge<P>* const out_e = a.pool + e_at + m + 1;
+        if (lane < m) {
+          const typename P::Line lf = line.flipped();
+          split_edge<P>(
+              at, m, line, lf, sg, lane,
+              [&](const typename P::Line& e, const typename P::V& v) {
+                if (in_at < cap) in_e[in_at] = {e, v};
+                ++in_at;
+              },
+              [&](const typename P::Line& e, const typename P::V& v) {
+                if (out_at < cap) out_e[out_at] = {e, v};
+                ++out_at;
+              });
+        }
+        const uint32_t n_in = total & 0xffffu, n_out = total >> 16;
+        next = (e_at << 32) | tmin(n_in, cap);
+        __threadfence_block();  // each lane's edges (global) before the warp's barrier
+        __syncwarp();  // every lane's edges are written before the outside part is published
+        if (lane == first) {
+          regularized += regular ? 1 : 0;
+          if (n_in > cap || n_out > cap) ++anomalies;  // only float arithmetic can break convexity
+          ++splits;
+          sh_store(&parent[child], id);
+          sh_store(&born[child], ci + first);
+          __threadfence_block();  // the outside part's edges (global) and record before its polygon word
+          sh_store(&sp[child], ((e_at + m + 1) << 32) | tmin(n_out, cap));
+        }
+      }
       cur = __shfl_sync(0xffffffffu, static_cast<unsigned long long>(next), first);
       __syncwarp();  // the inside part's edges, written by lane `first`, before the lanes read them
-      if (__shfl_sync(0xffffffffu, staged, first)) {
-        piece.load(wstage[t / 32], uint32_t(cur));  // the stage holds the part from its edge 0
-        __syncwarp();  // every lane has its copy before the stage is written again
+      if (st) {
+        // The pool keeps the part (its final polygon, if no later candidate splits it); the
+        // walk goes on from the stage.
+        if (lane < uint32_t(cur)) a.pool[(cur >> 32) + lane] = st[lane];
+        b ^= 1u;
+        at = st;
       } else {
-        piece.load(a.pool, cur);
+        at = a.pool + (cur >> 32);
       }
       ci += first + 1;
     }
+    __syncwarp();  // the stages are read before the warp's next piece is copied in
     if (lane == 0) {
       sh_store(&sp[id], cur);  // the piece's final polygon
       __threadfence_block();
@@ -684,7 +740,7 @@ __global__ void __launch_bounds__(kLongBlockOf<P>, 1) k_clip_long(ClipArgs<P> a,
   extern __shared__ __align__(16) uint8_t smem[];
   __shared__ LongShared sh;
   __shared__ TreeShared ts;
-  __shared__ PEdge<P> wstage[kLongBlockOf<P> / 32][kCopyEdges];
+  __shared__ PEdge<P> wstage[kLongBlockOf<P> / 32][2][kCopyEdges];
   __shared__ uint32_t sidx[kTreeCands];
   __shared__ uint32_t taken;
   const uint64_t n = *count < cap ? *count : cap;

@@ -358,24 +358,42 @@ TV_HD inline bool survives(const PEdge<P>* poly, uint32_t n, const TileTri<P>& t
   return s2 > 0 || (s1 == 0 && s2 == 0);
 }
 
+// Edge i's share of a split with the sides given: the inside part's edges it starts (0 to 2, in
+// order, handed to `in`) and the outside part's (to `out`). split_sides hands over edge 0's,
+// then edge 1's, ...; a warp can make every edge's at once, each placed by a prefix sum of
+// split_counts (clip.cu): the same edges in the same order.
+template <class P, class In, class Out>
+TV_HD inline void split_edge(const PEdge<P>* poly, uint32_t n, const typename P::Line& l, const typename P::Line& lf,
+                             const Sides& sg, uint32_t i, In&& in, Out&& out) {
+  const uint32_t j = i + 1 == n ? 0 : i + 1;
+  const int si = sg.at(i), sn = sg.at(j);
+  const typename P::Line& li = poly[i].line;
+  if (si > 0 || sn > 0) {
+    in(li, si >= 0 ? poly[i].start : P::meet(l, li));
+    if (sn <= 0) in(l, sn == 0 ? poly[j].start : P::meet(li, l));
+  }
+  if (si < 0 || sn < 0) {
+    out(li, si <= 0 ? poly[i].start : P::meet(lf, li));
+    if (sn >= 0) out(lf, sn == 0 ? poly[j].start : P::meet(li, lf));
+  }
+}
+// How many edges split_edge hands to `in` (low 16 bits) and to `out` (high 16 bits).
+TV_HD inline uint32_t split_counts(uint32_t n, const Sides& sg, uint32_t i) {
+  const uint32_t j = i + 1 == n ? 0 : i + 1;
+  const int si = sg.at(i), sn = sg.at(j);
+  const uint32_t in = si > 0 || sn > 0 ? 1u + (sn <= 0) : 0u, out = si < 0 || sn < 0 ? 1u + (sn >= 0) : 0u;
+  return in | out << 16;
+}
+
 // split's pass with the sides given.
 template <class P>
 TV_HD inline void split_sides(const PEdge<P>* poly, uint32_t n, const typename P::Line& l, const Sides& sg,
                               PolyOut<P>& in, PolyOut<P>& out) {
   const typename P::Line lf = l.flipped();
-  for (uint32_t i = 0; i < n; ++i) {
-    const uint32_t j = i + 1 == n ? 0 : i + 1;
-    const int si = sg.at(i), sn = sg.at(j);
-    const typename P::Line& li = poly[i].line;
-    if (si > 0 || sn > 0) {
-      in.push(li, si >= 0 ? poly[i].start : P::meet(l, li));
-      if (sn <= 0) in.push(l, sn == 0 ? poly[j].start : P::meet(li, l));
-    }
-    if (si < 0 || sn < 0) {
-      out.push(li, si <= 0 ? poly[i].start : P::meet(lf, li));
-      if (sn >= 0) out.push(lf, sn == 0 ? poly[j].start : P::meet(li, lf));
-    }
-  }
+  for (uint32_t i = 0; i < n; ++i)
+    split_edge<P>(
+        poly, n, l, lf, sg, i, [&](const typename P::Line& e, const typename P::V& v) { in.push(e, v); },
+        [&](const typename P::Line& e, const typename P::V& v) { out.push(e, v); });
 }
 
 // Splits a polygon that `l` crosses into inside = poly ∩ {l >= 0} and outside = poly ∩

@@ -2,6 +2,10 @@
 // implementations of the same predicates, so any decision (or rounding) they disagree on is
 // a bug in one of them. Random inputs over the whole coordinate range, plus the adversarial
 // ones where filters must fall back to exact arithmetic (points on lines, coplanar planes).
+#include <algorithm>
+#include <cmath>
+#include <utility>
+#include <cstdio>
 #include <cstring>
 #include <random>
 
@@ -172,6 +176,103 @@ TEST(CudaPredicates, SplitKeepsGeomsCanonicalOrderAndRepresentation) {
     ASSERT_EQ(b.y1, gb.y1);
   }
 }
+
+// k_clip_long's warp split (clip.cu): each edge's share (split_edge) made on its own, in no
+// particular order, and placed by a prefix sum of split_counts with split()'s room (m + 1 edges
+// a part) is split_sides' polygons, edge for edge. Pieces of 3 to 12 edges: tile polygons of
+// random triangles, split again and again with the inside part kept, by lines through their
+// vertices (sides of 0), random lines and corner cuts; float with its sides regularized, exact
+// as it is. (No float split here runs past the room; the placement stops at it as push does.)
+template <class P>
+std::pair<double, double> vxy(const typename P::V& v) {
+  if constexpr (P::kExact) return {double(v.x) / double(v.w), double(v.y) / double(v.w)};
+  else return {v.x, v.y};
+}
+
+template <class P>
+void split_by_edges_is_split() {
+  using E = c::PEdge<P>;
+  uint64_t splits = 0, on_line = 0, past_room = 0, longest = 0;
+  for (int k = 0; k < 6000; ++k) {
+    const int32_t lim = 1 << (8 + k % 15);
+    const c::Vtx v0{coord(lim), coord(lim), 0}, v1{coord(lim), coord(lim), 0}, v2{coord(lim), coord(lim), 0};
+    if (c::orient2d(v0.xy(), v1.xy(), v2.xy()) == 0) continue;
+    const auto tt = c::make_tile_tri<P>(v0, v1, v2, 0, true);
+    const int32_t x0 = coord(lim), y0 = coord(lim);
+    const c::Rect rect{x0, y0, x0 + 1 + int32_t(rng() % uint64_t(lim)), y0 + 1 + int32_t(rng() % uint64_t(lim))};
+    E poly[32];
+    bool overflow = false;
+    uint32_t n = c::tile_polygon<P>(tt, rect, poly, overflow);
+    for (int step = 0; step < 16 && n >= 3 && n < 13; ++step) {
+      // Through a vertex of the triangle or a corner of the rectangle (often the polygon's
+      // vertices: sides of 0), two of them, or random points.
+      const c::Pt pts[7] = {v0.xy(), v1.xy(), v2.xy(), {rect.x0, rect.y0}, {rect.x1, rect.y0}, {rect.x1, rect.y1},
+                            {rect.x0, rect.y1}};
+      c::Pt p = k % 3 == 0 ? c::Pt{coord(lim), coord(lim)} : pts[rng() % 7];
+      c::Pt q = k % 3 == 1 ? pts[rng() % 7] : c::Pt{coord(lim), coord(lim)};
+      if (step % 2 == 1) {  // a corner cut off, the rest kept: one edge more each time
+        const uint32_t i = uint32_t(rng() % n);
+        const auto [xi, yi] = vxy<P>(poly[i].start);
+        const auto [xp, yp] = vxy<P>(poly[(i + n - 1) % n].start);
+        const auto [xn, yn] = vxy<P>(poly[(i + 1) % n].start);
+        const double f = 0.05 + 0.3 * std::uniform_real_distribution<double>(0, 1)(rng);
+        p = {int32_t(std::llround(xi + f * (xp - xi))), int32_t(std::llround(yi + f * (yp - yi)))};
+        q = {int32_t(std::llround(xi + f * (xn - xi))), int32_t(std::llround(yi + f * (yn - yi)))};
+        if (P::side(P::line(p, q), poly[i].start) > 0) std::swap(p, q);
+      }
+      if (q == p) q = {coord(lim), coord(lim)};
+      const auto l = P::line(p, q);
+      c::Sides sg = c::sides_of<P>(poly, n, l);
+      if (sg.pos == 0 || sg.neg == 0) continue;
+      if constexpr (!P::kExact) sg.regularize(n);
+      const uint32_t cap = n + 1;
+      E in_e[32], out_e[32];
+      c::PolyOut<P> in{in_e, 0, cap, false}, out{out_e, 0, cap, false};
+      c::split_sides<P>(poly, n, l, sg, in, out);
+      ++splits;
+      on_line += (c::Sides::low_bits(n) & ~sg.pos & ~sg.neg) != 0;
+      past_room += in.overflow || out.overflow;
+      longest = std::max<uint64_t>(longest, n);
+      uint32_t at[33] = {};
+      for (uint32_t i = 0; i < n; ++i) at[i + 1] = at[i] + c::split_counts(n, sg, i);
+      ASSERT_EQ(at[n] & 0xffffu, in.n);
+      ASSERT_EQ(at[n] >> 16, out.n);
+      E pin[32], pout[32];
+      const auto lf = l.flipped();
+      for (uint32_t r = 0; r < n; ++r) {
+        const uint32_t i = (r * 7 + 3) % n == r ? r : (n - 1 - r);  // not in order
+        uint32_t ia = at[i] & 0xffffu, oa = at[i] >> 16;
+        c::split_edge<P>(
+            poly, n, l, lf, sg, i,
+            [&](const typename P::Line& e, const typename P::V& v) {
+              if (ia < cap) pin[ia] = {e, v};
+              ++ia;
+            },
+            [&](const typename P::Line& e, const typename P::V& v) {
+              if (oa < cap) pout[oa] = {e, v};
+              ++oa;
+            });
+      }
+      // Field by field (exact's records have padding).
+      auto same = [](const E& x, const E& y) {
+        if constexpr (P::kExact) return x.line == y.line && x.start.x == y.start.x && x.start.y == y.start.y && x.start.w == y.start.w;
+        else return std::memcmp(&x, &y, sizeof(E)) == 0;
+      };
+      for (uint32_t i = 0; i < std::min(in.n, cap); ++i) ASSERT_TRUE(same(in_e[i], pin[i])) << "inside edge " << i;
+      for (uint32_t i = 0; i < std::min(out.n, cap); ++i) ASSERT_TRUE(same(out_e[i], pout[i])) << "outside edge " << i;
+      n = std::min(in.n, cap);
+      std::memcpy(static_cast<void*>(poly), in_e, sizeof(E) * n);
+    }
+  }
+  std::printf("%llu splits, %llu with a vertex on the line, %llu past the room, pieces of up to %llu edges\n",
+              (unsigned long long)splits, (unsigned long long)on_line, (unsigned long long)past_room,
+              (unsigned long long)longest);
+  EXPECT_GT(on_line, 100u);  // the counts of a vertex on the line (sides of 0) are covered
+  EXPECT_GE(longest, 12u);
+}
+
+TEST(CudaPredicates, SplitByEdgesPlacedByCountsIsSplitFloat) { split_by_edges_is_split<c::FloatP>(); }
+TEST(CudaPredicates, SplitByEdgesPlacedByCountsIsSplitExact) { split_by_edges_is_split<c::ExactP>(); }
 
 }  // namespace
 
