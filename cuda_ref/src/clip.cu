@@ -47,7 +47,6 @@ struct ClipArgs {
   uint32_t slot_factor;
   uint64_t n_items;
   uint32_t spin_ns;  // k_clip_long's tree: a warp's sleep between looks at a piece it waits for
-  uint32_t end_mask;  // k_clip_long's tree: a waiting warp looks for the tree's end every end_mask + 1 looks
 };
 
 // A run whose candidate list overflowed has per-item counts without all their records: it is
@@ -290,29 +289,17 @@ inline constexpr uint32_t kLongBlockOf = P::kExact ? kLongBlock / 2 : kLongBlock
 // float's 16 warps a block and 32 ns or 1 us, the waiters' instrumented looks crowded out the
 // warp making the piece, and the run made no progress in 120-400 s, on chains of 24, 32 and 48
 // quads alike (8 warps: 9-15 s); with 20 us the 48-quad chain takes 42 s, clean (H200).
-//
-// TILEVIS_CLIP_END_LOOKS=K: a waiting warp looks at its own piece's word every time and at the
-// tree's end (the block's finished and made counts, which every waiter and the making warps share)
-// only every K-th time (default 16; a power of two, 1 to 1024). Every look is a shared-memory
-// atomic; with K = 1 each waiter made three a look, two of them on the words that the warp making
-// pieces also updates at every split.
-inline uint32_t clip_env_knob(const char* name, uint32_t fallback, unsigned long lo, unsigned long hi, bool pow2) {
-  const char* v = std::getenv(name);
-  if (!v) return fallback;
-  char* end = nullptr;
-  const unsigned long n = std::strtoul(v, &end, 10);
-  if (end == v || *end != '\0' || n < lo || n > hi || (pow2 && (n & (n - 1)) != 0))
-    throw std::runtime_error(std::string(name) + "=" + v + ": expected " + (pow2 ? "a power of two, " : "") +
-                             std::to_string(lo) + " to " + std::to_string(hi));
-  return uint32_t(n);
-}
 inline uint32_t clip_spin_ns() {
-  static const uint32_t ns = clip_env_knob("TILEVIS_CLIP_SPIN_NS", 32, 1, 1000000, false);
+  static const uint32_t ns = [] {
+    const char* v = std::getenv("TILEVIS_CLIP_SPIN_NS");
+    if (!v) return 32u;
+    char* end = nullptr;
+    const unsigned long n = std::strtoul(v, &end, 10);
+    if (end == v || *end != '\0' || n < 1 || n > 1000000)
+      throw std::runtime_error(std::string("TILEVIS_CLIP_SPIN_NS=") + v + ": expected 1 to 1000000");
+    return uint32_t(n);
+  }();
   return ns;
-}
-inline uint32_t clip_end_looks() {
-  static const uint32_t k = clip_env_knob("TILEVIS_CLIP_END_LOOKS", 16, 1, 1024, true);
-  return k;
 }
 
 struct LongShared {
@@ -550,14 +537,10 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
     uint64_t cur = ~uint64_t{0};
     if (lane == 0) {
       id = atomicAdd(&ts.head, 1u);
-      // Wait for piece `id`, or for the end: every piece made has been walked (looked at every
-      // end_mask + 1 looks, and at every look for an id that no piece can have).
-      for (uint32_t look = 0;; ++look) {
+      for (;;) {  // wait for piece `id`, or for the end: every piece made has been walked
         if (id < want && (cur = sh_load(&sp[id])) != ~uint64_t{0}) break;
-        if (id >= want || (look & a.end_mask) == a.end_mask) {
-          const uint32_t fin = sh_load(&ts.finished);
-          if (fin == sh_load(&ts.n_alloc)) break;
-        }
+        const uint32_t fin = sh_load(&ts.finished);
+        if (fin == sh_load(&ts.n_alloc)) break;
         __nanosleep(a.spin_ns);
       }
     }
@@ -892,7 +875,6 @@ bool stage_clip(Pipeline<P>& p) {
   a.slot_factor = p.caps.slot_factor;
   a.n_items = ni;
   a.spin_ns = clip_spin_ns();
-  a.end_mask = clip_end_looks() - 1;
 
   ex.exclusive_scan(a.cand_count, p.cand_offset.get(), p.N(kSzItems, ni), ni);
   ex.launch_dyn(k_cand_scatter<P>, cand_scatter<P>, p.counters.get() + kCandidates, p.caps.candidates, a);
