@@ -127,6 +127,12 @@ int run_golden(const GoldenArgs& a, const trace::Frame& frame, uint32_t tw, uint
   totals["max_tile_triangles"] = r.max_tile_triangles;
   totals["max_tile_edges"] = r.max_tile_edges;
   totals["max_tile_pieces"] = r.max_tile_pieces;
+  totals["longest_clip_walk"] = {{"steps", r.longest_walk.steps},
+                                 {"work", r.longest_walk.work},
+                                 {"candidates", r.longest_walk.candidates},
+                                 {"pieces", r.longest_walk.pieces},
+                                 {"tile", r.longest_walk.tile},
+                                 {"setup_index", r.longest_walk.setup_index}};
   if (hybrid)
     totals["per_pixel_fallback"] = {{"tiles", r.fallback_tiles},
                                     {"tiles_interpenetration", r.fallback_interpenetration},

@@ -92,8 +92,9 @@ class AnalyticResolver final : public TileResolver {
     // Clipping (SVGPU §3.2.2): every piece re-checked against every candidate edge.
     m_pieces.clear();
     m_pieces.push_back(std::move(poly));
-    for (uint32_t ei : m_candidates) {
-      const svgpu::Edge& e = f.edges()[ei];
+    m_walk.start();
+    for (size_t ci = 0; ci < m_candidates.size(); ++ci) {
+      const svgpu::Edge& e = f.edges()[m_candidates[ci]];
       const size_t n = m_pieces.size();
       for (size_t k = 0; k < n; ++k) {
         ++m_shape.piece_checks;
@@ -104,9 +105,14 @@ class AnalyticResolver final : public TileResolver {
         m_shape.split_edges += parent_edges;
         if (!sr.inside.empty() && !sr.outside.empty()) m_shape.crossing_edges += parent_edges;
         m_pieces[k] = std::move(sr.inside);
+        m_walk.split(k, ci, !sr.outside.empty());
         if (!sr.outside.empty()) m_pieces.push_back(std::move(sr.outside));
       }
     }
+    const uint64_t walk = m_walk.longest(m_candidates.size());
+    if (walk > out.longest_walk.steps)
+      out.longest_walk = {walk, m_walk.work(m_candidates.size()), m_candidates.size(), m_pieces.size(), tile,
+                          tt.setup_index};
     // Canonical order of pieces: a split puts the inside part in place of its parent and
     // appends the outside part (the order the CUDA reference reproduces).
     c.pieces += int64_t(m_pieces.size());
@@ -257,6 +263,7 @@ class AnalyticResolver final : public TileResolver {
   std::vector<uint32_t> m_occluders, m_candidates;
   std::vector<Occluder> m_occ;
   std::vector<ConvexPolygon> m_pieces;
+  svgpu::WalkChain m_walk;  // the clip's chain of dependent steps as cuda_ref's tree walks it
   EvuShape m_shape;  // of the triangle in process
   std::vector<uint64_t> m_stamp;  // per pixel of the tile: the last triangle serial that shaded it
   uint64_t m_serial = 0;

@@ -6,7 +6,9 @@
 // tests call them directly.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
+#include <vector>
 
 #include "geom/clip.h"
 #include "geom/depth.h"
@@ -81,5 +83,46 @@ inline bool may_cross(const Triangle& t, const Triangle& u) {
 // as mesh neighbours do? Then they lie on opposite sides of it on screen: their overlap has no
 // area and their planes cannot cross inside it (vertex compares only).
 bool opposite_neighbours(const geom::Triangle& t, const geom::Triangle& u);
+
+// The longest chain of dependent steps in clipping one triangle when every piece is walked by its
+// own worker through the candidates after the one that cut it off, `width` candidates tested at
+// once (cuda_ref's k_clip_long tree: a warp, 32): a step per `width` candidates that the piece
+// survives none of, one per split, and a piece cut off starts when the step that cut it ends. With
+// workers enough this bounds the item's time from below; the steps of all its walks (work) are
+// the tree's loop trips. Feed it the clip's splits in the order §3.2.2 makes them (candidate by
+// candidate, pieces in their order); pieces are numbered as the clip appends them, the root 0.
+class WalkChain {
+ public:
+  explicit WalkChain(uint64_t width = 32) : m_width(width) {}
+  void start() { m_walk.assign(1, Walk{}); }
+  // Piece `piece` is split by the candidate at position `ci`; `cut_off`: a new piece is appended.
+  void split(size_t piece, uint64_t ci, bool cut_off) {
+    Walk& w = m_walk[piece];
+    w.steps += (ci - w.pos) / m_width + 1;
+    w.pos = ci + 1;
+    if (cut_off) m_walk.push_back({w.pos, w.steps, w.steps});
+  }
+  // Over `candidates` candidates: the longest walk's end (steps), and every walk's own steps.
+  uint64_t longest(uint64_t candidates) const {
+    uint64_t best = 0;
+    for (const Walk& w : m_walk) best = std::max(best, end(w, candidates));
+    return best;
+  }
+  uint64_t work(uint64_t candidates) const {
+    uint64_t sum = 0;
+    for (const Walk& w : m_walk) sum += end(w, candidates) - w.start;
+    return sum;
+  }
+
+ private:
+  struct Walk {
+    uint64_t pos = 0, steps = 0, start = 0;  // next candidate position, steps so far (from the item's start), first step
+  };
+  uint64_t end(const Walk& w, uint64_t candidates) const {
+    return w.steps + (w.pos < candidates ? (candidates - w.pos + m_width - 1) / m_width : 0);
+  }
+  uint64_t m_width;
+  std::vector<Walk> m_walk;
+};
 
 }  // namespace tilevis::vis::svgpu

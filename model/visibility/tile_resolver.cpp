@@ -14,6 +14,7 @@ void FrameOutput::add(TileOutput&& tile) {
   visible_triangles += tile.visible_triangles;
   shader_invocations += tile.shader_invocations;
   max_tile_pieces = std::max(max_tile_pieces, tile.max_tile_pieces);
+  if (tile.longest_walk.steps > longest_walk.steps) longest_walk = tile.longest_walk;
 }
 
 TileFrame::TileFrame(const Setup& s, const geom::TileGrid& grid) : m_s(s), m_grid(grid) {

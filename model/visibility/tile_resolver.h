@@ -74,6 +74,14 @@ struct TileTriangleWork {
   EvuShape shape;
 };
 
+// The clip of one (tile, triangle) item whose chain of dependent steps is the longest when each
+// piece is walked on its own (svgpu::WalkChain, 32 candidates a step): what bounds cuda_ref's
+// k_clip_long on the frame's longest item. steps: that chain; work: all its walks' steps.
+struct LongestWalk {
+  uint64_t steps = 0, work = 0, candidates = 0, pieces = 0;
+  uint32_t tile = 0, setup_index = 0;  // the item: its tile, its triangle (setup order)
+};
+
 // What one tile's resolve produces besides its counters. The tile's samples go straight into
 // the frame's ids (no two tiles share a sample, so tiles may be resolved on several threads at
 // once); the rest waits here, in the order it was produced, until FrameOutput::add() takes it
@@ -83,6 +91,7 @@ struct TileOutput {
   std::vector<std::pair<uint32_t, double>> areas;  // (original triangle id, pixels²) as produced
   std::vector<PlanarPiece> pieces;                 // visible pieces (ResolverOptions::keep_pieces)
   uint64_t visible_triangles = 0, shader_invocations = 0, max_tile_pieces = 0;
+  LongestWalk longest_walk;  // of the tile's analytic items
 };
 
 // Where resolvers' tiles end up: frame-sized outputs shared by all tiles.
@@ -93,6 +102,7 @@ struct FrameOutput {
   uint64_t visible_triangles = 0;      // visible pieces fan-triangulated (per-pixel tiles: none)
   uint64_t shader_invocations = 0;     // summed over triangles: the pixels where each shades some sample (MSAA)
   uint64_t max_tile_pieces = 0;        // most pieces of one triangle in one tile
+  LongestWalk longest_walk;            // the analytic item with the longest clip chain (first in tile order)
 
   // An empty TileOutput writing into these ids.
   TileOutput tile_output() {

@@ -83,3 +83,38 @@ TEST(Svgpu, PlanesCrossOnlyWhereTheyInterpenetrate) {
   EXPECT_TRUE(sv::planes_cross(region, kFar, cross_right));
   EXPECT_FALSE(sv::planes_cross(left, kFar, cross_right));
 }
+
+// The clip's chain of dependent steps when each piece is walked on its own, 32 candidates a step
+// (svgpu::WalkChain, cuda_ref's k_clip_long tree), on hand-made split sequences.
+TEST(Svgpu, WalkChainCountsTheLongestWalk) {
+  sv::WalkChain w;
+  w.start();
+  EXPECT_EQ(w.longest(0), 0u);      // no candidates: nothing to walk
+  EXPECT_EQ(w.longest(1), 1u);      // one step tests up to 32
+  EXPECT_EQ(w.longest(32), 1u);
+  EXPECT_EQ(w.longest(100), 4u);    // 32 + 32 + 32 + 4
+  // The root split at candidates 0, 1 and 2: three steps, then 97 candidates (4 steps): 7. The
+  // piece cut off at 0 starts after step 1 at candidate 1: 1 + 4 = 5; at 2: 3 + 4 = 7.
+  w.split(0, 0, true);
+  w.split(0, 1, true);
+  w.split(0, 2, true);
+  EXPECT_EQ(w.longest(100), 7u);
+  EXPECT_EQ(w.work(100), 7u + 4u + 4u + 4u);  // the root's 7; pieces 1-3 walk 99, 98, 97 candidates
+  // Piece 1 (cut off at 0, time 1, next candidate 1) splits at 40: one step without a survivor
+  // (candidates 1-32), one for the split; then 59 candidates left (2 steps): 1 + 2 + 2 = 5. Its
+  // own cut-off piece starts at time 3 at candidate 41: 3 + 2 = 5. The root's 7 stays longest.
+  w.split(1, 40, true);
+  EXPECT_EQ(w.longest(100), 7u);
+  // A chain: piece 4 (cut off at 40) is split at 41, 42, ..., 99, each a step: 3 + 59 = 62.
+  for (uint64_t ci = 41; ci < 100; ++ci) w.split(4, ci, ci % 2 == 0);
+  EXPECT_EQ(w.longest(100), 62u);
+  // Piece 1 walked 2 + 2 steps, piece 4 its 59 splits; pieces 5-33, cut off at the even
+  // candidates 42-98, walk what follows them: 2 steps each from 42-66 (13), 1 from 68-98 (16).
+  EXPECT_EQ(w.work(100), 7u + 4u + 4u + 4u + 59u + 13u * 2u + 16u);
+  // Splits that cut nothing off (the outside part empty) still take their step.
+  sv::WalkChain v(8);
+  v.start();
+  v.split(0, 20, false);  // steps: 2 rounds of 8 (0-15), then the split: 3; next candidate 21
+  EXPECT_EQ(v.longest(21), 3u);
+  EXPECT_EQ(v.longest(30), 5u);  // + candidates 21-28, 29: 2 steps
+}

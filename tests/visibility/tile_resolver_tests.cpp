@@ -67,6 +67,7 @@ TEST(TileResolver, PerPixelIsTheTruthTileByTile) {
       EXPECT_EQ(r.samples_covered, truth.samples_covered);
       EXPECT_EQ(r.fragments_generated, truth.fragments_generated);
       EXPECT_EQ(r.pair_tests + r.pieces_total + r.occlusion_tests, 0u);
+      EXPECT_EQ(r.longest_walk.steps + r.longest_walk.work, 0u);  // nothing clipped
       for (size_t id = 0; id < truth.covered.size(); ++id)
         ASSERT_DOUBLE_EQ(r.visible_area[id], double(truth.covered[id]) / samples) << "triangle " << id;
     }
@@ -140,6 +141,25 @@ TEST(TileResolver, AheadOnThreadsIsTheSameBits) {
     EXPECT_EQ(four.visible_triangles, one.visible_triangles);
     EXPECT_EQ(four.shader_invocations, one.shader_invocations);
     EXPECT_EQ(four.max_tile_pieces, one.max_tile_pieces);
+    // The longest clip walk: the same item (the first in tile order among equals) on any threads.
+    EXPECT_EQ(four.longest_walk.steps, one.longest_walk.steps);
+    EXPECT_EQ(four.longest_walk.work, one.longest_walk.work);
+    EXPECT_EQ(four.longest_walk.tile, one.longest_walk.tile);
+    EXPECT_EQ(four.longest_walk.setup_index, one.longest_walk.setup_index);
+    if (mode != "per_pixel") {
+      // At least a step per 32 of its candidates, every walk's steps at least the chain's, its
+      // pieces within the frame's most, and its candidates within its tile's row.
+      const auto& w = one.longest_walk;
+      EXPECT_GE(w.steps, (w.candidates + 31) / 32);
+      EXPECT_GE(w.work, w.steps);
+      EXPECT_GE(w.work, w.pieces);
+      EXPECT_LE(w.pieces, one.max_tile_pieces);
+      EXPECT_GT(w.pieces, 1u) << "the bunny's longest walk splits";
+      const auto& cols = vis::TileCounters::columns();
+      const size_t cand = size_t(std::find(cols.begin(), cols.end(), "candidate_pairs") - cols.begin());
+      ASSERT_LT(cand, cols.size());
+      EXPECT_LE(int64_t(w.candidates), one.tiles.rows[w.tile][cand]);
+    }
     EXPECT_EQ(four.fallback_tiles, one.fallback_tiles);
     EXPECT_EQ(four.detection_tests, one.detection_tests);
 
