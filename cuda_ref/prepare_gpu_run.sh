@@ -14,10 +14,15 @@
 #   .gpu/prebuilt.tar.xz  with --prebuilt DIR: tilevis, cuda_gpu_tests, gl_raster, cuda_gpu_report
 #                         built here in DIR and the shared libraries they need (gpu_run.sh build
 #                         unpacks them when TILEVIS_GPU_PREBUILT=1 instead of compiling there)
+#   .gpu/NAME_bin.tar.xz  with --bin NAME DIR: DIR's tilevis alone (another commit's build here, in a
+#                         directory of its own or copied aside), for quick_check.sh to time beside
+#                         the prebuilt one: phase base unpacks it as /tmp/NAME_bin/tilevis
 #
 #   bash cuda_ref/prepare_gpu_run.sh            (TILEVIS_BIN=path/to/tilevis to pick the binary)
 #   bash cuda_ref/prepare_gpu_run.sh --prebuilt build-cuda        (also .gpu/prebuilt.tar.xz)
 #   bash cuda_ref/prepare_gpu_run.sh --prebuilt-only build-cuda   (only .gpu/prebuilt.tar.xz)
+#   bash cuda_ref/prepare_gpu_run.sh --bin base /tmp/base          (only .gpu/base_bin.tar.xz, of /tmp/base/tilevis
+#                                                                   or /tmp/base/model/app/tilevis)
 #
 # Then, on the GPU machine, from the repository root with .gpu carried along:
 #   bash cuda_ref/gpu_run.sh
@@ -30,11 +35,15 @@ die() { say "error: $*"; exit 1; }
 
 PREBUILT=""
 TRACES_TOO=1
+BINS=()  # NAME DIR pairs
 while [ $# -gt 0 ]; do
   case "$1" in
-    --prebuilt) PREBUILT="$2"; shift 2 ;;
-    --prebuilt-only) PREBUILT="$2"; TRACES_TOO=0; shift 2 ;;
-    *) die "unknown argument $1 (--prebuilt DIR, --prebuilt-only DIR)" ;;
+    --prebuilt) PREBUILT="${2:?--prebuilt DIR}"; shift 2 ;;
+    --prebuilt-only) PREBUILT="${2:?--prebuilt-only DIR}"; TRACES_TOO=0; shift 2 ;;
+    --bin) [ $# -ge 3 ] || die "--bin NAME DIR"
+      [[ "$2" =~ ^[A-Za-z0-9]+$ ]] || die "--bin $2: NAME is letters and digits (it names a quick_check variant)"
+      BINS+=("$2" "$3"); TRACES_TOO=0; shift 3 ;;
+    *) die "unknown argument $1 (--prebuilt DIR, --prebuilt-only DIR, --bin NAME DIR)" ;;
   esac
 done
 
@@ -44,7 +53,8 @@ if [ -z "$BIN" ]; then
     if [ -x "$b" ] && "$b" trace --help 2>/dev/null | grep -q "Scene file"; then BIN="$b"; break; fi
   done
 fi
-[ -n "$BIN" ] && [ -x "$BIN" ] || die "no tilevis binary with the scene generator (build one: ./tilevis info, or set TILEVIS_BIN)"
+[ "$TRACES_TOO" = 0 ] || { [ -n "$BIN" ] && [ -x "$BIN" ]; } ||
+  die "no tilevis binary with the scene generator (build one: ./tilevis info, or set TILEVIS_BIN)"
 LIMIT_MIB=52
 
 make_traces() {
@@ -136,7 +146,18 @@ if [ -n "$PREBUILT" ]; then
   say "$(du -sh .gpu/prebuilt.tar.xz | cut -f1) of prebuilt binaries (from $PREBUILT)"
 fi
 
+# --bin NAME DIR: DIR's tilevis alone as .gpu/NAME_bin.tar.xz (its libraries are the prebuilt one's:
+# build both in the same configuration).
+for ((i = 0; i < ${#BINS[@]}; i += 2)); do
+  name="${BINS[i]}" dir="${BINS[i + 1]}" bin=""
+  for b in "$dir/tilevis" "$dir/model/app/tilevis"; do [ -x "$b" ] && { bin="$b"; break; }; done
+  [ -n "$bin" ] || die "--bin $name $dir: no tilevis in $dir or $dir/model/app"
+  mkdir -p .gpu
+  tar -C "$(dirname "$bin")" -cf - tilevis | xz -6 -T2 >".gpu/${name}_bin.tar.xz"
+  say "$(du -sh ".gpu/${name}_bin.tar.xz" | cut -f1) .gpu/${name}_bin.tar.xz (from $bin)"
+done
+
 total=$(du -sb .gpu | cut -f1)
-say "$(du -sh .gpu/debs | cut -f1) of .debs, $(du -sh .gpu/traces.tar.xz | cut -f1) of traces; $((total / 1048576)) MiB in .gpu"
+say "$(du -sh .gpu/debs 2>/dev/null | cut -f1) of .debs, $(du -sh .gpu/traces.tar.xz 2>/dev/null | cut -f1) of traces; $((total / 1048576)) MiB in .gpu"
 [ "$total" -le $((LIMIT_MIB * 1048576)) ] || die ".gpu is over ${LIMIT_MIB} MiB"
 say "done: carry .gpu to the GPU machine and run bash cuda_ref/gpu_run.sh there"

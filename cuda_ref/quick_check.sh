@@ -17,7 +17,10 @@
 # one, in /tmp/NAME_src, and runs its GPU tests (label gpu; not base's), so that
 # "base:TILEVIS_QUICK_BIN=/tmp/base_src/build-gpu/model/app/tilevis new:" compares a change with
 # the commit before it, outputs byte for byte, and more trees (other branches) can be timed in
-# the same call. Phase `gl` (before bench; .gl carried)
+# the same call. It also unpacks every .gpu/NAME_bin.tar.xz (a tilevis built on the sender,
+# `prepare_gpu_run.sh --bin NAME DIR`) as /tmp/NAME_bin/tilevis, which compiles nothing there: with
+# TILEVIS_GPU_PREBUILT=1, "base:TILEVIS_QUICK_BIN=/tmp/base_bin/tilevis new:" times a change built
+# here against the commit before it at no build time on the GPU machine. Phase `gl` (before bench; .gl carried)
 # times the GPU's own rasteriser (gl_raster --runs 20) on the same scenes, and the bench table
 # then gives each run's new frame over it (/ GL). With .gpu carried
 # (prepare_gpu_run.sh) and the commit in .gpu/commit_src.txt (the sender writes it). $OUT gets
@@ -37,6 +40,11 @@ phases=("$@")
 t0=$SECONDS
 say() { printf 'quick_check [%4d s]: %s\n' "$((SECONDS - t0))" "$*" >&2; }
 for ph in "${phases[@]}"; do
+  # Prebuilt binaries (TILEVIS_GPU_PREBUILT=1: the build phase unpacks them) and the tools run
+  # beside them find their libraries there.
+  if [ -d "$BUILD/prebuilt_lib" ] && [[ ":${LD_LIBRARY_PATH}:" != *":$BUILD/prebuilt_lib:"* ]]; then
+    export LD_LIBRARY_PATH="$BUILD/prebuilt_lib:$LD_LIBRARY_PATH"
+  fi
   case "$ph" in
     build) bash cuda_ref/gpu_run.sh build 2>&1 | tail -n 4; say "build done" ;;
     test)
@@ -47,6 +55,16 @@ for ph in "${phases[@]}"; do
       say "host emulation tests: $(grep -E 'tests passed|tests failed' "$OUT/emulation.log" | tail -n 1)"
       grep -E "\*\*\*Failed|FAILED" "$OUT/emulation.log" | head -n 20 ;;
     base)
+      for tarball in .gpu/*_bin.tar.xz; do
+        [ -f "$tarball" ] || break
+        dir="/tmp/$(basename "$tarball" .tar.xz)"
+        rm -rf "$dir" && mkdir -p "$dir" && tar -C "$dir" -xJf "$tarball"
+        if "$dir/tilevis" cuda --help 2>/dev/null | grep -q precision; then
+          say "$(basename "$tarball"): $dir/tilevis"
+        else
+          say "$(basename "$tarball"): $dir/tilevis does not run here: $("$dir/tilevis" cuda --help 2>&1 | tail -n 1)"
+        fi
+      done
       for tarball in .gpu/*_src.tar.xz; do
         [ -f "$tarball" ] || { say "no .gpu/NAME_src.tar.xz to build"; break; }
         name="$(basename "$tarball" _src.tar.xz)" dir="/tmp/$(basename "$tarball" .tar.xz)"
