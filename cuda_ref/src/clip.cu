@@ -627,23 +627,10 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
         const uint32_t cnt = lane < m ? split_counts(m, sg, lane) : 0u;
         const uint32_t incl = WarpTeam{}.scan(cnt);  // both halves: no carry, 2 x 32 < 2^16
         const uint32_t total = __shfl_sync(0xffffffffu, incl, 31);
-        uint32_t in_at = (incl - cnt) & 0xffffu, out_at = (incl - cnt) >> 16;
         const uint32_t cap = m + 1;
-        PEdge<P>* const in_e = st ? st : a.pool + e_at;
-        PEdge<P>* const out_e = a.pool + e_at + m + 1;
-        if (lane < m) {
-          const typename P::Line lf = line.flipped();
-          split_edge<P>(
-              at, m, line, lf, sg, lane,
-              [&](const typename P::Line& e, const typename P::V& v) {
-                if (in_at < cap) in_e[in_at] = {e, v};
-                ++in_at;
-              },
-              [&](const typename P::Line& e, const typename P::V& v) {
-                if (out_at < cap) out_e[out_at] = {e, v};
-                ++out_at;
-              });
-        }
+        if (lane < m)
+          split_edge_placed<P>(at, m, line, line.flipped(), sg, lane, incl - cnt, st ? st : a.pool + e_at,
+                               a.pool + e_at + m + 1, cap);
         const uint32_t n_in = total & 0xffffu, n_out = total >> 16;
         next = (e_at << 32) | tmin(n_in, cap);
         __threadfence_block();  // each lane's edges (global) before the warp's barrier

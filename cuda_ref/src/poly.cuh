@@ -377,6 +377,25 @@ TV_HD inline void split_edge(const PEdge<P>* poly, uint32_t n, const typename P:
     if (sn >= 0) out(lf, sn == 0 ? poly[j].start : P::meet(li, lf));
   }
 }
+// split_edge's share written where a prefix sum of split_counts places it: `at`, that sum over the
+// edges before i, gives the inside part's position (low 16 bits) and the outside part's (high);
+// each part's edges past `cap` are not written (only float arithmetic can make them).
+template <class P>
+TV_HD inline void split_edge_placed(const PEdge<P>* poly, uint32_t n, const typename P::Line& l,
+                                    const typename P::Line& lf, const Sides& sg, uint32_t i, uint32_t at,
+                                    PEdge<P>* in, PEdge<P>* out, uint32_t cap) {
+  uint32_t ia = at & 0xffffu, oa = at >> 16;
+  split_edge<P>(
+      poly, n, l, lf, sg, i,
+      [&](const typename P::Line& e, const typename P::V& v) {
+        if (ia < cap) in[ia] = {e, v};
+        ++ia;
+      },
+      [&](const typename P::Line& e, const typename P::V& v) {
+        if (oa < cap) out[oa] = {e, v};
+        ++oa;
+      });
+}
 // How many edges split_edge hands to `in` (low 16 bits) and to `out` (high 16 bits).
 TV_HD inline uint32_t split_counts(uint32_t n, const Sides& sg, uint32_t i) {
   const uint32_t j = i + 1 == n ? 0 : i + 1;

@@ -241,17 +241,7 @@ void split_by_edges_is_split() {
       const auto lf = l.flipped();
       for (uint32_t r = 0; r < n; ++r) {
         const uint32_t i = (r * 7 + 3) % n == r ? r : (n - 1 - r);  // not in order
-        uint32_t ia = at[i] & 0xffffu, oa = at[i] >> 16;
-        c::split_edge<P>(
-            poly, n, l, lf, sg, i,
-            [&](const typename P::Line& e, const typename P::V& v) {
-              if (ia < cap) pin[ia] = {e, v};
-              ++ia;
-            },
-            [&](const typename P::Line& e, const typename P::V& v) {
-              if (oa < cap) pout[oa] = {e, v};
-              ++oa;
-            });
+        c::split_edge_placed<P>(poly, n, l, lf, sg, i, at[i], pin, pout, cap);  // k_clip_long's placing
       }
       // Field by field (exact's records have padding).
       auto same = [](const E& x, const E& y) {
