@@ -587,6 +587,14 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
       // arithmetic in every lane would spill).
       bool by_warp = false;
       if constexpr (!P::kExact) by_warp = m <= kSideCap;
+      // Lane `first` records the split and publishes the outside part, piece `child`, for any warp.
+      const auto publish = [&](uint64_t out_slot) {
+        ++splits;
+        sh_store(&parent[child], id);
+        sh_store(&born[child], ci + first);
+        __threadfence_block();  // the outside part's edges (global) and record before its polygon word
+        sh_store(&sp[child], out_slot);
+      };
       if (lane == first) {
         child = sh_load(&ts.fail) ? kNone : atomicAdd(&ts.n_alloc, 1u);
         if (child == kNone) {
@@ -606,11 +614,7 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
             uint64_t out_slot = 0;
             split_piece<P>(at, a.pool, e_at, m, a.edges[sidx[mine]].line, &sides, regularized, anomalies, next,
                            out_slot, st);
-            ++splits;
-            sh_store(&parent[child], id);
-            sh_store(&born[child], mine);
-            __threadfence_block();  // the outside part's edges (global) and record before its polygon word
-            sh_store(&sp[child], out_slot);
+            publish(out_slot);
           }
         }
       }
@@ -638,11 +642,7 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
         if (lane == first) {
           regularized += regular ? 1 : 0;
           if (n_in > cap || n_out > cap) ++anomalies;  // only float arithmetic can break convexity
-          ++splits;
-          sh_store(&parent[child], id);
-          sh_store(&born[child], ci + first);
-          __threadfence_block();  // the outside part's edges (global) and record before its polygon word
-          sh_store(&sp[child], ((e_at + m + 1) << 32) | tmin(n_out, cap));
+          publish(((e_at + m + 1) << 32) | tmin(n_out, cap));
         }
       }
       cur = __shfl_sync(0xffffffffu, static_cast<unsigned long long>(next), first);
