@@ -556,7 +556,11 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
     PEdge<P>(*const ws)[kCopyEdges] = wstage[t / 32];
     uint32_t b = 0;
     const PEdge<P>* at = a.pool + (cur >> 32);
-    if (uint32_t(cur) <= kCopyEdges) {
+    // staged: the piece is ws[b]. The tests and the split then read it through ws[b] itself, so
+    // that their loads are shared-memory loads (LDS); through `at`, which may point to either
+    // memory, they are generic loads.
+    bool staged = uint32_t(cur) <= kCopyEdges;
+    if (staged) {
       if (lane < uint32_t(cur)) ws[b][lane] = at[lane];
       at = ws[b];
     }
@@ -570,7 +574,10 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
       const uint32_t m = uint32_t(cur);
       Sides sides;
       bool flag = false;
-      if (mine < c) flag = survives<P>(at, m, tt, a.edges[sidx[mine]], &sides);
+      if (mine < c) {
+        const SilEdge<P>& e = a.edges[sidx[mine]];
+        flag = staged ? survives<P>(ws[b], m, tt, e, &sides) : survives<P>(at, m, tt, e, &sides);
+      }
       const uint32_t mask = __ballot_sync(0xffffffffu, flag);
       if (mask == 0) {
         ci += 32;
@@ -632,9 +639,14 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
         const uint32_t incl = WarpTeam{}.scan(cnt);  // both halves: no carry, 2 x 32 < 2^16
         const uint32_t total = __shfl_sync(0xffffffffu, incl, 31);
         const uint32_t cap = m + 1;
-        if (lane < m)
-          split_edge_placed<P>(at, m, line, line.flipped(), sg, lane, incl - cnt, st ? st : a.pool + e_at,
-                               a.pool + e_at + m + 1, cap);
+        if (lane < m) {
+          PEdge<P>* const in_e = st ? st : a.pool + e_at;
+          PEdge<P>* const out_e = a.pool + e_at + m + 1;
+          if (staged)
+            split_edge_placed<P>(ws[b], m, line, line.flipped(), sg, lane, incl - cnt, in_e, out_e, cap);
+          else
+            split_edge_placed<P>(at, m, line, line.flipped(), sg, lane, incl - cnt, in_e, out_e, cap);
+        }
         const uint32_t n_in = total & 0xffffu, n_out = total >> 16;
         next = (e_at << 32) | tmin(n_in, cap);
         __threadfence_block();  // each lane's edges (global) before the warp's barrier
@@ -653,8 +665,10 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
         if (lane < uint32_t(cur)) a.pool[(cur >> 32) + lane] = st[lane];
         b ^= 1u;
         at = st;
+        staged = true;
       } else {
         at = a.pool + (cur >> 32);
+        staged = false;
       }
       ci += first + 1;
     }
