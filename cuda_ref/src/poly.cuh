@@ -305,49 +305,31 @@ TV_HD inline void line_sides(const PEdge<P>* poly, uint32_t n, const typename P:
   }
 }
 
-// SVGPU §3.2.1 tests 1-3 of a silhouette edge against a (piece of a) triangle. true: the
-// pair survives and the piece must be split by the edge's line. Where `sides` is given (and
-// n <= kSideCap), the vertices' sides of AB's line, which tests 1 and 3 compute, are left
-// there for split() to take over: a surviving pair's split needs them again.
+// Test 3's chord of AB's line through a polygon, edge i's part in it (j = i + 1 mod n, si and sn
+// the sides of vertices i and j): where the line's edge of the inside part starts (`first`: the
+// sides go from positive to not), and where it ends (`second`: from not positive to positive).
+// survives() takes the last edge that gives each; a warp can make every edge's at once and take
+// the highest lane's (clip.cu).
 template <class P>
-TV_HD inline bool survives(const PEdge<P>* poly, uint32_t n, const TileTri<P>& tt, const SilEdge<P>& e,
-                           Sides* sides = nullptr) {
-  if (n == 0) return false;
-  // The pair survives only if tests 1, 2 and 3 all pass, so they may run in any order: the
-  // cheap one first.
-  // Test 2 (exact form): AB misses the polygon's interior when some polygon line has both ends
-  // on its outer side or on it (int64 edge functions); otherwise the separating axis along AB
-  // itself is ruled out by test 1, which finds vertices strictly on both sides of AB's line.
+TV_HD inline bool chord_first(const PEdge<P>* poly, uint32_t i, uint32_t j, int si, int sn, const typename P::Line& l,
+                              typename P::V& v) {
+  if (!(si > 0 && sn <= 0)) return false;
+  v = sn == 0 ? poly[j].start : P::meet(poly[i].line, l);
+  return true;
+}
+template <class P>
+TV_HD inline bool chord_second(const PEdge<P>* poly, uint32_t i, int si, int sn, const typename P::Line& l,
+                               typename P::V& v) {
+  if (!(si <= 0 && sn > 0)) return false;
+  v = si == 0 ? poly[i].start : P::meet(l, poly[i].line);
+  return true;
+}
+
+// Test 3 at the chord's ends: is the edge nearer than the triangle at either end of their overlap?
+template <class P>
+TV_HD inline bool chord_nearer(const TileTri<P>& tt, const SilEdge<P>& e, const typename P::V& first,
+                               const typename P::V& second) {
   const Pt a = e.a.xy(), b = e.b.xy();
-  if (a == b) return false;
-  for (uint32_t i = 0; i < n; ++i)
-    if (P::eval(poly[i].line, a) <= 0 && P::eval(poly[i].line, b) <= 0) return false;
-  // Test 1: the polygon lies on one side of the line (touching counts as one side).
-  const bool masked = n <= kSideCap;
-  Sides sd;
-  bool pos = false, neg = false;
-  if (masked) {
-    sd = sides_of<P>(poly, n, e.line);
-    pos = sd.pos != 0;
-    neg = sd.neg != 0;
-  } else {
-    line_sides<P>(poly, n, e.line, pos, neg);
-  }
-  if (!pos || !neg) return false;
-  auto side_at = [&](uint32_t k) { return masked ? sd.at(k) : P::side(e.line, poly[k].start); };
-  if (sides && masked) *sides = sd;
-  // Test 3: the chord of AB's line through the polygon: `first` where the line's edge of the
-  // inside part starts, `second` where it ends.
-  typename P::V first = poly[0].start, second = poly[0].start;
-  const int s0 = side_at(0);
-  int si = s0;
-  for (uint32_t i = 0; i < n; ++i) {
-    const uint32_t j = i + 1 == n ? 0 : i + 1;
-    const int sn = j == 0 ? s0 : side_at(j);
-    if (si > 0 && sn <= 0) first = sn == 0 ? poly[j].start : P::meet(poly[i].line, e.line);
-    if (si <= 0 && sn > 0) second = si == 0 ? poly[i].start : P::meet(e.line, poly[i].line);
-    si = sn;
-  }
   const int64_t dx = int64_t{e.b.x} - e.a.x, dy = int64_t{e.b.y} - e.a.y;
   // sign(z_triangle - z_edge) at each end of the overlap; > 0: the edge is nearer there.
   const int s1 = P::along(first, e.a, dx, dy) < 0 ? P::depth(tt.plane, a, e.a.z) : P::depth_edge(tt.plane, e.a, e.b, first);
@@ -356,6 +338,68 @@ TV_HD inline bool survives(const PEdge<P>* poly, uint32_t n, const TileTri<P>& t
   // Level at both ends: the edge lies in the triangle's plane over the overlap and can bound a
   // coplanar occluder (golden.cpp survives()).
   return s2 > 0 || (s1 == 0 && s2 == 0);
+}
+
+// Test 3 of a pair that passed tests 2 and 1: the chord of AB's line through the polygon, each
+// end as the last edge gives it (side_at(k): vertex k's side of AB's line), and the depths there.
+template <class P, class SideAt>
+TV_HD inline bool chord_survives(const PEdge<P>* poly, uint32_t n, const TileTri<P>& tt, const SilEdge<P>& e,
+                                 SideAt&& side_at) {
+  typename P::V first = poly[0].start, second = poly[0].start;
+  const int s0 = side_at(0);
+  int si = s0;
+  for (uint32_t i = 0; i < n; ++i) {
+    const uint32_t j = i + 1 == n ? 0 : i + 1;
+    const int sn = j == 0 ? s0 : side_at(j);
+    chord_first<P>(poly, i, j, si, sn, e.line, first);
+    chord_second<P>(poly, i, si, sn, e.line, second);
+    si = sn;
+  }
+  return chord_nearer<P>(tt, e, first, second);
+}
+
+// SVGPU §3.2.1 test 2 (exact form): AB misses the polygon's interior when some polygon line has
+// both ends on its outer side or on it (int64 edge functions); otherwise the separating axis
+// along AB itself is ruled out by test 1, which finds vertices strictly on both sides of AB's line.
+template <class P>
+TV_HD inline bool misses(const PEdge<P>* poly, uint32_t n, const SilEdge<P>& e) {
+  const Pt a = e.a.xy(), b = e.b.xy();
+  if (a == b) return true;
+  for (uint32_t i = 0; i < n; ++i)
+    if (P::eval(poly[i].line, a) <= 0 && P::eval(poly[i].line, b) <= 0) return true;
+  return false;
+}
+
+// Tests 2 and 1 of a polygon of at most kSideCap edges: true when AB may meet its interior and
+// its vertices lie strictly on both sides of AB's line (touching counts as one side), their sides
+// left in `sides`; test 3 (chord_survives) then decides.
+template <class P>
+TV_HD inline bool crosses(const PEdge<P>* poly, uint32_t n, const SilEdge<P>& e, Sides& sides) {
+  if (n == 0 || misses<P>(poly, n, e)) return false;
+  sides = sides_of<P>(poly, n, e.line);
+  return sides.pos != 0 && sides.neg != 0;
+}
+
+// SVGPU §3.2.1 tests 1-3 of a silhouette edge against a (piece of a) triangle. true: the
+// pair survives and the piece must be split by the edge's line. Where `sides` is given (and
+// n <= kSideCap), the vertices' sides of AB's line, which tests 1 and 3 compute, are left
+// there for split() to take over: a surviving pair's split needs them again.
+template <class P>
+TV_HD inline bool survives(const PEdge<P>* poly, uint32_t n, const TileTri<P>& tt, const SilEdge<P>& e,
+                           Sides* sides = nullptr) {
+  // The pair survives only if tests 1, 2 and 3 all pass, so they may run in any order: the
+  // cheap one first.
+  if (n <= kSideCap) {
+    Sides sd;
+    if (!crosses<P>(poly, n, e, sd)) return false;
+    if (sides) *sides = sd;
+    return chord_survives<P>(poly, n, tt, e, [&](uint32_t k) { return sd.at(k); });
+  }
+  if (misses<P>(poly, n, e)) return false;
+  bool pos = false, neg = false;
+  line_sides<P>(poly, n, e.line, pos, neg);
+  if (!pos || !neg) return false;
+  return chord_survives<P>(poly, n, tt, e, [&](uint32_t k) { return P::side(e.line, poly[k].start); });
 }
 
 // Edge i's share of a split with the sides given: the inside part's edges it starts (0 to 2, in
