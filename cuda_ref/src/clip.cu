@@ -612,8 +612,8 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
         // Tests 2 and 1 by each lane (its candidate); test 3 of the lowest candidates that pass
         // them by the whole warp, one candidate at a time (lanes over the piece's edges). Test 3
         // by each lane was most of a split step: its loop over the edges, a division or an exact
-        // intersection at each end (clock64 on an H200: 9,000 cycles of a float slivers step's
-        // 13,500, 20,600 of exact's 29,000).
+        // intersection at each end (clock64 on an H200, slivers: 9,000 cycles of a float split
+        // step's 14,100, 20,600 of exact's 29,200; reports/cuda/clip_chord_h200.md).
         const PEdge<P>* const pz = staged ? ws[b] : at;
         bool cross = false;
         if (mine < c) cross = crosses<P>(pz, m, a.edges[sidx[mine]], sides);
