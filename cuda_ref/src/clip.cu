@@ -488,19 +488,18 @@ __device__ inline T shfl_value(const T& v, int src) {
 }
 
 // Test 3 of one candidate (its sides `sg` of the piece's m <= 32 vertices, from crosses()) with
-// the warp's lanes over the piece's edges: lane i makes edge i's chord ends (chord_first,
-// chord_second), and the highest lane that makes each gives it, as chord_survives' loop keeps
-// the last: the same values, so the same answer, in about one edge's time instead of m edges'.
+// the warp's lanes over the piece's edges: lane i makes edge i's chord ends (chord_ends_at),
+// and the highest lane that makes each gives it, as chord_of's loop keeps the last: the same
+// values, so the same answer, in about one edge's time instead of m edges'.
 template <class P>
 __device__ inline bool chord_survives_warp(const PEdge<P>* poly, uint32_t m, const TileTri<P>& tt,
                                            const SilEdge<P>& e, const Sides& sg, uint32_t lane) {
   typename P::V vf = poly[0].start, vs = vf;
   bool hf = false, hs = false;
   if (lane < m) {
-    const uint32_t j = lane + 1 == m ? 0 : lane + 1;
-    const int si = sg.at(lane), sn = sg.at(j);
-    hf = chord_first<P>(poly, lane, j, si, sn, e.line, vf);
-    hs = chord_second<P>(poly, lane, si, sn, e.line, vs);
+    const uint32_t h = chord_ends_at<P>(poly, m, e.line, sg, lane, vf, vs);
+    hf = (h & 1u) != 0;
+    hs = (h & 2u) != 0;
   }
   const uint32_t bf = __ballot_sync(0xffffffffu, hf), bs = __ballot_sync(0xffffffffu, hs);
   // No lane: poly[0].start, which is lane 0's.

@@ -340,21 +340,41 @@ TV_HD inline bool chord_nearer(const TileTri<P>& tt, const SilEdge<P>& e, const 
   return s2 > 0 || (s1 == 0 && s2 == 0);
 }
 
-// Test 3 of a pair that passed tests 2 and 1: the chord of AB's line through the polygon, each
-// end as the last edge gives it (side_at(k): vertex k's side of AB's line), and the depths there.
+// Test 3's chord of line l through an n-gon: each end as the last edge gives it (side_at(k):
+// vertex k's side of l), poly[0].start where none does.
 template <class P, class SideAt>
-TV_HD inline bool chord_survives(const PEdge<P>* poly, uint32_t n, const TileTri<P>& tt, const SilEdge<P>& e,
-                                 SideAt&& side_at) {
-  typename P::V first = poly[0].start, second = poly[0].start;
+TV_HD inline void chord_of(const PEdge<P>* poly, uint32_t n, const typename P::Line& l, SideAt&& side_at,
+                           typename P::V& first, typename P::V& second) {
+  first = second = poly[0].start;
   const int s0 = side_at(0);
   int si = s0;
   for (uint32_t i = 0; i < n; ++i) {
     const uint32_t j = i + 1 == n ? 0 : i + 1;
     const int sn = j == 0 ? s0 : side_at(j);
-    chord_first<P>(poly, i, j, si, sn, e.line, first);
-    chord_second<P>(poly, i, si, sn, e.line, second);
+    chord_first<P>(poly, i, j, si, sn, l, first);
+    chord_second<P>(poly, i, si, sn, l, second);
     si = sn;
   }
+}
+
+// Edge i's part in chord_of (sides sg): bit 0 when it gives `first` (vf), bit 1 when it gives
+// `second` (vs). Lane i of k_clip_long's warp runs it; the highest edge that gives each end is
+// chord_of's answer.
+template <class P>
+TV_HD inline uint32_t chord_ends_at(const PEdge<P>* poly, uint32_t n, const typename P::Line& l, const Sides& sg,
+                                    uint32_t i, typename P::V& vf, typename P::V& vs) {
+  const uint32_t j = i + 1 == n ? 0 : i + 1;
+  const int si = sg.at(i), sn = sg.at(j);
+  return uint32_t(chord_first<P>(poly, i, j, si, sn, l, vf)) | uint32_t(chord_second<P>(poly, i, si, sn, l, vs)) << 1;
+}
+
+// Test 3 of a pair that passed tests 2 and 1: the chord of AB's line through the polygon and the
+// depths at its ends.
+template <class P, class SideAt>
+TV_HD inline bool chord_survives(const PEdge<P>* poly, uint32_t n, const TileTri<P>& tt, const SilEdge<P>& e,
+                                 SideAt&& side_at) {
+  typename P::V first, second;
+  chord_of<P>(poly, n, e.line, side_at, first, second);
   return chord_nearer<P>(tt, e, first, second);
 }
 

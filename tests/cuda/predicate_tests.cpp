@@ -264,6 +264,90 @@ void split_by_edges_is_split() {
 TEST(CudaPredicates, SplitByEdgesPlacedByCountsIsSplitFloat) { split_by_edges_is_split<c::FloatP>(); }
 TEST(CudaPredicates, SplitByEdgesPlacedByCountsIsSplitExact) { split_by_edges_is_split<c::ExactP>(); }
 
+// Test 3's chord as k_clip_long's warp makes it (lane i: chord_ends_at of edge i; each end from
+// the highest lane that gives it, poly[0].start where none does) against chord_of's loop, over
+// the pieces and lines of split_by_edges_is_split's kind, silhouette edges of random depths. The
+// sides are the raw ones survives() uses: in float they need not be a convex polygon's (more
+// than one change of sign), where "the last edge" is what makes the two agree.
+template <class P>
+void chord_by_lanes_is_chord() {
+  using E = c::PEdge<P>;
+  using V = typename P::V;
+  auto same_v = [](const V& x, const V& y) {
+    if constexpr (P::kExact) return x.x == y.x && x.y == y.y && x.w == y.w;
+    else return std::memcmp(&x, &y, sizeof(V)) == 0;
+  };
+  uint64_t chords = 0, several = 0, survived = 0, zero_side = 0;
+  for (int k = 0; k < 6000; ++k) {
+    const int32_t lim = 1 << (8 + k % 15);
+    const c::Vtx v0{coord(lim), coord(lim), depth()}, v1{coord(lim), coord(lim), depth()},
+        v2{coord(lim), coord(lim), depth()};
+    if (c::orient2d(v0.xy(), v1.xy(), v2.xy()) == 0) continue;
+    const auto tt = c::make_tile_tri<P>(v0, v1, v2, 0, true);
+    const int32_t x0 = coord(lim), y0 = coord(lim);
+    const c::Rect rect{x0, y0, x0 + 1 + int32_t(rng() % uint64_t(lim)), y0 + 1 + int32_t(rng() % uint64_t(lim))};
+    E poly[32];
+    bool overflow = false;
+    uint32_t n = c::tile_polygon<P>(tt, rect, poly, overflow);
+    for (int step = 0; step < 16 && n >= 3 && n < 13; ++step) {
+      const c::Pt pts[7] = {v0.xy(), v1.xy(), v2.xy(), {rect.x0, rect.y0}, {rect.x1, rect.y0}, {rect.x1, rect.y1},
+                            {rect.x0, rect.y1}};
+      const c::Pt p = k % 3 == 0 ? c::Pt{coord(lim), coord(lim)} : pts[rng() % 7];
+      c::Pt q = k % 3 == 1 ? pts[rng() % 7] : c::Pt{coord(lim), coord(lim)};
+      if (q == p) q = {coord(lim), coord(lim)};
+      const c::Vtx a{p.x, p.y, depth()}, b{q.x, q.y, depth()};
+      const auto e = c::make_sil_edge<P>(a, b);
+      const c::Sides sg = c::sides_of<P>(poly, n, e.line);
+      if (sg.pos != 0 && sg.neg != 0) {
+        ++chords;
+        zero_side += (c::Sides::low_bits(n) & ~sg.pos & ~sg.neg) != 0;
+        V first, second;
+        c::chord_of<P>(poly, n, e.line, [&](uint32_t i) { return sg.at(i); }, first, second);
+        V lf = poly[0].start, ls = poly[0].start;
+        int hf = -1, hs = -1, gives = 0;
+        for (uint32_t r = 0; r < n; ++r) {
+          const uint32_t i = (r * 5 + 2) % n == r ? r : (n - 1 - r);  // lanes in no order
+          V vf = poly[0].start, vs = poly[0].start;
+          const uint32_t h = c::chord_ends_at<P>(poly, n, e.line, sg, i, vf, vs);
+          gives += (h & 1u) != 0;
+          if ((h & 1u) && int(i) > hf) hf = int(i), lf = vf;
+          if ((h & 2u) && int(i) > hs) hs = int(i), ls = vs;
+        }
+        several += gives > 1;
+        ASSERT_TRUE(same_v(first, lf)) << "first, piece of " << n << " edges";
+        ASSERT_TRUE(same_v(second, ls)) << "second, piece of " << n << " edges";
+        const bool by_lanes = c::chord_nearer<P>(tt, e, lf, ls);
+        ASSERT_EQ(by_lanes, c::chord_survives<P>(poly, n, tt, e, [&](uint32_t i) { return sg.at(i); }));
+        survived += by_lanes;
+      }
+      // On to a smaller piece: the inside part of the line's split (regularized in float, as
+      // the clip does), when it has room.
+      if (sg.pos == 0 || sg.neg == 0) continue;
+      c::Sides sr = sg;
+      if constexpr (!P::kExact) sr.regularize(n);
+      E in_e[32], out_e[32];
+      c::PolyOut<P> in{in_e, 0, n + 1, false}, out{out_e, 0, n + 1, false};
+      c::split_sides<P>(poly, n, e.line, sr, in, out);
+      if (in.overflow || in.n < 3) break;
+      n = in.n;
+      std::memcpy(static_cast<void*>(poly), in_e, sizeof(E) * n);
+    }
+  }
+  std::printf("%llu chords, %llu with a vertex on the line, %llu with more than one edge giving an end, %llu survive\n",
+              (unsigned long long)chords, (unsigned long long)zero_side, (unsigned long long)several,
+              (unsigned long long)survived);
+  EXPECT_GT(chords, 1000u);
+  EXPECT_GT(zero_side, 10u);
+  EXPECT_GT(survived, 100u);
+  EXPECT_GT(chords - survived, 100u);
+  if constexpr (!P::kExact) {
+    EXPECT_GT(several, 0u);  // float signs that change more than twice: covered
+  }
+}
+
+TEST(CudaPredicates, ChordByLanesIsChordFloat) { chord_by_lanes_is_chord<c::FloatP>(); }
+TEST(CudaPredicates, ChordByLanesIsChordExact) { chord_by_lanes_is_chord<c::ExactP>(); }
+
 }  // namespace
 
 // add_repeated (the hybrid fold's per-pixel areas) against the additions one at a time, bit for
