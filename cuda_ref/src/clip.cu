@@ -508,6 +508,49 @@ __device__ inline bool chord_survives_warp(const PEdge<P>* poly, uint32_t m, con
   return chord_nearer<P>(tt, e, first, second);
 }
 
+// k_clip_long's walk timed (a build with -DTILEVIS_CUDA_WALK_CLOCK=ON): lane 0 of each warp reads
+// clock64() at the walk's phase boundaries and adds the cycles of each phase, and the steps and
+// pieces it walked, to g_walk_clock when the tree ends; `tilevis cuda` writes the process's sums
+// to stats.json (clip_walk_clock). The reads add instructions to the kernel (it ran about a third
+// longer on slivers): the shares are what to read, not the absolute time. Off (the default), the
+// marks compile to nothing. reports/cuda/clip_chord_h200.md is what such a build showed.
+enum WalkPhase : uint32_t {
+  kWalkWait,        // waiting for a piece (or for the tree's end)
+  kWalkStage,       // copying it into the warp's stage
+  kWalkTestNoSplit, // a step's tests where no candidate survives
+  kWalkTestSplit,   // a step's tests where one does
+  kWalkAllocate,    // lane `first`'s piece id and edges (exact: and its one-lane split and publication)
+  kWalkSplit,       // the warp's split (float)
+  kWalkPublish,     // the fence and the outside part's publication (float), the inside part handed on
+  kWalkStepEnd,     // the inside part kept in the pool, the next step set up
+  kWalkPieceEnd,    // the piece's final polygon recorded
+  kWalkPhases
+};
+enum WalkCount : uint32_t { kWalkStepsNoSplit, kWalkStepsSplit, kWalkPieces, kWalkCounts };
+#if defined(TILEVIS_CUDA_WALK_CLOCK)
+__device__ unsigned long long g_walk_clock[kWalkPhases + kWalkCounts];
+struct WalkClock {
+  unsigned long long last = clock64(), cycles[kWalkPhases] = {}, counts[kWalkCounts] = {};
+  __device__ void mark(WalkPhase p) {
+    const unsigned long long now = clock64();
+    cycles[p] += now - last;
+    last = now;
+  }
+  __device__ void count(WalkCount c) { ++counts[c]; }
+  __device__ void add(bool lead) const {
+    if (!lead) return;
+    for (uint32_t k = 0; k < kWalkPhases; ++k) atomicAdd(&g_walk_clock[k], cycles[k]);
+    for (uint32_t k = 0; k < kWalkCounts; ++k) atomicAdd(&g_walk_clock[kWalkPhases + k], counts[k]);
+  }
+};
+#else
+struct WalkClock {
+  __device__ void mark(WalkPhase) {}
+  __device__ void count(WalkCount) {}
+  __device__ void add(bool) const {}
+};
+#endif
+
 template <class P>
 __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, uint8_t* smem, TreeShared& ts,
                                PEdge<P> (*wstage)[2][kCopyEdges], uint32_t* sidx) {
@@ -565,6 +608,7 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
   const uint64_t base = slot_of[0];
   uint32_t splits = 0, anomalies = 0, regularized = 0;
   const uint32_t lane = t & 31u;
+  WalkClock clock;
   for (;;) {
     uint32_t id = 0;
     uint64_t cur = ~uint64_t{0};
@@ -579,7 +623,9 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
     }
     id = __shfl_sync(0xffffffffu, id, 0);
     cur = __shfl_sync(0xffffffffu, static_cast<unsigned long long>(cur), 0);
+    clock.mark(kWalkWait);
     if (cur == ~uint64_t{0}) break;
+    clock.count(kWalkPieces);
     // The walked piece lives in one of the warp's two stages in shared memory (its lanes copy
     // it there, an edge each): every lane tests it there and the splitting lane reads it there,
     // with no copy of its own. (A Piece is a copy in each lane's local memory: with it here the
@@ -598,6 +644,7 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
       at = ws[b];
     }
     __syncwarp();
+    clock.mark(kWalkStage);
     // The warp's lanes test the next 32 candidates at once; the lowest that the piece survives is
     // the next that splits it (those before it leave it as it is), and its lane splits it.
     uint32_t ci = (lane == 0 ? sh_load(&born[id]) : 0u);
@@ -632,9 +679,13 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
       }
       const uint32_t mask = __ballot_sync(0xffffffffu, flag);
       if (mask == 0) {
+        clock.mark(kWalkTestNoSplit);
+        clock.count(kWalkStepsNoSplit);
         ci += 32;
         continue;
       }
+      clock.mark(kWalkTestSplit);
+      clock.count(kWalkStepsSplit);
       const uint32_t first = uint32_t(__ffs(mask)) - 1u;
       uint64_t next = 0, e_at = 0;
       uint32_t quit = 0, child = 0;
@@ -678,6 +729,7 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
         }
       }
       if (__shfl_sync(0xffffffffu, quit, first) != 0) break;  // the block failed: nothing more is kept
+      clock.mark(kWalkAllocate);
       if constexpr (!P::kExact) if (by_warp) {
         // Lane `first`'s sides (regularized as split() does, the same in every lane), its line,
         // and each edge's share placed by prefix sums of the counts: split_sides' polygons.
@@ -701,6 +753,7 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
         }
         const uint32_t n_in = total & 0xffffu, n_out = total >> 16;
         next = (e_at << 32) | tmin(n_in, cap);
+        clock.mark(kWalkSplit);
         __threadfence_block();  // each lane's edges (global) before the warp's barrier
         __syncwarp();  // every lane's edges are written before the outside part is published
         if (lane == first) {
@@ -710,6 +763,7 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
         }
       }
       cur = __shfl_sync(0xffffffffu, static_cast<unsigned long long>(next), first);
+      clock.mark(kWalkPublish);
       __syncwarp();  // the inside part's edges, written by lane `first`, before the lanes read them
       if (st) {
         // The pool keeps the part (its final polygon, if no later candidate splits it); the
@@ -723,6 +777,7 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
         staged = false;
       }
       ci += first + 1;
+      clock.mark(kWalkStepEnd);
     }
     __syncwarp();  // the stages are read before the warp's next piece is copied in
     if (lane == 0) {
@@ -730,7 +785,9 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
       __threadfence_block();
       atomicAdd(&ts.finished, 1u);
     }
+    clock.mark(kWalkPieceEnd);
   }
+  clock.add(lane == 0);
   __syncthreads();
   const bool failed = ts.fail != 0;
   const uint32_t count = failed ? 0 : ts.n_alloc;
@@ -959,6 +1016,20 @@ bool stage_clip(Pipeline<P>& p) {
   uint64_t c[kFloatAnomalies];
   ex.download(c, p.counters.get(), sizeof(c));
   return pools_fit(p, c);
+}
+
+std::vector<std::pair<std::string, uint64_t>> walk_clock_totals() {
+  std::vector<std::pair<std::string, uint64_t>> out;
+#if defined(TILEVIS_CUDA_WALK_CLOCK)
+  unsigned long long g[kWalkPhases + kWalkCounts] = {};
+  if (cudaMemcpyFromSymbol(g, g_walk_clock, sizeof(g)) != cudaSuccess) return out;
+  static const char* const names[kWalkPhases + kWalkCounts] = {
+      "wait_cycles",  "stage_cycles",  "test_no_split_cycles", "test_split_cycles",  "allocate_cycles",
+      "split_cycles", "publish_cycles", "step_end_cycles",     "piece_end_cycles",   "steps_no_split",
+      "steps_split",  "pieces"};
+  for (uint32_t k = 0; k < kWalkPhases + kWalkCounts; ++k) out.emplace_back(names[k], uint64_t(g[k]));
+#endif
+  return out;
 }
 
 template <class P>

@@ -1001,6 +1001,7 @@ CudaResult run(const trace::Frame& frame, const CudaConfig& cfg) {
   r.float_exact_areas = c[kFloatExactAreas];
   r.deep_pairs = c[kDeepPairs];
   r.peak_device_bytes = ex.peak_bytes();
+  if (ex.where == Where::gpu) r.walk_clock = walk_clock_totals();
   r.min_dram_bytes = p.f.n_vertices * 16 + p.f.n_triangles * 12 + n_samples * 4;
   if (ex.where == Where::gpu) {
     int khz = 0, bus_bits = 0;

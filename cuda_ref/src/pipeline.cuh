@@ -3,6 +3,8 @@
 // raster.cu) fills its part; pipeline.cu runs them, times them and grows buffers on overflow.
 #pragma once
 
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "exec.cuh"
@@ -390,6 +392,9 @@ bool stage_clip(Pipeline<P>& p);  // false: a buffer overflowed (capacities grow
 // capacity grown). stage_clip checks them itself, except in a device-sized run.
 template <class P>
 bool pools_fit(Pipeline<P>& p, const uint64_t* c);
+// k_clip_long's walk phases summed over the process (clip.cu, builds with
+// TILEVIS_CUDA_WALK_CLOCK; empty otherwise or when the device cannot be read).
+std::vector<std::pair<std::string, uint64_t>> walk_clock_totals();
 // Occlusion and raster run once per kind of piece (pieces.cuh): the unclipped items' pieces on
 // side stream 0 as soon as culling is done (beside the clipping), the clipped ones' after it.
 enum class Pass;

@@ -289,6 +289,11 @@ int run(const CudaArgs& a, const trace::Frame& frame, uint32_t tw, uint32_t th) 
     fmt::print("  z-buffers: tiled exact {:.3f} ms (ratio {:.2f}), naive {:.3f} ms (ratio {:.2f}, {} samples differ)\n",
                tiled.total_ms, r.total_ms / tiled.total_ms, naive.total_ms, r.total_ms / naive.total_ms, naive_diff);
   }
+  if (!r.walk_clock.empty()) {  // a TILEVIS_CUDA_WALK_CLOCK build
+    nlohmann::json w = nlohmann::json::object();
+    for (const auto& [name, value] : r.walk_clock) w[name] = value;
+    out.stats["clip_walk_clock"] = w;
+  }
   if (a.hw_raster_ms > 0) {
     out.stats["hw_raster_ms"] = a.hw_raster_ms;
     out.stats["hw_raster_ratio"] = r.total_ms / a.hw_raster_ms;

@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "tilevis/trace.h"
@@ -120,6 +121,10 @@ struct CudaResult {
   // launch + 8-byte copy back + wait (a host round trip); 0 where TILEVIS_CUDA_NO_LAUNCH_PROBE is set
   // (compute-sanitizer runs: gpu_run.sh sanitize).
   double launch_us = 0, round_trip_us = 0;
+  // k_clip_long's walk timed by clock64 in a build with TILEVIS_CUDA_WALK_CLOCK=ON (empty in
+  // others): cycles of each phase summed over every warp and every run of the process, then the
+  // steps without and with a split and the pieces walked (clip.cu, WalkPhase).
+  std::vector<std::pair<std::string, uint64_t>> walk_clock;
 };
 
 // A sequence of frames (an orbit) through one pipeline, as a renderer meets them: per frame, the
