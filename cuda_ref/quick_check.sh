@@ -11,7 +11,8 @@
 # switches: TILEVIS_QUICK_VARIANTS="off:TILEVIS_CUDA_PDL=off exit:TILEVIS_CUDA_PDL=exit" runs every
 # scene and precision under each NAME:VAR=VALUE[,VAR=VALUE...] in turn (interleaved, TILEVIS_QUICK_PASSES times,
 # default 1), checks that ids.exr, tiles.csv and visible_area.bin are the same bytes under every
-# variant, and tables each variant's times. A variant may run another build's tool:
+# variant, and tables each variant's times, then the variants side by side, each against the first
+# (cuda_ref/tools/bench_table.py; over GL too where phase gl ran). A variant may run another build's tool:
 # TILEVIS_QUICK_BIN=PATH among its assignments. Phase `base` builds the tree of every
 # .gpu/NAME_src.tar.xz (`git archive REV | xz >.gpu/NAME_src.tar.xz` on the sender) beside this
 # one, in /tmp/NAME_src, and runs its GPU tests (label gpu; not base's), so that
@@ -155,6 +156,13 @@ for k, s in rows.items():
           f"{g('graph_total_ms'):.3f} | {g('cuda_zbuffer_ms'):.3f} | {g('naive_zbuffer_ms'):.3f} | "
           f"{g('cuda_zbuffer_ratio'):.2f} | {g('naive_zbuffer_ratio'):.2f} | {gl:.3f} | {g('total_ms') / gl:.2f} | {g('retries')} |")
 PY
+      # Two variants or more: side by side, each against the first (and over GL where phase gl ran).
+      if [ ${#variants[@]} -gt 1 ]; then
+        names="$(printf '%s\n' "${variants[@]}" | sed 's/:.*//' | paste -sd, -)"
+        gl_args=()
+        [ -f "$OUT/gl.json" ] && gl_args=(--gl "$OUT/gl.json")
+        python3 cuda_ref/tools/bench_table.py "$OUT/bench.json" --variants "$names" "${gl_args[@]}"
+      fi
       ;;
     pack)
       rm -rf /tmp/prebuilt && mkdir -p /tmp/prebuilt/prebuilt/bin /tmp/prebuilt/prebuilt/lib
