@@ -189,27 +189,54 @@ std::pair<double, double> vxy(const typename P::V& v) {
   else return {v.x, v.y};
 }
 
+// A random triangle (depths random or 0) clipped to a random rectangle at the scale of case k
+// (2^(8 + k % 15)), and the points its test lines go through: random ones, or the triangle's
+// vertices and the rectangle's corners (often the polygon's vertices: sides of 0).
+template <class P>
+struct RandomPiece {
+  int32_t lim = 0;
+  c::Vtx v[3];
+  c::TileTri<P> tt;
+  c::Rect rect;
+  c::PEdge<P> poly[32];
+  uint32_t n = 0;
+
+  bool make(int k, bool depths) {
+    lim = 1 << (8 + k % 15);
+    for (c::Vtx& x : v) {
+      const int32_t px = coord(lim), py = coord(lim);
+      x = {px, py, depths ? depth() : 0u};
+    }
+    if (c::orient2d(v[0].xy(), v[1].xy(), v[2].xy()) == 0) return false;
+    tt = c::make_tile_tri<P>(v[0], v[1], v[2], 0, true);
+    const int32_t x0 = coord(lim), y0 = coord(lim);
+    rect = {x0, y0, x0 + 1 + int32_t(rng() % uint64_t(lim)), y0 + 1 + int32_t(rng() % uint64_t(lim))};
+    bool overflow = false;
+    n = c::tile_polygon<P>(tt, rect, poly, overflow);
+    return true;
+  }
+  // A line's two points for case k: through a vertex or a corner, two of them, or random points.
+  std::pair<c::Pt, c::Pt> line_points(int k) {
+    const c::Pt pts[7] = {v[0].xy(), v[1].xy(), v[2].xy(), {rect.x0, rect.y0}, {rect.x1, rect.y0}, {rect.x1, rect.y1},
+                          {rect.x0, rect.y1}};
+    const c::Pt p = k % 3 == 0 ? c::Pt{coord(lim), coord(lim)} : pts[rng() % 7];
+    const c::Pt q = k % 3 == 1 ? pts[rng() % 7] : c::Pt{coord(lim), coord(lim)};
+    return {p, q};
+  }
+};
+
 template <class P>
 void split_by_edges_is_split() {
   using E = c::PEdge<P>;
   uint64_t splits = 0, on_line = 0, past_room = 0, longest = 0;
+  RandomPiece<P> rp;
   for (int k = 0; k < 6000; ++k) {
-    const int32_t lim = 1 << (8 + k % 15);
-    const c::Vtx v0{coord(lim), coord(lim), 0}, v1{coord(lim), coord(lim), 0}, v2{coord(lim), coord(lim), 0};
-    if (c::orient2d(v0.xy(), v1.xy(), v2.xy()) == 0) continue;
-    const auto tt = c::make_tile_tri<P>(v0, v1, v2, 0, true);
-    const int32_t x0 = coord(lim), y0 = coord(lim);
-    const c::Rect rect{x0, y0, x0 + 1 + int32_t(rng() % uint64_t(lim)), y0 + 1 + int32_t(rng() % uint64_t(lim))};
-    E poly[32];
-    bool overflow = false;
-    uint32_t n = c::tile_polygon<P>(tt, rect, poly, overflow);
+    if (!rp.make(k, false)) continue;
+    const int32_t lim = rp.lim;
+    E* const poly = rp.poly;
+    uint32_t n = rp.n;
     for (int step = 0; step < 16 && n >= 3 && n < 13; ++step) {
-      // Through a vertex of the triangle or a corner of the rectangle (often the polygon's
-      // vertices: sides of 0), two of them, or random points.
-      const c::Pt pts[7] = {v0.xy(), v1.xy(), v2.xy(), {rect.x0, rect.y0}, {rect.x1, rect.y0}, {rect.x1, rect.y1},
-                            {rect.x0, rect.y1}};
-      c::Pt p = k % 3 == 0 ? c::Pt{coord(lim), coord(lim)} : pts[rng() % 7];
-      c::Pt q = k % 3 == 1 ? pts[rng() % 7] : c::Pt{coord(lim), coord(lim)};
+      auto [p, q] = rp.line_points(k);
       if (step % 2 == 1) {  // a corner cut off, the rest kept: one edge more each time
         const uint32_t i = uint32_t(rng() % n);
         const auto [xi, yi] = vxy<P>(poly[i].start);
@@ -278,22 +305,15 @@ void chord_by_lanes_is_chord() {
     else return std::memcmp(&x, &y, sizeof(V)) == 0;
   };
   uint64_t chords = 0, several = 0, survived = 0, zero_side = 0;
+  RandomPiece<P> rp;
   for (int k = 0; k < 6000; ++k) {
-    const int32_t lim = 1 << (8 + k % 15);
-    const c::Vtx v0{coord(lim), coord(lim), depth()}, v1{coord(lim), coord(lim), depth()},
-        v2{coord(lim), coord(lim), depth()};
-    if (c::orient2d(v0.xy(), v1.xy(), v2.xy()) == 0) continue;
-    const auto tt = c::make_tile_tri<P>(v0, v1, v2, 0, true);
-    const int32_t x0 = coord(lim), y0 = coord(lim);
-    const c::Rect rect{x0, y0, x0 + 1 + int32_t(rng() % uint64_t(lim)), y0 + 1 + int32_t(rng() % uint64_t(lim))};
-    E poly[32];
-    bool overflow = false;
-    uint32_t n = c::tile_polygon<P>(tt, rect, poly, overflow);
+    if (!rp.make(k, true)) continue;
+    const int32_t lim = rp.lim;
+    const auto& tt = rp.tt;
+    E* const poly = rp.poly;
+    uint32_t n = rp.n;
     for (int step = 0; step < 16 && n >= 3 && n < 13; ++step) {
-      const c::Pt pts[7] = {v0.xy(), v1.xy(), v2.xy(), {rect.x0, rect.y0}, {rect.x1, rect.y0}, {rect.x1, rect.y1},
-                            {rect.x0, rect.y1}};
-      const c::Pt p = k % 3 == 0 ? c::Pt{coord(lim), coord(lim)} : pts[rng() % 7];
-      c::Pt q = k % 3 == 1 ? pts[rng() % 7] : c::Pt{coord(lim), coord(lim)};
+      auto [p, q] = rp.line_points(k);
       if (q == p) q = {coord(lim), coord(lim)};
       const c::Vtx a{p.x, p.y, depth()}, b{q.x, q.y, depth()};
       const auto e = c::make_sil_edge<P>(a, b);
