@@ -131,6 +131,8 @@ int run_golden(const GoldenArgs& a, const trace::Frame& frame, uint32_t tw, uint
                                  {"work", r.longest_walk.work},
                                  {"candidates", r.longest_walk.candidates},
                                  {"pieces", r.longest_walk.pieces},
+                                 {"chain_splits", r.longest_walk.chain_splits},
+                                 {"splits", r.longest_walk.splits},
                                  {"tile", r.longest_walk.tile},
                                  {"setup_index", r.longest_walk.setup_index}};
   if (hybrid)

@@ -111,7 +111,13 @@ class AnalyticResolver final : public TileResolver {
     }
     const uint64_t walk = m_walk.longest(m_candidates.size());
     if (walk > out.longest_walk.steps)
-      out.longest_walk = {walk, m_walk.work(m_candidates.size()), m_candidates.size(), m_pieces.size(), tile,
+      out.longest_walk = {walk,
+                          m_walk.work(m_candidates.size()),
+                          m_candidates.size(),
+                          m_pieces.size(),
+                          m_walk.longest_splits(m_candidates.size()),
+                          m_walk.splits(),
+                          tile,
                           tt.setup_index};
     // Canonical order of pieces: a split puts the inside part in place of its parent and
     // appends the outside part (the order the CUDA reference reproduces).

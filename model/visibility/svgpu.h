@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "geom/clip.h"
@@ -94,20 +95,28 @@ bool opposite_neighbours(const geom::Triangle& t, const geom::Triangle& u);
 class WalkChain {
  public:
   explicit WalkChain(uint64_t width = 32) : m_width(width) {}
-  void start() { m_walk.assign(1, Walk{}); }
+  void start() {
+    m_walk.assign(1, Walk{});
+    m_splits = 0;
+  }
   // Piece `piece` is split by the candidate at position `ci`; `cut_off`: a new piece is appended.
   void split(size_t piece, uint64_t ci, bool cut_off) {
     Walk& w = m_walk[piece];
     w.steps += (ci - w.pos) / m_width + 1;
     w.pos = ci + 1;
-    if (cut_off) m_walk.push_back({w.pos, w.steps, w.steps});
+    ++w.splits;
+    ++m_splits;
+    if (cut_off) m_walk.push_back({w.pos, w.steps, w.steps, w.splits});
   }
   // Over `candidates` candidates: the longest walk's end (steps), and every walk's own steps.
-  uint64_t longest(uint64_t candidates) const {
-    uint64_t best = 0;
-    for (const Walk& w : m_walk) best = std::max(best, end(w, candidates));
-    return best;
+  uint64_t longest(uint64_t candidates) const { return longest_walk(candidates).second; }
+  // How many of the longest chain's steps are splits (the first longest walk's): a split step
+  // costs cuda_ref's warp many times one without a survivor (reports/cuda/clip_chord_h200.md).
+  uint64_t longest_splits(uint64_t candidates) const {
+    return m_walk.empty() ? 0 : m_walk[longest_walk(candidates).first].splits;
   }
+  // Splits of all walks: the work's steps that split.
+  uint64_t splits() const { return m_splits; }
   uint64_t work(uint64_t candidates) const {
     uint64_t sum = 0;
     for (const Walk& w : m_walk) sum += end(w, candidates) - w.start;
@@ -117,11 +126,19 @@ class WalkChain {
  private:
   struct Walk {
     uint64_t pos = 0, steps = 0, start = 0;  // next candidate position, steps so far (from the item's start), first step
+    uint64_t splits = 0;                     // splits on its chain so far (its parent's when it was cut off, then its own)
   };
+  std::pair<size_t, uint64_t> longest_walk(uint64_t candidates) const {  // (the first longest walk, its end)
+    std::pair<size_t, uint64_t> best{0, 0};
+    for (size_t k = 0; k < m_walk.size(); ++k)
+      if (const uint64_t e = end(m_walk[k], candidates); e > best.second) best = {k, e};
+    return best;
+  }
   uint64_t end(const Walk& w, uint64_t candidates) const {
     return w.steps + (w.pos < candidates ? (candidates - w.pos + m_width - 1) / m_width : 0);
   }
   uint64_t m_width;
+  uint64_t m_splits = 0;
   std::vector<Walk> m_walk;
 };
 

@@ -76,9 +76,10 @@ struct TileTriangleWork {
 
 // The clip of one (tile, triangle) item whose chain of dependent steps is the longest when each
 // piece is walked on its own (svgpu::WalkChain, 32 candidates a step): what bounds cuda_ref's
-// k_clip_long on the frame's longest item. steps: that chain; work: all its walks' steps.
+// k_clip_long on the frame's longest item. steps: that chain; work: all its walks' steps;
+// chain_splits and splits: the steps of each that split a piece.
 struct LongestWalk {
-  uint64_t steps = 0, work = 0, candidates = 0, pieces = 0;
+  uint64_t steps = 0, work = 0, candidates = 0, pieces = 0, chain_splits = 0, splits = 0;
   uint32_t tile = 0, setup_index = 0;  // the item: its tile, its triangle (setup order)
 };
 

@@ -99,6 +99,8 @@ TEST(Svgpu, WalkChainCountsTheLongestWalk) {
   w.split(0, 1, true);
   w.split(0, 2, true);
   EXPECT_EQ(w.longest(100), 7u);
+  EXPECT_EQ(w.longest_splits(100), 3u);  // the root's chain: 3 splits and 4 steps without one
+  EXPECT_EQ(w.splits(), 3u);
   EXPECT_EQ(w.work(100), 7u + 4u + 4u + 4u);  // the root's 7; pieces 1-3 walk 99, 98, 97 candidates
   // Piece 1 (cut off at 0, time 1, next candidate 1) splits at 40: one step without a survivor
   // (candidates 1-32), one for the split; then 59 candidates left (2 steps): 1 + 2 + 2 = 5. Its
@@ -108,6 +110,10 @@ TEST(Svgpu, WalkChainCountsTheLongestWalk) {
   // A chain: piece 4 (cut off at 40) is split at 41, 42, ..., 99, each a step: 3 + 59 = 62.
   for (uint64_t ci = 41; ci < 100; ++ci) w.split(4, ci, ci % 2 == 0);
   EXPECT_EQ(w.longest(100), 62u);
+  // Its 62 steps: the root's split at 0, piece 1's step without a survivor and its split at 40,
+  // then piece 4's 59 splits.
+  EXPECT_EQ(w.longest_splits(100), 61u);
+  EXPECT_EQ(w.splits(), 3u + 1u + 59u);
   // Piece 1 walked 2 + 2 steps, piece 4 its 59 splits; pieces 5-33, cut off at the even
   // candidates 42-98, walk what follows them: 2 steps each from 42-66 (13), 1 from 68-98 (16).
   EXPECT_EQ(w.work(100), 7u + 4u + 4u + 4u + 59u + 13u * 2u + 16u);
@@ -116,5 +122,6 @@ TEST(Svgpu, WalkChainCountsTheLongestWalk) {
   v.start();
   v.split(0, 20, false);  // steps: 2 rounds of 8 (0-15), then the split: 3; next candidate 21
   EXPECT_EQ(v.longest(21), 3u);
+  EXPECT_EQ(v.longest_splits(21), 1u);
   EXPECT_EQ(v.longest(30), 5u);  // + candidates 21-28, 29: 2 steps
 }

@@ -144,6 +144,8 @@ TEST(TileResolver, AheadOnThreadsIsTheSameBits) {
     // The longest clip walk: the same item (the first in tile order among equals) on any threads.
     EXPECT_EQ(four.longest_walk.steps, one.longest_walk.steps);
     EXPECT_EQ(four.longest_walk.work, one.longest_walk.work);
+    EXPECT_EQ(four.longest_walk.chain_splits, one.longest_walk.chain_splits);
+    EXPECT_EQ(four.longest_walk.splits, one.longest_walk.splits);
     EXPECT_EQ(four.longest_walk.tile, one.longest_walk.tile);
     EXPECT_EQ(four.longest_walk.setup_index, one.longest_walk.setup_index);
     if (mode != "per_pixel") {
@@ -153,6 +155,11 @@ TEST(TileResolver, AheadOnThreadsIsTheSameBits) {
       EXPECT_GE(w.steps, (w.candidates + 31) / 32);
       EXPECT_GE(w.work, w.steps);
       EXPECT_GE(w.work, w.pieces);
+      // Every piece but the first was cut off by a split; the chain's splits are among them.
+      EXPECT_GE(w.splits, w.pieces - 1);
+      EXPECT_LE(w.chain_splits, w.splits);
+      EXPECT_LE(w.chain_splits, w.steps);
+      EXPECT_LE(w.splits, w.work);
       EXPECT_LE(w.pieces, one.max_tile_pieces);
       EXPECT_GT(w.pieces, 1u) << "the bunny's longest walk splits";
       const auto& cols = vis::TileCounters::columns();
