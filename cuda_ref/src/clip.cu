@@ -528,11 +528,19 @@ enum WalkPhase : uint32_t {
 };
 enum WalkCount : uint32_t { kWalkStepsNoSplit, kWalkStepsSplit, kWalkPieces, kWalkCounts };
 #if defined(TILEVIS_CUDA_WALK_CLOCK)
-__device__ unsigned long long g_walk_clock[kWalkPhases + kWalkCounts];
+inline constexpr uint32_t kWalkSlots = uint32_t(kWalkPhases) + uint32_t(kWalkCounts);
+__device__ unsigned long long g_walk_clock[kWalkSlots];
+__device__ inline unsigned long long walk_now() {
+#if defined(__CUDA_ARCH__)
+  return clock64();
+#else
+  return 0;  // the host pass of nvcc (never run there)
+#endif
+}
 struct WalkClock {
-  unsigned long long last = clock64(), cycles[kWalkPhases] = {}, counts[kWalkCounts] = {};
+  unsigned long long last = walk_now(), cycles[kWalkPhases] = {}, counts[kWalkCounts] = {};
   __device__ void mark(WalkPhase p) {
-    const unsigned long long now = clock64();
+    const unsigned long long now = walk_now();
     cycles[p] += now - last;
     last = now;
   }
@@ -540,7 +548,7 @@ struct WalkClock {
   __device__ void add(bool lead) const {
     if (!lead) return;
     for (uint32_t k = 0; k < kWalkPhases; ++k) atomicAdd(&g_walk_clock[k], cycles[k]);
-    for (uint32_t k = 0; k < kWalkCounts; ++k) atomicAdd(&g_walk_clock[kWalkPhases + k], counts[k]);
+    for (uint32_t k = 0; k < kWalkCounts; ++k) atomicAdd(&g_walk_clock[uint32_t(kWalkPhases) + k], counts[k]);
   }
 };
 #else
@@ -1021,13 +1029,13 @@ bool stage_clip(Pipeline<P>& p) {
 std::vector<std::pair<std::string, uint64_t>> walk_clock_totals() {
   std::vector<std::pair<std::string, uint64_t>> out;
 #if defined(TILEVIS_CUDA_WALK_CLOCK)
-  unsigned long long g[kWalkPhases + kWalkCounts] = {};
+  unsigned long long g[kWalkSlots] = {};
   if (cudaMemcpyFromSymbol(g, g_walk_clock, sizeof(g)) != cudaSuccess) return out;
-  static const char* const names[kWalkPhases + kWalkCounts] = {
+  static const char* const names[kWalkSlots] = {
       "wait_cycles",  "stage_cycles",  "test_no_split_cycles", "test_split_cycles",  "allocate_cycles",
       "split_cycles", "publish_cycles", "step_end_cycles",     "piece_end_cycles",   "steps_no_split",
       "steps_split",  "pieces"};
-  for (uint32_t k = 0; k < kWalkPhases + kWalkCounts; ++k) out.emplace_back(names[k], uint64_t(g[k]));
+  for (uint32_t k = 0; k < kWalkSlots; ++k) out.emplace_back(names[k], uint64_t(g[k]));
 #endif
   return out;
 }
