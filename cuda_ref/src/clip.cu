@@ -704,7 +704,7 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
       // share, split_edge); exact, and longer pieces, with lane `first` alone (exact's wide
       // arithmetic in every lane would spill).
       bool by_warp = false;
-      if constexpr (!P::kExact) by_warp = m <= kSideCap;
+      by_warp = m <= kSideCap;
       // Lane `first` records the split and publishes the outside part, piece `child`, for any warp.
       const auto publish = [&](uint64_t out_slot) {
         ++splits;
@@ -738,14 +738,15 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
       }
       if (__shfl_sync(0xffffffffu, quit, first) != 0) break;  // the block failed: nothing more is kept
       clock.mark(kWalkAllocate);
-      if constexpr (!P::kExact) if (by_warp) {
+      if (by_warp) {
         // Lane `first`'s sides (regularized as split() does, the same in every lane), its line,
         // and each edge's share placed by prefix sums of the counts: split_sides' polygons.
         e_at = __shfl_sync(0xffffffffu, static_cast<unsigned long long>(e_at), first);
         Sides sg;
         sg.pos = __shfl_sync(0xffffffffu, sides.pos, first);
         sg.neg = __shfl_sync(0xffffffffu, sides.neg, first);
-        const bool regular = sg.regularize(m);
+        bool regular = false;
+        if constexpr (!P::kExact) regular = sg.regularize(m);  // exact sides are a convex polygon's
         const typename P::Line& line = a.edges[sidx[ci + first]].line;
         const uint32_t cnt = lane < m ? split_counts(m, sg, lane) : 0u;
         const uint32_t incl = WarpTeam{}.scan(cnt);  // both halves: no carry, 2 x 32 < 2^16
