@@ -409,32 +409,40 @@ void stage_binning(Pipeline<P>& p) {
   a.counters = p.counters.get();
   uint64_t* const big_tris = p.counters.get() + kBigTris;
   uint64_t* const big_edges = p.counters.get() + kBigEdges;
-  // Triangles on the main stream, edges beside them (side stream 0) until cull; the occluder
-  // lists (side 1) until occlusion; the visible-area order (side 2) until the fold.
+  // Triangles on the main stream; edges on side stream 0 (on from the silhouettes, which left
+  // them there) until cull; the occluder lists (side 1) until occlusion; the visible-area order
+  // (side 2) until the fold.
   const uint64_t n_tris = p.N(kSzTris, p.n_tris), n_edges = p.N(kSzEdges, p.n_edges);
   ex.launch(k_bin<P, false, false>, bin_tri_count<P>, n_tris, a, kBinBlock);
   ex.launch_dyn(k_bin_big<P, false, false>, bin_big_host<P>, big_tris, p.n_tris, a, kBinBlock);
   ex.exclusive_scan(a.tri_tiles, p.tri_tiles_off.get(), n_tris, p.n_tris);
-  ex.branch(0);
+  ex.resume(0);
   ex.launch(k_bin<P, true, false>, bin_edge_count<P>, n_edges, a, kBinBlock);
   ex.launch_dyn(k_bin_big<P, true, false>, bin_big_host<P>, big_edges, p.n_edges, a, kBinBlock);
   ex.exclusive_scan(a.edge_tiles, p.edge_tiles_off.get(), n_edges, p.n_edges);
   ex.on_main();
-  ex.merge(0);
-  if (p.dev) {  // the counts stay on the device, within the learned bounds
+  if (p.dev) {  // the counts stay on the device, within the learned bounds: each chain takes its own
     p.n_items = p.caps.items;
     p.n_tile_edges = p.caps.tile_edges;
     const uint64_t ni = p.n_items, ne = p.n_tile_edges;
-    SizeArgs s{p.sizes.get(), 2, {p.tri_tiles_off.get() + p.n_tris, p.edge_tiles_off.get() + p.n_edges},
-               {ni, ne}, 0, kCullLanes,
-               {{p.item_key.need(ni + 1), 0, ni}, {p.occ_key.need(ni + 1), 0, ni}, {p.area_key.need(ni + 1), 0, ni},
-                {p.tedge_key.need(ne + 1), 1, ne}}, 4};
-    queue_take_sizes(ex, s);
+    queue_take_sizes(ex, SizeArgs{p.sizes.get(), 2, {p.tri_tiles_off.get() + p.n_tris, nullptr}, {ni, 0}, 0, 0,
+                                  {{p.item_key.need(ni + 1), 0, ni}, {p.occ_key.need(ni + 1), 0, ni},
+                                   {p.area_key.need(ni + 1), 0, ni}}, 3});
+    const cudaEvent_t items_taken = ex.record();
+    ex.resume(0);
+    ex.wait(items_taken);
+    queue_take_sizes(ex, SizeArgs{p.sizes.get(), 3, {p.edge_tiles_off.get() + p.n_edges, nullptr}, {ne, 0}, 0,
+                                  kCullLanes, {{p.tedge_key.need(ne + 1), 0, ne}}, 1});
+    ex.on_main();
   } else {
-    // sync: the numbers of (tile, triangle) and (tile, edge) pairs.
+    // sync: the numbers of (tile, triangle) and (tile, edge) pairs (host reads on the main
+    // stream: the edges' chain joins it there, and branches off again after).
+    ex.merge(0);
     ex.read_many({{&p.n_items, p.tri_tiles_off.get() + p.n_tris}, {&p.n_tile_edges, p.edge_tiles_off.get() + p.n_edges}});
     Capacities::learn(p.caps.items, p.n_items);
     Capacities::learn(p.caps.tile_edges, p.n_tile_edges);
+    ex.branch(0);
+    ex.on_main();
   }
   if (p.n_items >= 0xffffffffull) throw std::runtime_error("cuda: more than 2^32 - 2 (tile, triangle) pairs");
   const uint64_t n_items = p.N(kSzItems, p.n_items), n_tedges = p.N(kSzTileEdges, p.n_tile_edges);
@@ -450,7 +458,7 @@ void stage_binning(Pipeline<P>& p) {
   const int d = int(p.f.depth_bits);
   uint32_t* item_begin = p.tile_item_begin.need(tiles);
   uint32_t* edge_begin = p.tile_edge_begin.need(tiles);
-  ex.branch(0);
+  ex.resume(0);
   ex.launch(k_bin<P, true, true>, bin_edge_emit<P>, p.N(kSzEdgeEmit, p.n_edges), a, kBinBlock);
   a.emit_gate = p.N(kSzEdgeEmit, p.n_edges);
   ex.launch_dyn(k_bin_big<P, true, true>, bin_big_host<P>, big_edges, p.n_edges, a, kBinBlock);

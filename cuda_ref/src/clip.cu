@@ -3,8 +3,9 @@
 // re-test the current pieces in parallel (32 at a time), and a ballot gives every split piece
 // its slot: the inside part replaces its parent, the outside part is appended in parent order,
 // exactly the order a sequential loop leaves (the canonical piece order). Items with long
-// candidate chains (kLongChain or more) go to a block each instead (k_clip_long): a tree of
-// per-piece walks, a warp each, whose slots are assigned afterwards in the same canonical order.
+// candidate chains (long_chain(n) or more: 12, or 24 with many items) go to a block each
+// instead (k_clip_long): a tree of per-piece walks, a warp each, whose slots are assigned
+// afterwards in the same canonical order.
 //
 // No hand-sized buffers (SVGPU §4.3's failure): piece slots and polygon edges come from pools
 // with device-side bump counters. An item that finds its pool exhausted stops and is counted;
@@ -35,7 +36,7 @@ struct ClipArgs {
   uint64_t cand_cap;  // room in cand_edges / cand_sorted; offsets past it belong to an overflowed run
   uint64_t deep_cap;
   uint32_t* clip_items;
-  uint32_t* long_items;  // the items of kLongChain or more candidates (unordered), listed by cand_scatter
+  uint32_t* long_items;  // the items of long_chain(n) or more candidates (unordered), listed by cand_scatter
   uint32_t* item_slot;
   uint64_t* slot_poly;  // edge offset << 32 | edge count
   uint32_t* slot_item;  // the item of each used slot; kNone in reserved slots left unused
@@ -56,9 +57,35 @@ TV_HD inline bool candidates_overflowed(const ClipArgs<P>& a) {
   return a.counters[kCandidates] > a.cand_cap || a.counters[kDeepPairs] > a.deep_cap;
 }
 
-// Items of kLongChain or more candidates are clipped by a block each (k_clip_long, below, says
-// why 24). The candidate that is an item's kLongChain-th to be scattered lists the item for it.
-inline constexpr uint32_t kLongChain = 24;
+// With at least kSmallMinItems items to clip, items of fewer than kSmallChain candidates are
+// clipped by a thread each in k_clip_items. Million float, with the occlusion cells: 3.58 ms with
+// none, 3.37 below 4, 3.35 below 8, 3.49 below 16 (H200). Exact was slower with it until a step's
+// vertex sides became masks (no local array, no spills): million exact 7.71 ms with none, 6.95
+// below 4, 6.73 below 8, 6.68 below 16 (H100, outputs byte-identical; the scenes of fewer items,
+// which keep a warp each, unchanged). With exact at 8 and kSmallMinItems 4096, dragon_bunnies
+// exact (9,376 items) took 3.35 ms against 3.61, armadillo and glass 1 % more; not taken.
+inline constexpr uint32_t kSmallChain = 8;
+inline constexpr uint32_t kSmallMinItems = 16384;
+
+// Items of long_chain(n) or more candidates are clipped by a block each (k_clip_long, below, says
+// why 24), n being the number of items to clip. The candidate that is an item's long_chain(n)-th
+// to be scattered lists the item for it. With fewer than kSmallMinItems items (every scene at
+// 1080p but million), the longest chains set the stage's length, so shorter ones go to the tree
+// too: 12 against 24 (H200, 2026-11-29, one build, the threshold read at run time, outputs
+// byte-identical, new frame ms): bunny float 0.406 -> 0.371, exact 0.640 -> 0.608; armadillo
+// 0.523 -> 0.506 and 0.834 -> 0.784; glass exact 0.615 -> 0.589; the others within noise (16:
+// armadillo float 0.501, bunny 0.378; 8: no better than 12). Million (45,960 items) keeps 24:
+// float 2.682 ms at 24, 2.779 at 12, 3.031 at 8.
+inline constexpr uint32_t kLongChain = 24, kLongChainFewItems = 12;
+TV_HD inline uint32_t long_chain(uint64_t n_clip_items) {
+  return n_clip_items >= kSmallMinItems ? kLongChain : kLongChainFewItems;
+}
+// The number of items to clip, as k_clip_items and k_clip_long count them (cull lists them).
+template <class P>
+TV_HD inline uint64_t clip_item_count(const ClipArgs<P>& a) {
+  const uint64_t n = a.counters[kClipItems];
+  return n < a.n_items ? n : a.n_items;
+}
 
 template <class P>
 TV_HD void cand_scatter(const ClipArgs<P>& a, uint64_t k) {
@@ -67,7 +94,7 @@ TV_HD void cand_scatter(const ClipArgs<P>& a, uint64_t k) {
   const uint32_t pos = atomic_add(&a.cand_cursor[j], 1u);
   const uint64_t at = uint64_t(a.cand_offset[j]) + pos;
   if (at < a.cand_cap) a.cand_edges[at] = uint32_t(d);
-  if (pos == kLongChain - 1) a.long_items[bump_one(&a.counters[kLongItems], ~uint64_t{0})] = j;
+  if (pos == long_chain(clip_item_count(a)) - 1) a.long_items[bump_one(&a.counters[kLongItems], ~uint64_t{0})] = j;
 }
 
 
@@ -700,11 +727,11 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
       // The inside part, which this warp walks on with, goes to the other stage when it fits
       // (m + 1 edges at most), and to the pool after it; else to the pool alone.
       PEdge<P>* const st = m < kCopyEdges ? ws[b ^ 1u] : nullptr;
-      // Float splits a piece of up to kSideCap edges with the whole warp (lane i makes edge i's
-      // share, split_edge); exact, and longer pieces, with lane `first` alone (exact's wide
-      // arithmetic in every lane would spill).
+      // A piece of up to kSideCap edges is split by the whole warp (lane i makes edge i's share,
+      // split_edge), exact too (measured on an H200: exact slivers 5.8-6.9 % faster than with
+      // lane `first` alone, though its frame spills more); longer pieces by lane `first` alone.
       bool by_warp = false;
-      if constexpr (!P::kExact) by_warp = m <= kSideCap;
+      by_warp = m <= kSideCap;
       // Lane `first` records the split and publishes the outside part, piece `child`, for any warp.
       const auto publish = [&](uint64_t out_slot) {
         ++splits;
@@ -738,14 +765,15 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
       }
       if (__shfl_sync(0xffffffffu, quit, first) != 0) break;  // the block failed: nothing more is kept
       clock.mark(kWalkAllocate);
-      if constexpr (!P::kExact) if (by_warp) {
+      if (by_warp) {
         // Lane `first`'s sides (regularized as split() does, the same in every lane), its line,
         // and each edge's share placed by prefix sums of the counts: split_sides' polygons.
         e_at = __shfl_sync(0xffffffffu, static_cast<unsigned long long>(e_at), first);
         Sides sg;
         sg.pos = __shfl_sync(0xffffffffu, sides.pos, first);
         sg.neg = __shfl_sync(0xffffffffu, sides.neg, first);
-        const bool regular = sg.regularize(m);
+        bool regular = false;
+        if constexpr (!P::kExact) regular = sg.regularize(m);  // exact sides are a convex polygon's
         const typename P::Line& line = a.edges[sidx[ci + first]].line;
         const uint32_t cnt = lane < m ? split_counts(m, sg, lane) : 0u;
         const uint32_t incl = WarpTeam{}.scan(cnt);  // both halves: no carry, 2 x 32 < 2^16
@@ -894,15 +922,6 @@ __global__ void k_cand_scatter(ClipArgs<P> a, const uint64_t* count, uint64_t ca
   TV_GRID_LOOP(i, n) cand_scatter<P>(a, i);
 }
 inline constexpr uint32_t kClipBlock = 128;
-// With at least kSmallMinItems items to clip, items of fewer than kSmallChain candidates are
-// clipped by a thread each in k_clip_items. Million float, with the occlusion cells: 3.58 ms with
-// none, 3.37 below 4, 3.35 below 8, 3.49 below 16 (H200). Exact was slower with it until a step's
-// vertex sides became masks (no local array, no spills): million exact 7.71 ms with none, 6.95
-// below 4, 6.73 below 8, 6.68 below 16 (H100, outputs byte-identical; the scenes of fewer items,
-// which keep a warp each, unchanged). With exact at 8 and kSmallMinItems 4096, dragon_bunnies
-// exact (9,376 items) took 3.35 ms against 3.61, armadillo and glass 1 % more; not taken.
-inline constexpr uint32_t kSmallChain = 8;
-inline constexpr uint32_t kSmallMinItems = 16384;
 
 template <class P>
 __global__ void k_clip_items(ClipArgs<P> a, const uint64_t* count, uint64_t cap) {
@@ -919,6 +938,7 @@ __global__ void k_clip_items(ClipArgs<P> a, const uint64_t* count, uint64_t cap)
   // stage's length there (measured: a thread per small item made glass's clipping 0.161 ->
   // 0.197 ms at 4 candidates, 0.297 at 8, first or after the warps' items).
   const bool threads_first = n >= kSmallMinItems;
+  const uint32_t long_c = long_chain(n);  // n is clip_item_count(a), as cand_scatter counted
   const uint32_t lane = threadIdx.x & 31u;
   if (threads_first && !candidates_overflowed(a)) {  // (overflowed: clip_item returns at once)
     const uint64_t threads = uint64_t(gridDim.x) * blockDim.x;
@@ -930,7 +950,7 @@ __global__ void k_clip_items(ClipArgs<P> a, const uint64_t* count, uint64_t cap)
         c = a.cand_count[j];
         if (uint64_t(a.cand_offset[j]) + c > a.cand_cap) c = kNone;  // clip_item returns at once
       }
-      const bool mine = c < kSmallChain && c < kLongChain;
+      const bool mine = c < kSmallChain && c < long_c;
       const uint64_t want = mine ? tmin<uint64_t>(piece_bound(c), uint64_t(a.slot_factor) * (c + 1)) : 0;
       uint64_t incl = want;
       for (uint32_t d = 1; d < 32; d <<= 1) {
@@ -955,7 +975,7 @@ __global__ void k_clip_items(ClipArgs<P> a, const uint64_t* count, uint64_t cap)
   }
   for (uint64_t w = warp; w < n; w += warps) {
     const uint32_t c = a.cand_count[a.clip_items[w]];
-    if ((!threads_first || c >= kSmallChain) && c < kLongChain) clip_item<P>(a, w, WarpTeam{}, stage[threadIdx.x / 32]);
+    if ((!threads_first || c >= kSmallChain) && c < long_c) clip_item<P>(a, w, WarpTeam{}, stage[threadIdx.x / 32]);
   }
 }
 

@@ -254,6 +254,7 @@ class Exec {
   cudaStream_t stream = nullptr;
   cudaStream_t main_stream = nullptr;
   void branch(int k);
+  void resume(int k);  // back to side k, after the work it holds (a branch still pending: no new fork)
   void on_main();
   void merge(int k);
   void wait_for(int k);  // the stream in use waits for side k's work queued so far

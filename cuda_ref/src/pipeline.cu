@@ -73,6 +73,13 @@ void Exec::branch(int k) {
   m_pending[k] = true;
 }
 
+void Exec::resume(int k) {
+  if (where == Where::cpu) return;
+  if (!m_pending[k]) throw std::logic_error("cuda: resume of a side stream with no pending branch");
+  stream = m_side[k];
+  m_cur = k + 1;
+}
+
 void Exec::on_main() {
   stream = main_stream;
   m_cur = 0;

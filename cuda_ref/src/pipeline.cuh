@@ -69,10 +69,11 @@ enum Counter : uint32_t {
 enum SizeSlot : uint32_t {
   kSzSetup, kSzUses, kSzSetupEmit,                                // after setup's scan
   kSzEdges, kSzTris, kSzFrontBuild, kSzSilScatter,                // after the silhouettes' scans
-  kSzItems, kSzTileEdges, kSzCullLanes, kSzTriEmit, kSzEdgeEmit,  // after binning's scans
+  kSzItems, kSzTriEmit,                                           // after binning's triangle scan
+  kSzTileEdges, kSzEdgeEmit, kSzCullLanes,                        // after its edge scan (and the above)
   kSzOverflow,
   kSzTotals,  // the totals as found, two per stage (for growing the bounds)
-  kSizeSlots = kSzTotals + 6
+  kSizeSlots = kSzTotals + 8
 };
 // The same kernel pads the key lists the stage's sorts will sort: keys from the count to the
 // bound set to all ones (Exec::sort_pairs' padding, done here so that it costs no launch).
@@ -83,7 +84,7 @@ struct SizePad {
 };
 struct SizeArgs {
   uint64_t* sz;
-  uint32_t stage;  // 0 setup, 1 silhouettes, 2 binning
+  uint32_t stage;  // 0 setup, 1 silhouettes, 2 binning's triangles, 3 its edges (after 2's take)
   const uint64_t* total[2];
   uint64_t bound[2];
   uint64_t n_triangles, cull_lanes;
@@ -129,12 +130,17 @@ TV_HD inline void take_sizes(const SizeArgs& a) {
       s[kSzFrontBuild] = k * s[kSzSetup];
       s[kSzSilScatter] = k * s[kSzUses];
       break;
-    default:
+    case 2:
       s[kSzItems] = k * t0;
-      s[kSzTileEdges] = k * t1;
-      s[kSzCullLanes] = k * t0 * a.cull_lanes;
       s[kSzTriEmit] = k * s[kSzTris];
+      break;
+    default:  // the edges' take waits for the triangles' (their chains run side by side until cull)
+      s[kSzTileEdges] = k * t0;
       s[kSzEdgeEmit] = k * s[kSzEdges];
+      // Either bound passed: every count after the chains meet is 0 (the triangle chain's own
+      // kernels may have started with theirs, which fit their buffers).
+      if (over) s[kSzItems] = 0;
+      s[kSzCullLanes] = k * s[kSzItems] * a.cull_lanes;
       break;
   }
 }

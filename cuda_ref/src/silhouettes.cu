@@ -307,26 +307,29 @@ void stage_silhouettes(Pipeline<P>& p) {
     Capacities::learn(p.caps.tris, p.n_tris);
   }
 
-  fa.tris = p.tris.need(p.n_tris + 1);
+  // The silhouette edges on side stream 0, where binning goes on with them (stage_binning
+  // resumes it), beside the front triangles on the main stream and their binning.
   ex.branch(0);
-  ex.launch(k_front_build_block<P>, front_build<P>, p.N(kSzFrontBuild, p.n_setup), fa, kFrontBlock<P>);
-  ex.on_main();
-
   h.sil_key = p.sil_key.need(p.n_edges + 1);
   h.sil_use = p.sil_use.need(p.n_edges + 1);
   h.key_base = p.f.n_vertices + 1;
   ex.launch(k_sil_scatter, sil_scatter, p.N(kSzSilScatter, uses), h);
-  ex.branch(1);
-  ex.zero(h.slots, cap * sizeof(HashSlot));
-  ex.on_main();
-  p.hash_clean_at = h.slots;
-  p.hash_clean = cap;
+  const cudaEvent_t scattered = ex.record();  // the table's last use
   const int end_bit = int(bits_for(h.key_base * h.key_base - 1));  // below 2^64: vertices < 2^32 - 1
   ex.sort_pairs(h.sil_key, p.sil_key_sorted.need(p.n_edges + 1), h.sil_use, p.sil_use_sorted.need(p.n_edges + 1),
                 p.N(kSzEdges, p.n_edges), end_bit, p.n_edges, true);
   EdgeArgs<P> ea{p.setup.get(), p.sil_use_sorted.get(), p.edges.need(p.n_edges + 1)};
   ex.launch(k_build_edge<P>, build_edge<P>, p.N(kSzEdges, p.n_edges), ea);
-  ex.merge(0);
+  ex.on_main();
+
+  fa.tris = p.tris.need(p.n_tris + 1);
+  ex.launch(k_front_build_block<P>, front_build<P>, p.N(kSzFrontBuild, p.n_setup), fa, kFrontBlock<P>);
+  ex.branch(1);
+  ex.wait(scattered);
+  ex.zero(h.slots, cap * sizeof(HashSlot));
+  ex.on_main();
+  p.hash_clean_at = h.slots;
+  p.hash_clean = cap;
 }
 
 template void stage_silhouettes<ExactP>(Pipeline<ExactP>&);
