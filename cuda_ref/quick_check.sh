@@ -111,6 +111,7 @@ PY
         [ "$4" = 1 ] || n="${n}_pass$4"
         echo "$n"
       }
+      compared=0 differ=0
       for pass in $(seq 1 "${TILEVIS_QUICK_PASSES:-1}"); do
         for s in ${TILEVIS_QUICK_SCENES:-bunny million slivers}; do
           for p in ${TILEVIS_QUICK_PRECISIONS:-float exact}; do
@@ -132,7 +133,9 @@ PY
               other="$(run_name "$s" "$p" "$v" "$pass")"
               for f in ids.exr tiles.csv visible_area.bin; do
                 [ -f "/tmp/quick/$first/$f" ] || continue
-                cmp -s "/tmp/quick/$first/$f" "/tmp/quick/$other/$f" || say "OUTPUT DIFFERS: $other/$f against $first/$f"
+                compared=$((compared + 1))
+                cmp -s "/tmp/quick/$first/$f" "/tmp/quick/$other/$f" ||
+                  { differ=$((differ + 1)); say "OUTPUT DIFFERS: $other/$f against $first/$f"; }
               done
             done
           done
@@ -162,6 +165,8 @@ PY
         gl_args=()
         [ -f "$OUT/gl.json" ] && gl_args=(--gl "$OUT/gl.json")
         python3 cuda_ref/tools/bench_table.py "$OUT/bench.json" --variants "$names" "${gl_args[@]}"
+        # Last, so that a caller reading only the tail of the output still sees it.
+        say "outputs against the first variant: $compared files compared, $differ differ"
       fi
       ;;
     pack)
