@@ -13,6 +13,7 @@
 #include <cub/device/device_scan.cuh>
 
 #include "geom/tile_grid.h"
+#include "sort_probe.h"
 #include "tilevis/fnv1a.h"
 #include "pieces.cuh"
 
@@ -413,6 +414,30 @@ void Exec::sort_pairs(const uint64_t* keys_in, uint64_t* keys_out, const uint32_
   TV_CUDA(cub::DeviceRadixSort::SortPairs(nullptr, bytes, keys_in, keys_out, vals_in, vals_out, n, 0, end_bit, stream));
   void* t = temp(bytes);
   TV_CUDA(cub::DeviceRadixSort::SortPairs(t, bytes, keys_in, keys_out, vals_in, vals_out, n, 0, end_bit, stream));
+}
+
+void sort_pairs_probe(bool gpu, std::vector<uint64_t>& keys, std::vector<uint32_t>& vals, int end_bit, uint64_t count) {
+  if (vals.size() != keys.size()) throw std::invalid_argument("sort_pairs_probe: as many values as keys");
+  Exec ex(gpu ? Where::gpu : Where::cpu, false);
+  const uint64_t n = keys.size();
+  auto* k = static_cast<uint64_t*>(ex.alloc((n + 1) * 8));
+  auto* ko = static_cast<uint64_t*>(ex.alloc((n + 1) * 8));
+  auto* v = static_cast<uint32_t*>(ex.alloc((n + 1) * 4));
+  auto* vo = static_cast<uint32_t*>(ex.alloc((n + 1) * 4));
+  ex.upload(k, keys.data(), n * 8);
+  ex.upload(v, vals.data(), n * 4);
+  uint64_t n_arg = n;
+  if (count < n) {  // the count after the keys, as a device-sized run's sizes hold it
+    ex.upload(k + n, &count, 8);
+    n_arg = dev_count(k + n, n);
+  }
+  ex.sort_pairs(k, ko, v, vo, n_arg, end_bit, n);
+  ex.download(keys.data(), ko, n * 8);
+  ex.download(vals.data(), vo, n * 4);
+  ex.release(k, (n + 1) * 8);
+  ex.release(ko, (n + 1) * 8);
+  ex.release(v, (n + 1) * 4);
+  ex.release(vo, (n + 1) * 4);
 }
 
 // ---- the run -------------------------------------------------------------------------------

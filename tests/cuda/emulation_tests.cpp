@@ -6,6 +6,7 @@
 
 #include "compare.h"
 #include "scenes.h"
+#include "sort_check.h"
 #if TILEVIS_HAVE_SCENE
 #include <filesystem>
 #include "tilevis/scene.h"
@@ -164,6 +165,9 @@ TEST(Emulation, DeviceSizedRunPastItsBoundsRunsAgain) {
     }
   }
 }
+
+// Exec::sort_pairs's host path (and the padding of a device count), by the GPU test's check.
+TEST(Emulation, SortPairsIsStableByTheKeysLowBits) { ct::check_sort_pairs(false); }
 
 TEST(Emulation, RejectsBadConfig) {
   const trace::Frame f = ct::scene("cubes");

@@ -8,6 +8,7 @@
 
 #include "compare.h"
 #include "scenes.h"
+#include "sort_check.h"
 
 using namespace tilevis;
 namespace ct = tilevis::cudatest;
@@ -83,6 +84,12 @@ TEST(Gpu, SameAsHostEmulation) {
     EXPECT_EQ(gpu.tiles, cpu.tiles) << name;
     EXPECT_EQ(gpu.visible_area, cpu.visible_area) << name;
   }
+}
+
+// Exec::sort_pairs, every path it takes by size (sort_check.h).
+TEST(Gpu, SortPairsIsStableByTheKeysLowBits) {
+  REQUIRE_GPU();
+  ct::check_sort_pairs(true);
 }
 
 TEST(Gpu, DeterministicAcrossRuns) {
