@@ -314,11 +314,18 @@ sanitize_one() {
   shift 3
   while [ "$1" != "--" ]; do opts+=("$1"); shift; done
   shift
+  # Phases resume: a check filed by an earlier call (one its time limit cut short) is not run again.
+  if grep -qF "$tool $label: " "$WORK/meta/sanitizer.txt.tmp" 2>/dev/null; then
+    say "$tool $label: filed earlier"
+    return
+  fi
   timeout "${TILEVIS_SANITIZE_TIMEOUT:-300}" compute-sanitizer --tool "$tool" "${opts[@]}" --error-exitcode 3 "$@" \
     >"$log" 2>&1 || rc=$?
   line="$(grep -E "ERROR SUMMARY|RACECHECK SUMMARY" "$log" | tail -n 1 || true)"
   [ "$rc" = 124 ] && line="did not finish in ${TILEVIS_SANITIZE_TIMEOUT:-300} s"
   echo "$tool $label: ${line:-no summary} (exit $rc)" >>"$WORK/meta/sanitizer.txt.tmp"
+  # Filed as it goes, so that a call's time limit loses no finished check (the report reads this).
+  paste -sd ';' "$WORK/meta/sanitizer.txt.tmp" >"$WORK/meta/sanitizer.txt"
   say "$tool $label: ${line:-no summary} (exit $rc)"
 }
 
@@ -328,7 +335,7 @@ phase_sanitize() {
   # k_clip_long: .gpu/tiny/teapot_stadium_320x240.tvt).
   local small="${TILEVIS_SANITIZE_TRACE:-$TRACES/small/dragon_320x240.tvt}" tool p
   command -v compute-sanitizer >/dev/null || { echo "compute-sanitizer not found" >"$WORK/meta/sanitizer.txt"; return; }
-  : >"$WORK/meta/sanitizer.txt.tmp"
+  touch "$WORK/meta/sanitizer.txt.tmp"  # kept: the checks it lists are not run again
   export TILEVIS_CUDA_NO_LAUNCH_PROBE=1  # no launch-cost probe (2,300 empty launches) under the tools
   # TILEVIS_SANITIZE_ONLY: "tool:what ..." (what: a precision below, clip_long_exact,
   # clip_long_float or dev_overflow) narrows the runs.

@@ -66,6 +66,7 @@ int main(int argc, char** argv) {
   json report = {{"device", device}, {"commit", commit}, {"entries", json::array()}, {"meta", json::object()}};
   if (fs::exists(work / "meta"))
     for (const auto& e : fs::directory_iterator(work / "meta")) {
+      if (e.path().extension() != ".txt") continue;  // a phase's working file (sanitizer.txt.tmp)
       std::ifstream in(e.path());
       std::stringstream ss;
       ss << in.rdbuf();
