@@ -546,9 +546,9 @@ enum WalkPhase : uint32_t {
   kWalkStage,       // copying it into the warp's stage
   kWalkTestNoSplit, // a step's tests where no candidate survives
   kWalkTestSplit,   // a step's tests where one does
-  kWalkAllocate,    // lane `first`'s piece id and edges (exact: and its one-lane split and publication)
-  kWalkSplit,       // the warp's split (float)
-  kWalkPublish,     // the fence and the outside part's publication (float), the inside part handed on
+  kWalkAllocate,    // lane `first`'s piece id and edges (a piece past kSideCap: and its one-lane split and publication)
+  kWalkSplit,       // the warp's split
+  kWalkPublish,     // the fence and the outside part's publication (the warp's split), the inside part handed on
   kWalkStepEnd,     // the inside part kept in the pool, the next step set up
   kWalkPieceEnd,    // the piece's final polygon recorded
   kWalkPhases
@@ -730,8 +730,7 @@ __device__ void clip_item_tree(const ClipArgs<P>& a, uint32_t j, uint64_t want, 
       // A piece of up to kSideCap edges is split by the whole warp (lane i makes edge i's share,
       // split_edge), exact too (measured on an H200: exact slivers 5.8-6.9 % faster than with
       // lane `first` alone, though its frame spills more); longer pieces by lane `first` alone.
-      bool by_warp = false;
-      by_warp = m <= kSideCap;
+      const bool by_warp = m <= kSideCap;
       // Lane `first` records the split and publishes the outside part, piece `child`, for any warp.
       const auto publish = [&](uint64_t out_slot) {
         ++splits;
