@@ -8,7 +8,6 @@
 #include <iterator>
 #include <numeric>
 
-#include <cub/block/block_radix_sort.cuh>
 #include <cub/device/device_radix_sort.cuh>
 #include <cub/device/device_scan.cuh>
 
@@ -265,31 +264,50 @@ __global__ void k_pad_keys(uint64_t* keys, uint64_t n, uint64_t bound) {
     keys[i] = ~uint64_t{0};
 }
 
-// A sort of at most kSmallSort pairs in one block (cub::BlockRadixSort, stable like the device
-// sort): one launch where CUB's device sort takes a histogram, a scan and a pass per digit once
-// the pairs outgrow its single tile (a device-sized run's bound can, where the count would not:
-// the bunny's silhouette edges, 6 launches and about 30 us more, measured with Nsight Compute).
-constexpr uint32_t kSmallSortThreads = 256, kSmallSortItems = 16, kSmallSort = kSmallSortThreads * kSmallSortItems;
-__global__ void __launch_bounds__(kSmallSortThreads)
-    k_sort_small(const uint64_t* keys_in, uint64_t* keys_out, const uint32_t* vals_in, uint32_t* vals_out, uint32_t n,
-                 int end_bit) {
+// A sort of at most kRankSort pairs by counting, in one launch over the whole GPU: an
+// element's place is the number of keys (their bits below end_bit) under its own plus the equal
+// keys before it, so the order is the stable one CUB's sorts give. A block places kRankPer
+// elements; its threads count in kRankParts interleaved parts of every key (a warp's lanes read
+// the same key, broadcast from shared memory), summed at the end. n^2 comparisons: for the few
+// thousand pairs of the silhouette and tile-edge lists, one launch instead of CUB's histogram,
+// scan and pass per digit (about 9 us each on an H200 with Nsight Compute, armadillo's 5,374
+// silhouette edges: 5 passes), or the one block of the cub::BlockRadixSort it replaces (24 us
+// for elephant's). Limit 8,192, measured on an H200 (new frame, 15 scenes, 5 runs) against
+// 4,096 and 16,384 and against that block sort up to 4,096 with CUB above: armadillo float
+// 0.499 -> 0.423 ms, exact 0.772 -> 0.703, decals float -9 %, dragon -6 to -8 %; 4,096 does
+// not reach armadillo's lists and 16,384 gains nothing more.
+constexpr uint32_t kRankThreads = 256, kRankParts = 8, kRankPer = kRankThreads / kRankParts, kRankTile = 2048;
+constexpr uint32_t kRankSort = 8192;
+__global__ void __launch_bounds__(kRankThreads)
+    k_sort_rank(const uint64_t* keys_in, uint64_t* keys_out, const uint32_t* vals_in, uint32_t* vals_out, uint32_t n,
+                uint64_t mask) {
   TV_KERNEL_WAIT();
-  using Sort = cub::BlockRadixSort<uint64_t, kSmallSortThreads, kSmallSortItems, uint32_t>;
-  __shared__ typename Sort::TempStorage tmp;
-  uint64_t k[kSmallSortItems];
-  uint32_t v[kSmallSortItems];
-  for (uint32_t j = 0; j < kSmallSortItems; ++j) {  // blocked: thread t holds items t * kSmallSortItems + j
-    const uint32_t i = threadIdx.x * kSmallSortItems + j;
-    k[j] = i < n ? keys_in[i] : ~uint64_t{0};  // past n: after every pair (stable, and last in input)
-    v[j] = i < n ? vals_in[i] : 0u;
+  __shared__ uint64_t tile[kRankTile];
+  __shared__ uint32_t parts[kRankParts][kRankPer];
+  const uint32_t slot = threadIdx.x % kRankPer, part = threadIdx.x / kRankPer;
+  const uint32_t e = blockIdx.x * kRankPer + slot;
+  const uint64_t ke = e < n ? keys_in[e] & mask : 0;
+  uint32_t before = 0;
+  for (uint32_t t0 = 0; t0 < n; t0 += kRankTile) {
+    const uint32_t m = n - t0 < kRankTile ? n - t0 : kRankTile;
+    __syncthreads();  // every thread is done with the last tile
+    for (uint32_t k = threadIdx.x; k < m; k += kRankThreads) tile[k] = keys_in[t0 + k] & mask;
+    __syncthreads();
+    // Keys before e count when not above its own, keys from e on when below it (e itself: not).
+    const uint32_t split = e <= t0 ? 0u : e - t0 < m ? e - t0 : m;
+    uint32_t k = part;
+#pragma unroll 4
+    for (; k < split; k += kRankParts) before += tile[k] <= ke;
+#pragma unroll 4
+    for (; k < m; k += kRankParts) before += tile[k] < ke;
   }
-  Sort(tmp).Sort(k, v, 0, end_bit);
-  for (uint32_t j = 0; j < kSmallSortItems; ++j) {
-    const uint32_t i = threadIdx.x * kSmallSortItems + j;
-    if (i < n) {
-      keys_out[i] = k[j];
-      vals_out[i] = v[j];
-    }
+  parts[part][slot] = before;
+  __syncthreads();
+  if (part == 0 && e < n) {
+    uint32_t r = 0;
+    for (uint32_t q = 0; q < kRankParts; ++q) r += parts[q][slot];
+    keys_out[r] = keys_in[e];
+    vals_out[r] = vals_in[e];
   }
 }
 
@@ -405,8 +423,10 @@ void Exec::sort_pairs(const uint64_t* keys_in, uint64_t* keys_out, const uint32_
     }
     return;
   }
-  if (n <= kSmallSort) {
-    k_sort_small<<<1, kSmallSortThreads, 0, stream>>>(keys_in, keys_out, vals_in, vals_out, uint32_t(n), end_bit);
+  if (n <= kRankSort) {
+    const uint64_t mask = end_bit >= 64 ? ~uint64_t{0} : (uint64_t{1} << end_bit) - 1;
+    k_sort_rank<<<uint32_t((n + kRankPer - 1) / kRankPer), kRankThreads, 0, stream>>>(keys_in, keys_out, vals_in,
+                                                                                     vals_out, uint32_t(n), mask);
     TV_CUDA(cudaGetLastError());
     return;
   }
