@@ -17,6 +17,8 @@
 // z-buffer (the other per-tile counters are 0, as golden's per_pixel resolver leaves them);
 // their triangles' visible areas are the owned samples times a sample's share of a pixel,
 // added one sample at a time in the fold (golden's order of additions).
+#include <cstdlib>
+
 #include "pieces.cuh"
 
 namespace tilevis::cuda {
@@ -43,6 +45,7 @@ struct HybArgs {
   uint8_t* flag;     // per occluder position: in some crossing pair (count_all)
   uint4* active;     // per warp and occluder position: a detection bin's active members (scratch)
   uint64_t active_stride;  // positions per warp's share of `active`
+  uint32_t det_warps;
   uint64_t* batch;   // per tile and warp, 64 words: the pairs waiting for the exact test (scratch)
   uint64_t* bin_counts;    // per tile and detection bin: screens and tests (GPU scratch)
   uint32_t bins_per_tile;
@@ -154,7 +157,16 @@ struct Bins {
 // GPU a block takes a tile and its warps take the bins (bin_sweep, below); the host sweeps
 // them in order.
 
-inline constexpr uint32_t kDetWarps = 4;  // warps of a tile's block on the GPU (the bins shared out)
+// Warps of a tile's block on the GPU (the bins shared out). MEASURING KNOB (not for main):
+// TILEVIS_DET_WARPS=4, 8 or 16.
+inline uint32_t det_warps() {
+  static const uint32_t w = [] {
+    const char* v = std::getenv("TILEVIS_DET_WARPS");
+    const uint32_t n = v ? uint32_t(std::strtoul(v, nullptr, 10)) : 4u;
+    return n == 8 || n == 16 ? n : 4u;
+  }();
+  return w;
+}
 
 // A tile as the detector sees it: its occluder list (nearest z_min first) and its bins.
 template <class P>
@@ -332,13 +344,6 @@ TV_HD void write_verdict(const HybArgs<P>& a, uint64_t tile, uint32_t cause, uin
   a.screens[tile] = screens;
   a.tests[tile] = tests;
   a.crossing[tile] = crossing;
-  if (cause != 0) {  // a per-pixel tile: its parts add their samples (k_per_pixel)
-    int64_t* r = a.rows + tile * kTileColumns;
-    for (int c : {kColPairTests, kColCandidates, kColClips, kColPieces, kColVisiblePieces, kColOcclusionTests,
-                  kColSamplesCovered, kColFragments})
-      r[c] = 0;
-    a.shaded[tile] = 0;
-  }
 }
 
 template <class P>
@@ -349,7 +354,7 @@ TV_HD void verdict_host(const HybArgs<P>& a, uint64_t tile) {
     const DetTile<P> d = det_tile(a, uint32_t(tile));
     det_positions(a, d, 0, 1);
     uint4* act = a.active + d.base;
-    uint64_t* bpair = a.batch + tile * kDetWarps * 2 * WarpTeam::kSize;
+    uint64_t* bpair = a.batch + tile * a.det_warps * 2 * WarpTeam::kSize;
     for (uint32_t b = 0; b < d.g.x * d.g.y && cause == 0; ++b) {
       uint64_t s = 0, t = 0;
       if (bin_sweep(a, d, b % d.g.x, b / d.g.x, false, act, bpair, s, t, HostTeam{})) cause = 1;
@@ -367,12 +372,12 @@ TV_HD void verdict_host(const HybArgs<P>& a, uint64_t tile) {
   write_verdict(a, tile, cause, screens, tests, crossing);
 }
 
-// A block per tile; its warps take the tile's bins w, w + kDetWarps, ..., each with its own
+// A block per tile; its W warps take the tile's bins w, w + W, ..., each with its own
 // active list and batch. A warp stops at its first crossing bin, or when another warp has
 // found one in an earlier bin (the bins after the first crossing one are not counted); the
 // bins' counts are summed up to the first crossing bin once every warp is done.
-template <class P>
-__global__ void __launch_bounds__(kDetWarps * 32) k_verdict(HybArgs<P> a, uint64_t n_tiles) {
+template <class P, uint32_t W>
+__global__ void __launch_bounds__(W * 32) k_verdict(HybArgs<P> a, uint64_t n_tiles) {
   TV_KERNEL_WAIT();
   __shared__ uint32_t first;  // the first bin (row-major) with a crossing; ~0: none
   __shared__ uint32_t found;
@@ -392,9 +397,9 @@ __global__ void __launch_bounds__(kDetWarps * 32) k_verdict(HybArgs<P> a, uint64
     det_positions(a, d, threadIdx.x, blockDim.x);
     __syncthreads();
     uint4* act = a.active + uint64_t(w) * a.active_stride + d.base;
-    uint64_t* bpair = a.batch + (tile * kDetWarps + w) * 2 * WarpTeam::kSize;
+    uint64_t* bpair = a.batch + (tile * W + w) * 2 * WarpTeam::kSize;
     uint64_t* counts = a.bin_counts + tile * a.bins_per_tile * 2;
-    for (uint32_t b = w; b < nbins; b += kDetWarps) {
+    for (uint32_t b = w; b < nbins; b += W) {
       const uint32_t seen = __shfl_sync(0xffffffffu, lane == 0 ? atomicAdd(&first, 0u) : 0u, 0);
       if (b > seen) break;  // an earlier bin has a crossing (one value for the whole warp)
       uint64_t s = 0, t = 0;
@@ -409,7 +414,7 @@ __global__ void __launch_bounds__(kDetWarps * 32) k_verdict(HybArgs<P> a, uint64
     __syncthreads();
     const uint32_t f = first;
     if (f != ~0u) {  // the crossing triangles, over every bin
-      for (uint32_t b = w; b < nbins; b += kDetWarps) {
+      for (uint32_t b = w; b < nbins; b += W) {
         uint64_t s = 0, t = 0;
         bin_sweep(a, d, b % d.g.x, b / d.g.x, true, act, bpair, s, t, WarpTeam{});
       }
@@ -506,6 +511,17 @@ TV_HD void finish_sample(const HybArgs<P>& a, int64_t px, int64_t py, uint32_t k
   if (o.item >= 0) atomic_add(&a.owned[o.item], 1u);
 }
 
+// A per-pixel tile's row: the analytic stages ran beside the verdicts and counted in it too;
+// golden's per_pixel resolver leaves those counters 0.
+template <class P>
+TV_HD void finish_tile_row(const HybArgs<P>& a, uint64_t tile, uint64_t covered, uint64_t generated, uint64_t shaded) {
+  int64_t* r = a.rows + tile * kTileColumns;
+  for (int c : {kColPairTests, kColCandidates, kColClips, kColPieces, kColVisiblePieces, kColOcclusionTests}) r[c] = 0;
+  r[kColSamplesCovered] = int64_t(covered);
+  r[kColFragments] = int64_t(generated);
+  a.shaded[tile] = covered + shaded;
+}
+
 // Host emulation of a per-pixel tile.
 template <class P>
 TV_HD void per_pixel_tile(const HybArgs<P>& a, uint64_t tile) {
@@ -540,82 +556,187 @@ TV_HD void per_pixel_tile(const HybArgs<P>& a, uint64_t tile) {
     }
     finish_sample(a, px, py, k, o);
   }
-  row[kColSamplesCovered] = int64_t(covered);
-  row[kColFragments] = int64_t(generated);
-  a.shaded[tile] = covered + shaded;
+  finish_tile_row(a, tile, covered, generated, shaded);
 }
 
-constexpr uint32_t kPixBlock = 256, kPixChunk = 32;
+// ---- per-pixel tiles on the GPU: a block per tile, triangles drawn into owner words ----------
+//
+// While a tile is drawn, its samples' entries of the id buffer hold the owning item (-1: none).
+// A thread draws an item over the samples its box may cover (a few for the sub-pixel triangles
+// of an overloaded tile); an item whose box spans more than kPixBig samples is queued and drawn
+// by the whole block. An opaque item takes a covered sample's owner word by compare-and-swap
+// when it is nearer, or as near and earlier in the tile's list: golden's loop over the list
+// keeps the first of the nearest (it replaces only on strictly nearer), and that order is total,
+// so the merge is order-free. Then non-opaque items count the samples they shade (cause 2), and
+// each sample's owner becomes its id. (The former kernel gave each thread a sample and walked the
+// tile's whole list for it: slivers float 0.90 ms on the H200 for tiles of thousands of dust
+// triangles, Nsight Compute.)
+constexpr uint32_t kPixThreads = 256, kPixBig = 64, kPixQueue = 1024;
 
-// A block per kPixBlock samples of a per-pixel tile (its parts spread over the SMs: a few
-// tiles of thousands of triangles must not wait on one SM each). The tile's counters were set
-// to 0 by its verdict; the parts add to them (integers: the order does not matter).
+// The pixels of the tile whose samples may lie in a closed sub-pixel box: a sample of pixel p
+// lies in [p << sb, (p + 1) << sb).
+struct PixSpan {
+  int64_t x0, y0, x1, y1;  // inclusive; empty where x0 > x1 or y0 > y1
+  TV_HD uint64_t samples(uint32_t n_samples) const {
+    return x0 > x1 || y0 > y1 ? 0 : uint64_t(x1 - x0 + 1) * uint64_t(y1 - y0 + 1) * n_samples;
+  }
+};
+
 template <class P>
-__global__ void __launch_bounds__(kPixBlock) k_per_pixel(HybArgs<P> a, uint64_t n_tiles, uint32_t parts) {
+TV_HD inline PixSpan pix_span(const HybArgs<P>& a, const Rect& box, const PixSpan& tile) {
+  const int sb = int(a.grid.sb);
+  return {tmax<int64_t>(tile.x0, int64_t(box.x0) >> sb), tmax<int64_t>(tile.y0, int64_t(box.y0) >> sb),
+          tmin<int64_t>(tile.x1, int64_t(box.x1) >> sb), tmin<int64_t>(tile.y1, int64_t(box.y1) >> sb)};
+}
+
+template <class P>
+TV_HD inline PixSpan tile_pixels(const HybArgs<P>& a, uint64_t tile) {
+  const uint32_t tx = uint32_t(tile % a.grid.tiles_x), ty = uint32_t(tile / a.grid.tiles_x);
+  const int64_t x0 = int64_t(tx) * a.grid.tile_w, y0 = int64_t(ty) * a.grid.tile_h;
+  return {x0, y0, tmin<int64_t>(x0 + a.grid.tile_w, a.width) - 1, tmin<int64_t>(y0 + a.grid.tile_h, a.height) - 1};
+}
+
+// Sample u of a span, row-major pixels, samples within a pixel.
+TV_HD inline void span_sample(const PixSpan& sp, uint32_t n_samples, uint64_t u, int64_t& px, int64_t& py,
+                              uint32_t& k) {
+  const uint64_t w = uint64_t(sp.x1 - sp.x0 + 1);
+  k = uint32_t(u % n_samples);
+  px = sp.x0 + int64_t((u / n_samples) % w);
+  py = sp.y0 + int64_t((u / n_samples) / w);
+}
+
+template <class P>
+TV_HD inline Pt sample_pt(const HybArgs<P>& a, int64_t px, int64_t py, uint32_t k) {
+  const uint32_t sxy = a.sample_xy[k];
+  return {int32_t((px << a.grid.sb) + (sxy & 0xffffu)), int32_t((py << a.grid.sb) + (sxy >> 16))};
+}
+
+template <class P>
+TV_HD inline exact::Plane exact_plane(const TileTri<P>& t) {
+  if constexpr (P::kExact) return t.plane;
+  else return exact::plane_of(t.v[0], t.v[1], t.v[2]);
+}
+
+// Item t at sample (px, py, k): coverage, and for an opaque item the owner word.
+template <class P>
+__device__ inline void draw_sample(const HybArgs<P>& a, const PTri& t, int64_t px, int64_t py, uint32_t k,
+                                   uint32_t& generated) {
+  const Pt s = sample_pt(a, px, py, k);
+  if (!covers(t, s)) return;
+  ++generated;
+  if (!t.opaque) return;
+  int* const w = reinterpret_cast<int*>(a.ids) + (uint64_t(py) * a.width + uint64_t(px)) * a.n_samples + k;
+  int cur = atomicAdd(w, 0);
+  for (;;) {
+    if (cur >= 0) {
+      const int d = sample_depth_order(t.plane, exact_plane(a.tris[a.item_tri[cur]]), s);
+      if (d > 0 || (d == 0 && uint32_t(cur) < t.item)) return;  // the owner stays
+    }
+    const int seen = atomicCAS(w, cur, int(t.item));
+    if (seen == cur) return;
+    cur = seen;
+  }
+}
+
+// Non-opaque item t at sample (px, py, k), the owners drawn: shaded where it covers the sample
+// in front of its owner (per_pixel_resolver.cpp; at 1 sample a pixel is a sample).
+template <class P>
+__device__ inline uint32_t shades(const HybArgs<P>& a, const PTri& t, int64_t px, int64_t py, uint32_t k) {
+  const Pt s = sample_pt(a, px, py, k);
+  if (!covers(t, s)) return 0;
+  const int o = a.ids[(uint64_t(py) * a.width + uint64_t(px)) * a.n_samples + k];
+  return o < 0 || sample_depth_order(t.plane, exact_plane(a.tris[a.item_tri[o]]), s) < 0 ? 1u : 0u;
+}
+
+template <class P>
+__global__ void __launch_bounds__(kPixThreads) k_per_pixel(HybArgs<P> a, uint64_t n_tiles) {
   TV_KERNEL_WAIT();
-  __shared__ PTri staged[kPixChunk];
+  __shared__ PTri big;
+  __shared__ uint32_t queue[kPixQueue];
+  __shared__ uint32_t n_queued;
   __shared__ unsigned long long sums[3];
-  for (uint64_t job = blockIdx.x; job < n_tiles * parts; job += gridDim.x) {
-    const uint64_t tile = job / parts;
-    if (a.cause[tile] == 0) continue;  // uniform over the block
-    int64_t* row = a.rows + tile * kTileColumns;
-    const uint32_t begin = a.item_begin[tile], n = uint32_t(row[kColTriangles]);
-    if (threadIdx.x == 0) sums[0] = sums[1] = sums[2] = 0;
-    uint32_t covered = 0, generated = 0, shaded = 0;
-    int64_t px = 0, py = 0;
-    uint32_t k = 0;
-    const bool mine = tile_sample(a, uint32_t(tile), uint32_t(job % parts) * kPixBlock + threadIdx.x, px, py, k);
-    Pt s{0, 0};
-    if (mine) {
-      const uint32_t sxy = a.sample_xy[k];
-      s = {int32_t((px << a.grid.sb) + (sxy & 0xffffu)), int32_t((py << a.grid.sb) + (sxy >> 16))};
+  const uint32_t S = a.n_samples;
+  for (uint64_t tile = blockIdx.x; tile < n_tiles; tile += gridDim.x) {
+    const uint32_t cause = a.cause[tile];
+    if (cause == 0) continue;  // uniform over the block
+    const uint32_t begin = a.item_begin[tile], n = uint32_t(a.rows[tile * kTileColumns + kColTriangles]);
+    const PixSpan tp = tile_pixels(a, tile);
+    const uint64_t n_tile = tp.samples(S);
+    if (threadIdx.x == 0) {
+      n_queued = 0;
+      sums[0] = sums[1] = sums[2] = 0;
     }
-    POwner o;
-    exact::Plane owner_plane{};
-    for (uint32_t c = 0; c < n; c += kPixChunk) {
-      const uint32_t m = tmin(kPixChunk, n - c);
-      __syncthreads();
-      if (threadIdx.x < m) staged[threadIdx.x] = ptri_of(a, begin + c + threadIdx.x);
-      __syncthreads();
-      if (mine)
-        for (uint32_t j = 0; j < m; ++j) {
-          const int64_t before = o.item;
-          test(staged[j], s, o, generated);
-          if (o.item != before) {
-            owner_plane = staged[j].plane;
-            o.plane = &owner_plane;
-          }
+    for (uint64_t u = threadIdx.x; u < n_tile; u += blockDim.x) {
+      int64_t px, py;
+      uint32_t k;
+      span_sample(tp, S, u, px, py, k);
+      a.ids[(uint64_t(py) * a.width + uint64_t(px)) * S + k] = -1;
+    }
+    __syncthreads();
+    uint32_t generated = 0, covered = 0, shaded = 0;
+    for (uint32_t i = threadIdx.x; i < n; i += blockDim.x) {
+      const PTri t = ptri_of(a, begin + i);
+      const PixSpan sp = pix_span(a, t.bbox, tp);
+      const uint64_t m = sp.samples(S);
+      if (m > kPixBig) {
+        const uint32_t q = atomicAdd(&n_queued, 1u);
+        if (q < kPixQueue) {
+          queue[q] = begin + i;
+          continue;
         }
-    }
-    // Non-opaque triangles (cause 2: the tile has some) are shaded where they cover the sample
-    // in front of its owner (per_pixel_resolver.cpp; at 1 sample a pixel is a sample).
-    if (a.cause[tile] == 2)
-      for (uint32_t c = 0; c < n; c += kPixChunk) {
-        const uint32_t m = tmin(kPixChunk, n - c);
-        __syncthreads();
-        if (threadIdx.x < m) staged[threadIdx.x] = ptri_of(a, begin + c + threadIdx.x);
-        __syncthreads();
-        if (mine)
-          for (uint32_t j = 0; j < m; ++j)
-            if (!staged[j].opaque && covers(staged[j], s) &&
-                (o.item < 0 || sample_depth_order(staged[j].plane, owner_plane, s) < 0))
-              ++shaded;
       }
-    if (mine) {
-      covered += o.item >= 0 ? 1 : 0;
-      finish_sample(a, px, py, k, o);
+      for (uint64_t u = 0; u < m; ++u) {
+        int64_t px, py;
+        uint32_t k;
+        span_sample(sp, S, u, px, py, k);
+        draw_sample(a, t, px, py, k, generated);
+      }
     }
-    __syncthreads();  // sums zeroed before any adds
+    __syncthreads();
+    const uint32_t nq = tmin(n_queued, kPixQueue);
+    for (uint32_t q = 0; q < nq; ++q) {
+      if (threadIdx.x == 0) big = ptri_of(a, queue[q]);
+      __syncthreads();
+      const PixSpan sp = pix_span(a, big.bbox, tp);
+      for (uint64_t u = threadIdx.x; u < sp.samples(S); u += blockDim.x) {
+        int64_t px, py;
+        uint32_t k;
+        span_sample(sp, S, u, px, py, k);
+        draw_sample(a, big, px, py, k, generated);
+      }
+      __syncthreads();  // `big` is read before the next is written
+    }
+    if (cause == 2) {  // the tile has non-opaque items
+      for (uint32_t i = threadIdx.x; i < n; i += blockDim.x) {
+        const PTri t = ptri_of(a, begin + i);
+        if (t.opaque) continue;
+        const PixSpan sp = pix_span(a, t.bbox, tp);
+        for (uint64_t u = 0; u < sp.samples(S); ++u) {
+          int64_t px, py;
+          uint32_t k;
+          span_sample(sp, S, u, px, py, k);
+          shaded += shades(a, t, px, py, k);
+        }
+      }
+      __syncthreads();  // every owner read before the ids replace them
+    }
+    for (uint64_t u = threadIdx.x; u < n_tile; u += blockDim.x) {
+      int64_t px, py;
+      uint32_t k;
+      span_sample(tp, S, u, px, py, k);
+      const uint64_t at = (uint64_t(py) * a.width + uint64_t(px)) * S + k;
+      const int o = a.ids[at];
+      if (o < 0) continue;
+      ++covered;
+      a.ids[at] = int32_t(a.tris[a.item_tri[o]].id);
+      atomicAdd(&a.owned[o], 1u);
+    }
     atomicAdd(&sums[0], static_cast<unsigned long long>(covered));
     atomicAdd(&sums[1], static_cast<unsigned long long>(generated));
     atomicAdd(&sums[2], static_cast<unsigned long long>(shaded));
     __syncthreads();
-    if (threadIdx.x == 0) {
-      atomicAdd(reinterpret_cast<unsigned long long*>(&a.shaded[tile]), sums[0] + sums[2]);
-      atomicAdd(reinterpret_cast<unsigned long long*>(&row[kColSamplesCovered]), sums[0]);
-      atomicAdd(reinterpret_cast<unsigned long long*>(&row[kColFragments]), sums[1]);
-    }
-    __syncthreads();
+    if (threadIdx.x == 0) finish_tile_row(a, tile, sums[0], sums[1], sums[2]);
+    __syncthreads();  // the shared words are reused by the next tile
   }
 }
 
@@ -739,11 +860,8 @@ __global__ void __launch_bounds__(kFoldBlock) k_hybrid_fold_long(HFoldArgs<P> a,
 template <class P>
 void hybrid_fold_long_host(const HFoldArgs<P>&, uint64_t) {}  // the host's hybrid_fold folds every run
 
-}  // namespace
-
 template <class P>
-void stage_hybrid(Pipeline<P>& p) {
-  Exec& ex = p.ex;
+HybArgs<P> hybrid_args(Pipeline<P>& p) {
   const uint64_t ni = p.n_items, nt = p.n_tiles;
   HybArgs<P> a{};
   a.tris = p.tris.get();
@@ -764,8 +882,9 @@ void stage_hybrid(Pipeline<P>& p) {
   a.range = p.hyb_range.need(ni + 1);
   a.flag = p.hyb_flag.need(ni + 1);
   a.active_stride = ni + 1;
-  a.active = p.hyb_active.need(kDetWarps * a.active_stride);
-  a.batch = p.hyb_batch.need(nt * kDetWarps * 2 * WarpTeam::kSize + 1);
+  a.det_warps = det_warps();
+  a.active = p.hyb_active.need(a.det_warps * a.active_stride);
+  a.batch = p.hyb_batch.need(nt * a.det_warps * 2 * WarpTeam::kSize + 1);
   {
     const Bins g = bins_of(a, a.grid.rect(0));
     a.bins_per_tile = g.x * g.y;
@@ -778,20 +897,38 @@ void stage_hybrid(Pipeline<P>& p) {
   a.ids = p.ids.get();
   a.owned = p.hyb_owned.need(ni + 1);
   a.shaded = p.hyb_shaded.need(nt + 1);
-  ex.zero(a.owned, (ni + 1) * 4);
+  return a;
+}
+
+}  // namespace
+
+template <class P>
+void stage_verdicts(Pipeline<P>& p) {
+  Exec& ex = p.ex;
+  const uint64_t nt = p.n_tiles;
+  const HybArgs<P> a = hybrid_args(p);
   if (ex.where == Where::cpu) {
     for (uint64_t t = 0; t < nt; ++t) verdict_host<P>(a, ex.host_index(t, nt));
   } else {
-    k_verdict<P><<<uint32_t(tmin<uint64_t>(nt, uint64_t(ex.grid_blocks) * 8)), kDetWarps * 32, 0, ex.stream>>>(a, nt);
+    const uint32_t blocks = uint32_t(tmin<uint64_t>(nt, uint64_t(ex.grid_blocks) * 8));
+    if (a.det_warps == 16) k_verdict<P, 16><<<blocks, 16 * 32, 0, ex.stream>>>(a, nt);
+    else if (a.det_warps == 8) k_verdict<P, 8><<<blocks, 8 * 32, 0, ex.stream>>>(a, nt);
+    else k_verdict<P, 4><<<blocks, 4 * 32, 0, ex.stream>>>(a, nt);
     TV_CUDA(cudaGetLastError());
     ++ex.queued;
   }
+}
+
+template <class P>
+void stage_hybrid(Pipeline<P>& p) {
+  Exec& ex = p.ex;
+  const uint64_t ni = p.n_items, nt = p.n_tiles;
+  const HybArgs<P> a = hybrid_args(p);
+  ex.zero(a.owned, (ni + 1) * 4);
   if (ex.where == Where::cpu) {
     for (uint64_t t = 0; t < nt; ++t) per_pixel_tile<P>(a, ex.host_index(t, nt));
   } else {
-    const uint32_t parts = (p.grid.tile_w * p.grid.tile_h * p.f.n_samples + kPixBlock - 1) / kPixBlock;
-    const uint32_t blocks = uint32_t(tmin<uint64_t>(nt * parts, uint64_t(ex.grid_blocks) * 8));
-    k_per_pixel<P><<<blocks, kPixBlock, 0, ex.stream>>>(a, nt, parts);
+    k_per_pixel<P><<<uint32_t(tmin<uint64_t>(nt, uint64_t(ex.grid_blocks) * 8)), kPixThreads, 0, ex.stream>>>(a, nt);
     TV_CUDA(cudaGetLastError());
     ++ex.queued;
   }
@@ -821,6 +958,8 @@ void stage_hybrid(Pipeline<P>& p) {
   ex.launch_dyn(k_hybrid_fold_long<P>, hybrid_fold_long_host<P>, f.long_count, ni, f, kFoldBlock, ex.grid_blocks);
 }
 
+template void stage_verdicts<ExactP>(Pipeline<ExactP>&);
+template void stage_verdicts<FloatP>(Pipeline<FloatP>&);
 template void stage_hybrid<ExactP>(Pipeline<ExactP>&);
 template void stage_hybrid<FloatP>(Pipeline<FloatP>&);
 

@@ -543,6 +543,13 @@ bool run_once(Pipeline<P>& p, Timer& t) {
   stage_cull(p);
   t.mark(4);
   p.ex.merge(1);  // the occluder lists (binning)
+  if (p.cfg.hybrid) {
+    // The verdicts need the tiles' lists and counts only: they run beside the analytic stages,
+    // which count into every tile's row (the per-pixel pass then sets its tiles' rows).
+    p.ex.branch(3);
+    stage_verdicts(p);
+    p.ex.on_main();
+  }
   p.ex.branch(0);
   t.mark(kStageCount + 1);
   stage_occlusion(p, Pass::unclipped);

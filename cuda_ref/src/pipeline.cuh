@@ -415,6 +415,8 @@ void stage_raster(Pipeline<P>& p, Pass pass);
 template <class P>
 void stage_fold(Pipeline<P>& p);
 template <class P>
-void stage_hybrid(Pipeline<P>& p);  // hybrid mode, after every other stage: verdicts, per-pixel tiles, areas  // after both occlusion passes: the visible area per triangle
+void stage_verdicts(Pipeline<P>& p);  // hybrid mode: every tile's verdict, beside the analytic stages (side 3)
+template <class P>
+void stage_hybrid(Pipeline<P>& p);  // hybrid mode, after every other stage: per-pixel tiles, areas
 
 }  // namespace tilevis::cuda
