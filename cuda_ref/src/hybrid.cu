@@ -17,8 +17,6 @@
 // z-buffer (the other per-tile counters are 0, as golden's per_pixel resolver leaves them);
 // their triangles' visible areas are the owned samples times a sample's share of a pixel,
 // added one sample at a time in the fold (golden's order of additions).
-#include <cstdlib>
-
 #include "pieces.cuh"
 
 namespace tilevis::cuda {
@@ -45,7 +43,6 @@ struct HybArgs {
   uint8_t* flag;     // per occluder position: in some crossing pair (count_all)
   uint4* active;     // per warp and occluder position: a detection bin's active members (scratch)
   uint64_t active_stride;  // positions per warp's share of `active`
-  uint32_t det_warps;
   uint64_t* batch;   // per tile and warp, 64 words: the pairs waiting for the exact test (scratch)
   uint64_t* bin_counts;    // per tile and detection bin: screens and tests (GPU scratch)
   uint32_t bins_per_tile;
@@ -55,6 +52,8 @@ struct HybArgs {
   int32_t* ids;
   uint32_t* owned;  // per item: samples it owns in a per-pixel tile
   uint64_t* shaded;  // per per-pixel tile at 1 sample: pixels shaded (owners, and non-opaque triangles in front)
+  uint32_t* big;        // GPU: per per-pixel tile, in its range of item positions, its big items (k_pp_small)
+  uint32_t* big_count;  // GPU: per tile, how many
 };
 
 template <class P>
@@ -157,16 +156,11 @@ struct Bins {
 // GPU a block takes a tile and its warps take the bins (bin_sweep, below); the host sweeps
 // them in order.
 
-// Warps of a tile's block on the GPU (the bins shared out). MEASURING KNOB (not for main):
-// TILEVIS_DET_WARPS=4, 8 or 16.
-inline uint32_t det_warps() {
-  static const uint32_t w = [] {
-    const char* v = std::getenv("TILEVIS_DET_WARPS");
-    const uint32_t n = v ? uint32_t(std::strtoul(v, nullptr, 10)) : 4u;
-    return n == 8 || n == 16 ? n : 4u;
-  }();
-  return w;
-}
+// Warps of a tile's block on the GPU (the bins shared out). 8 and 16 against 4 (H200, hybrid, 15
+// scenes, one build, new frame, the verdicts beside the analytic stages): bunny float 1.161 ms at
+// 4, 0.875 at 8, 0.814 at 16, million float 4.33 / 4.07 / 3.98; but decals float 0.471 / 0.585
+// / 0.608, hot_tile 2.03 / 2.28 / 2.34, slivers 2.63 / 2.80 / 2.89: kept at 4.
+inline constexpr uint32_t kDetWarps = 4;
 
 // A tile as the detector sees it: its occluder list (nearest z_min first) and its bins.
 template <class P>
@@ -354,7 +348,7 @@ TV_HD void verdict_host(const HybArgs<P>& a, uint64_t tile) {
     const DetTile<P> d = det_tile(a, uint32_t(tile));
     det_positions(a, d, 0, 1);
     uint4* act = a.active + d.base;
-    uint64_t* bpair = a.batch + tile * a.det_warps * 2 * WarpTeam::kSize;
+    uint64_t* bpair = a.batch + tile * kDetWarps * 2 * WarpTeam::kSize;
     for (uint32_t b = 0; b < d.g.x * d.g.y && cause == 0; ++b) {
       uint64_t s = 0, t = 0;
       if (bin_sweep(a, d, b % d.g.x, b / d.g.x, false, act, bpair, s, t, HostTeam{})) cause = 1;
@@ -372,12 +366,12 @@ TV_HD void verdict_host(const HybArgs<P>& a, uint64_t tile) {
   write_verdict(a, tile, cause, screens, tests, crossing);
 }
 
-// A block per tile; its W warps take the tile's bins w, w + W, ..., each with its own
+// A block per tile; its warps take the tile's bins w, w + kDetWarps, ..., each with its own
 // active list and batch. A warp stops at its first crossing bin, or when another warp has
 // found one in an earlier bin (the bins after the first crossing one are not counted); the
 // bins' counts are summed up to the first crossing bin once every warp is done.
-template <class P, uint32_t W>
-__global__ void __launch_bounds__(W * 32) k_verdict(HybArgs<P> a, uint64_t n_tiles) {
+template <class P>
+__global__ void __launch_bounds__(kDetWarps * 32) k_verdict(HybArgs<P> a, uint64_t n_tiles) {
   TV_KERNEL_WAIT();
   __shared__ uint32_t first;  // the first bin (row-major) with a crossing; ~0: none
   __shared__ uint32_t found;
@@ -397,9 +391,9 @@ __global__ void __launch_bounds__(W * 32) k_verdict(HybArgs<P> a, uint64_t n_til
     det_positions(a, d, threadIdx.x, blockDim.x);
     __syncthreads();
     uint4* act = a.active + uint64_t(w) * a.active_stride + d.base;
-    uint64_t* bpair = a.batch + (tile * W + w) * 2 * WarpTeam::kSize;
+    uint64_t* bpair = a.batch + (tile * kDetWarps + w) * 2 * WarpTeam::kSize;
     uint64_t* counts = a.bin_counts + tile * a.bins_per_tile * 2;
-    for (uint32_t b = w; b < nbins; b += W) {
+    for (uint32_t b = w; b < nbins; b += kDetWarps) {
       const uint32_t seen = __shfl_sync(0xffffffffu, lane == 0 ? atomicAdd(&first, 0u) : 0u, 0);
       if (b > seen) break;  // an earlier bin has a crossing (one value for the whole warp)
       uint64_t s = 0, t = 0;
@@ -414,7 +408,7 @@ __global__ void __launch_bounds__(W * 32) k_verdict(HybArgs<P> a, uint64_t n_til
     __syncthreads();
     const uint32_t f = first;
     if (f != ~0u) {  // the crossing triangles, over every bin
-      for (uint32_t b = w; b < nbins; b += W) {
+      for (uint32_t b = w; b < nbins; b += kDetWarps) {
         uint64_t s = 0, t = 0;
         bin_sweep(a, d, b % d.g.x, b / d.g.x, true, act, bpair, s, t, WarpTeam{});
       }
@@ -512,11 +506,14 @@ TV_HD void finish_sample(const HybArgs<P>& a, int64_t px, int64_t py, uint32_t k
 }
 
 // A per-pixel tile's row: the analytic stages ran beside the verdicts and counted in it too;
-// golden's per_pixel resolver leaves those counters 0.
+// golden's per_pixel resolver leaves these counters 0.
+TV_HD inline void zero_analytic_columns(int64_t* r) {
+  for (int c : {kColPairTests, kColCandidates, kColClips, kColPieces, kColVisiblePieces, kColOcclusionTests}) r[c] = 0;
+}
 template <class P>
 TV_HD void finish_tile_row(const HybArgs<P>& a, uint64_t tile, uint64_t covered, uint64_t generated, uint64_t shaded) {
   int64_t* r = a.rows + tile * kTileColumns;
-  for (int c : {kColPairTests, kColCandidates, kColClips, kColPieces, kColVisiblePieces, kColOcclusionTests}) r[c] = 0;
+  zero_analytic_columns(r);
   r[kColSamplesCovered] = int64_t(covered);
   r[kColFragments] = int64_t(generated);
   a.shaded[tile] = covered + shaded;
@@ -559,19 +556,23 @@ TV_HD void per_pixel_tile(const HybArgs<P>& a, uint64_t tile) {
   finish_tile_row(a, tile, covered, generated, shaded);
 }
 
-// ---- per-pixel tiles on the GPU: a block per tile, triangles drawn into owner words ----------
+// ---- per-pixel tiles on the GPU ------------------------------------------------------------
 //
 // While a tile is drawn, its samples' entries of the id buffer hold the owning item (-1: none).
-// A thread draws an item over the samples its box may cover (a few for the sub-pixel triangles
-// of an overloaded tile); an item whose box spans more than kPixBig samples is queued and drawn
-// by the whole block. An opaque item takes a covered sample's owner word by compare-and-swap
-// when it is nearer, or as near and earlier in the tile's list: golden's loop over the list
-// keeps the first of the nearest (it replaces only on strictly nearer), and that order is total,
-// so the merge is order-free. Then non-opaque items count the samples they shade (cause 2), and
-// each sample's owner becomes its id. (The former kernel gave each thread a sample and walked the
-// tile's whole list for it: slivers float 0.90 ms on the H200 for tiles of thousands of dust
-// triangles, Nsight Compute.)
-constexpr uint32_t kPixThreads = 256, kPixBig = 64, kPixQueue = 1024;
+// The owner of a sample is the first of the nearest opaque items that cover it in the tile's list
+// (golden's loop replaces only on strictly nearer): the order (depth, list position) is total, so
+// owners can be merged in any order, by compare-and-swap. Three kernels:
+//  1 a block per tile: the owner words cleared; each small item (a box of at most kPixBig
+//    samples: the sub-pixel triangles of an overloaded tile) drawn by a thread over its box; the
+//    big ones listed;
+//  2 a block per kPixBlock samples of a tile: a thread per sample runs through the tile's big
+//    items (staged kPixChunk at a time), keeps the nearest, and merges it into the owner word;
+//  3 a block per kPixBlock samples: non-opaque items' shaded samples (cause 2), each owner
+//    replaced by its id, the samples owned and covered counted.
+// (One kernel with a thread per sample that ran through the whole list: slivers float 0.90 ms
+// on the H200, Nsight Compute, for tiles of thousands of dust triangles; one block per tile
+// drawing every item by compare-and-swap: stack 5x slower, its tiles' thousands of big quads.)
+constexpr uint32_t kPixThreads = 256, kPixBig = 64, kPixBlock = 256, kPixChunk = 32;
 
 // The pixels of the tile whose samples may lie in a closed sub-pixel box: a sample of pixel p
 // lies in [p << sb, (p + 1) << sb).
@@ -617,126 +618,188 @@ TV_HD inline exact::Plane exact_plane(const TileTri<P>& t) {
   else return exact::plane_of(t.v[0], t.v[1], t.v[2]);
 }
 
-// Item t at sample (px, py, k): coverage, and for an opaque item the owner word.
+// Owner word at `at` for opaque item `item` (plane `pl`) at sample s: taken where the item is
+// nearer, or as near and earlier in the list.
 template <class P>
-__device__ inline void draw_sample(const HybArgs<P>& a, const PTri& t, int64_t px, int64_t py, uint32_t k,
-                                   uint32_t& generated) {
-  const Pt s = sample_pt(a, px, py, k);
-  if (!covers(t, s)) return;
-  ++generated;
-  if (!t.opaque) return;
-  int* const w = reinterpret_cast<int*>(a.ids) + (uint64_t(py) * a.width + uint64_t(px)) * a.n_samples + k;
+__device__ inline void merge_owner(const HybArgs<P>& a, uint64_t at, uint32_t item, const exact::Plane& pl, Pt s) {
+  int* const w = reinterpret_cast<int*>(a.ids) + at;
   int cur = atomicAdd(w, 0);
   for (;;) {
     if (cur >= 0) {
-      const int d = sample_depth_order(t.plane, exact_plane(a.tris[a.item_tri[cur]]), s);
-      if (d > 0 || (d == 0 && uint32_t(cur) < t.item)) return;  // the owner stays
+      if (uint32_t(cur) == item) return;
+      const int d = sample_depth_order(pl, exact_plane(a.tris[a.item_tri[cur]]), s);
+      if (d > 0 || (d == 0 && uint32_t(cur) < item)) return;  // the owner stays
     }
-    const int seen = atomicCAS(w, cur, int(t.item));
+    const int seen = atomicCAS(w, cur, int(item));
     if (seen == cur) return;
     cur = seen;
   }
 }
 
-// Non-opaque item t at sample (px, py, k), the owners drawn: shaded where it covers the sample
-// in front of its owner (per_pixel_resolver.cpp; at 1 sample a pixel is a sample).
 template <class P>
-__device__ inline uint32_t shades(const HybArgs<P>& a, const PTri& t, int64_t px, int64_t py, uint32_t k) {
-  const Pt s = sample_pt(a, px, py, k);
-  if (!covers(t, s)) return 0;
-  const int o = a.ids[(uint64_t(py) * a.width + uint64_t(px)) * a.n_samples + k];
-  return o < 0 || sample_depth_order(t.plane, exact_plane(a.tris[a.item_tri[o]]), s) < 0 ? 1u : 0u;
+TV_HD inline uint64_t sample_at(const HybArgs<P>& a, int64_t px, int64_t py, uint32_t k) {
+  return (uint64_t(py) * a.width + uint64_t(px)) * a.n_samples + k;
 }
 
+// 1: a block per tile. Row: the analytic columns 0, the small items' fragments; big items go
+// to the tile's list (a.big, in the tile's range of item positions; a.big_count per tile).
 template <class P>
-__global__ void __launch_bounds__(kPixThreads) k_per_pixel(HybArgs<P> a, uint64_t n_tiles) {
+__global__ void __launch_bounds__(kPixThreads) k_pp_small(HybArgs<P> a, uint64_t n_tiles) {
   TV_KERNEL_WAIT();
-  __shared__ PTri big;
-  __shared__ uint32_t queue[kPixQueue];
-  __shared__ uint32_t n_queued;
-  __shared__ unsigned long long sums[3];
+  __shared__ uint32_t n_big;
+  __shared__ unsigned long long generated_sum;
   const uint32_t S = a.n_samples;
   for (uint64_t tile = blockIdx.x; tile < n_tiles; tile += gridDim.x) {
-    const uint32_t cause = a.cause[tile];
-    if (cause == 0) continue;  // uniform over the block
+    if (a.cause[tile] == 0) continue;  // uniform over the block
     const uint32_t begin = a.item_begin[tile], n = uint32_t(a.rows[tile * kTileColumns + kColTriangles]);
     const PixSpan tp = tile_pixels(a, tile);
-    const uint64_t n_tile = tp.samples(S);
     if (threadIdx.x == 0) {
-      n_queued = 0;
-      sums[0] = sums[1] = sums[2] = 0;
+      n_big = 0;
+      generated_sum = 0;
     }
-    for (uint64_t u = threadIdx.x; u < n_tile; u += blockDim.x) {
+    for (uint64_t u = threadIdx.x; u < tp.samples(S); u += blockDim.x) {
       int64_t px, py;
       uint32_t k;
       span_sample(tp, S, u, px, py, k);
-      a.ids[(uint64_t(py) * a.width + uint64_t(px)) * S + k] = -1;
+      a.ids[sample_at(a, px, py, k)] = -1;
     }
     __syncthreads();
-    uint32_t generated = 0, covered = 0, shaded = 0;
+    uint32_t generated = 0;
     for (uint32_t i = threadIdx.x; i < n; i += blockDim.x) {
-      const PTri t = ptri_of(a, begin + i);
-      const PixSpan sp = pix_span(a, t.bbox, tp);
+      const PixSpan sp = pix_span(a, a.tris[a.item_tri[begin + i]].bbox, tp);
       const uint64_t m = sp.samples(S);
       if (m > kPixBig) {
-        const uint32_t q = atomicAdd(&n_queued, 1u);
-        if (q < kPixQueue) {
-          queue[q] = begin + i;
-          continue;
-        }
+        a.big[begin + atomicAdd(&n_big, 1u)] = begin + i;
+        continue;
       }
+      if (m == 0) continue;
+      const PTri t = ptri_of(a, begin + i);
       for (uint64_t u = 0; u < m; ++u) {
         int64_t px, py;
         uint32_t k;
         span_sample(sp, S, u, px, py, k);
-        draw_sample(a, t, px, py, k, generated);
+        const Pt s = sample_pt(a, px, py, k);
+        if (!covers(t, s)) continue;
+        ++generated;
+        if (t.opaque) merge_owner(a, sample_at(a, px, py, k), t.item, t.plane, s);
       }
     }
+    atomicAdd(&generated_sum, static_cast<unsigned long long>(generated));
     __syncthreads();
-    const uint32_t nq = tmin(n_queued, kPixQueue);
-    for (uint32_t q = 0; q < nq; ++q) {
-      if (threadIdx.x == 0) big = ptri_of(a, queue[q]);
-      __syncthreads();
-      const PixSpan sp = pix_span(a, big.bbox, tp);
-      for (uint64_t u = threadIdx.x; u < sp.samples(S); u += blockDim.x) {
-        int64_t px, py;
-        uint32_t k;
-        span_sample(sp, S, u, px, py, k);
-        draw_sample(a, big, px, py, k, generated);
-      }
-      __syncthreads();  // `big` is read before the next is written
+    if (threadIdx.x == 0) {
+      int64_t* r = a.rows + tile * kTileColumns;
+      zero_analytic_columns(r);
+      r[kColSamplesCovered] = 0;
+      r[kColFragments] = int64_t(generated_sum);
+      a.shaded[tile] = 0;
+      a.big_count[tile] = n_big;
     }
-    if (cause == 2) {  // the tile has non-opaque items
-      for (uint32_t i = threadIdx.x; i < n; i += blockDim.x) {
-        const PTri t = ptri_of(a, begin + i);
-        if (t.opaque) continue;
-        const PixSpan sp = pix_span(a, t.bbox, tp);
-        for (uint64_t u = 0; u < sp.samples(S); ++u) {
-          int64_t px, py;
-          uint32_t k;
-          span_sample(sp, S, u, px, py, k);
-          shaded += shades(a, t, px, py, k);
-        }
+    __syncthreads();  // the shared words are reused by the next tile
+  }
+}
+
+// Sample (tile, part, thread) of a per-pixel tile; false past the tile's samples.
+template <class P>
+__device__ inline bool pp_sample(const HybArgs<P>& a, uint64_t tile, uint32_t part, int64_t& px, int64_t& py,
+                                 uint32_t& k) {
+  const PixSpan tp = tile_pixels(a, tile);
+  const uint64_t u = uint64_t(part) * kPixBlock + threadIdx.x;
+  if (u >= tp.samples(a.n_samples)) return false;
+  span_sample(tp, a.n_samples, u, px, py, k);
+  return true;
+}
+
+// Items item_at(0 .. n - 1), staged kPixChunk at a time in shared memory, each given to `each`
+// by every thread of the block.
+template <class P, class At, class Each>
+__device__ inline void staged_items(const HybArgs<P>& a, uint32_t n, PTri* staged, At item_at, Each each) {
+  for (uint32_t c = 0; c < n; c += kPixChunk) {
+    const uint32_t m = tmin(kPixChunk, n - c);
+    __syncthreads();
+    if (threadIdx.x < m) staged[threadIdx.x] = ptri_of(a, item_at(c + threadIdx.x));
+    __syncthreads();
+    for (uint32_t j = 0; j < m; ++j) each(staged[j]);
+  }
+}
+
+// 2: the big items, a thread per sample.
+template <class P>
+__global__ void __launch_bounds__(kPixBlock) k_pp_big(HybArgs<P> a, uint64_t n_tiles, uint32_t parts) {
+  TV_KERNEL_WAIT();
+  __shared__ PTri staged[kPixChunk];
+  __shared__ unsigned long long generated_sum;
+  for (uint64_t job = blockIdx.x; job < n_tiles * parts; job += gridDim.x) {
+    const uint64_t tile = job / parts;
+    if (a.cause[tile] == 0) continue;  // uniform over the block
+    const uint32_t nb = a.big_count[tile];
+    if (nb == 0) continue;
+    if (threadIdx.x == 0) generated_sum = 0;
+    int64_t px = 0, py = 0;
+    uint32_t k = 0;
+    const bool mine = pp_sample(a, tile, uint32_t(job % parts), px, py, k);
+    const Pt s = mine ? sample_pt(a, px, py, k) : Pt{0, 0};
+    uint32_t generated = 0, best = ~0u;
+    exact::Plane best_plane{};
+    const uint32_t* const big = a.big + a.item_begin[tile];
+    staged_items(a, nb, staged, [&](uint32_t x) { return big[x]; }, [&](const PTri& t) {
+      if (!mine || !covers(t, s)) return;
+      ++generated;
+      if (!t.opaque) return;
+      if (best != ~0u) {
+        const int d = sample_depth_order(t.plane, best_plane, s);
+        if (d > 0 || (d == 0 && best < t.item)) return;
       }
-      __syncthreads();  // every owner read before the ids replace them
+      best = t.item;
+      best_plane = t.plane;
+    });
+    if (mine && best != ~0u) merge_owner(a, sample_at(a, px, py, k), best, best_plane, s);
+    atomicAdd(&generated_sum, static_cast<unsigned long long>(generated));
+    __syncthreads();
+    if (threadIdx.x == 0)
+      atomicAdd(reinterpret_cast<unsigned long long*>(&a.rows[tile * kTileColumns + kColFragments]), generated_sum);
+    __syncthreads();
+  }
+}
+
+// 3: the owners final: non-opaque items' shading (cause 2), ids, owned and covered samples.
+template <class P>
+__global__ void __launch_bounds__(kPixBlock) k_pp_finish(HybArgs<P> a, uint64_t n_tiles, uint32_t parts) {
+  TV_KERNEL_WAIT();
+  __shared__ PTri staged[kPixChunk];
+  __shared__ unsigned long long sums[2];
+  for (uint64_t job = blockIdx.x; job < n_tiles * parts; job += gridDim.x) {
+    const uint64_t tile = job / parts;
+    const uint32_t cause = a.cause[tile];
+    if (cause == 0) continue;  // uniform over the block
+    if (threadIdx.x == 0) sums[0] = sums[1] = 0;
+    int64_t px = 0, py = 0;
+    uint32_t k = 0;
+    const bool mine = pp_sample(a, tile, uint32_t(job % parts), px, py, k);
+    const Pt s = mine ? sample_pt(a, px, py, k) : Pt{0, 0};
+    const uint64_t at = mine ? sample_at(a, px, py, k) : 0;
+    const int o = mine ? a.ids[at] : -1;
+    uint32_t shaded = 0;
+    if (cause == 2) {
+      // Non-opaque triangles are shaded where they cover the sample in front of its owner
+      // (per_pixel_resolver.cpp; at 1 sample a pixel is a sample).
+      const exact::Plane op = o >= 0 ? exact_plane(a.tris[a.item_tri[o]]) : exact::Plane{};
+      const uint32_t begin = a.item_begin[tile], n = uint32_t(a.rows[tile * kTileColumns + kColTriangles]);
+      staged_items(a, n, staged, [&](uint32_t x) { return begin + x; }, [&](const PTri& t) {
+        if (mine && !t.opaque && covers(t, s) && (o < 0 || sample_depth_order(t.plane, op, s) < 0)) ++shaded;
+      });
     }
-    for (uint64_t u = threadIdx.x; u < n_tile; u += blockDim.x) {
-      int64_t px, py;
-      uint32_t k;
-      span_sample(tp, S, u, px, py, k);
-      const uint64_t at = (uint64_t(py) * a.width + uint64_t(px)) * S + k;
-      const int o = a.ids[at];
-      if (o < 0) continue;
-      ++covered;
+    if (o >= 0) {
       a.ids[at] = int32_t(a.tris[a.item_tri[o]].id);
       atomicAdd(&a.owned[o], 1u);
     }
-    atomicAdd(&sums[0], static_cast<unsigned long long>(covered));
-    atomicAdd(&sums[1], static_cast<unsigned long long>(generated));
-    atomicAdd(&sums[2], static_cast<unsigned long long>(shaded));
+    atomicAdd(&sums[0], static_cast<unsigned long long>(o >= 0 ? 1 : 0));
+    atomicAdd(&sums[1], static_cast<unsigned long long>(shaded));
     __syncthreads();
-    if (threadIdx.x == 0) finish_tile_row(a, tile, sums[0], sums[1], sums[2]);
-    __syncthreads();  // the shared words are reused by the next tile
+    if (threadIdx.x == 0) {
+      atomicAdd(reinterpret_cast<unsigned long long*>(&a.rows[tile * kTileColumns + kColSamplesCovered]), sums[0]);
+      atomicAdd(reinterpret_cast<unsigned long long*>(&a.shaded[tile]), sums[0] + sums[1]);
+    }
+    __syncthreads();
   }
 }
 
@@ -882,9 +945,8 @@ HybArgs<P> hybrid_args(Pipeline<P>& p) {
   a.range = p.hyb_range.need(ni + 1);
   a.flag = p.hyb_flag.need(ni + 1);
   a.active_stride = ni + 1;
-  a.det_warps = det_warps();
-  a.active = p.hyb_active.need(a.det_warps * a.active_stride);
-  a.batch = p.hyb_batch.need(nt * a.det_warps * 2 * WarpTeam::kSize + 1);
+  a.active = p.hyb_active.need(kDetWarps * a.active_stride);
+  a.batch = p.hyb_batch.need(nt * kDetWarps * 2 * WarpTeam::kSize + 1);
   {
     const Bins g = bins_of(a, a.grid.rect(0));
     a.bins_per_tile = g.x * g.y;
@@ -897,6 +959,8 @@ HybArgs<P> hybrid_args(Pipeline<P>& p) {
   a.ids = p.ids.get();
   a.owned = p.hyb_owned.need(ni + 1);
   a.shaded = p.hyb_shaded.need(nt + 1);
+  a.big = p.hyb_big.need(ni + 1);
+  a.big_count = p.hyb_big_count.need(nt + 1);
   return a;
 }
 
@@ -910,10 +974,7 @@ void stage_verdicts(Pipeline<P>& p) {
   if (ex.where == Where::cpu) {
     for (uint64_t t = 0; t < nt; ++t) verdict_host<P>(a, ex.host_index(t, nt));
   } else {
-    const uint32_t blocks = uint32_t(tmin<uint64_t>(nt, uint64_t(ex.grid_blocks) * 8));
-    if (a.det_warps == 16) k_verdict<P, 16><<<blocks, 16 * 32, 0, ex.stream>>>(a, nt);
-    else if (a.det_warps == 8) k_verdict<P, 8><<<blocks, 8 * 32, 0, ex.stream>>>(a, nt);
-    else k_verdict<P, 4><<<blocks, 4 * 32, 0, ex.stream>>>(a, nt);
+    k_verdict<P><<<uint32_t(tmin<uint64_t>(nt, uint64_t(ex.grid_blocks) * 8)), kDetWarps * 32, 0, ex.stream>>>(a, nt);
     TV_CUDA(cudaGetLastError());
     ++ex.queued;
   }
@@ -928,7 +989,15 @@ void stage_hybrid(Pipeline<P>& p) {
   if (ex.where == Where::cpu) {
     for (uint64_t t = 0; t < nt; ++t) per_pixel_tile<P>(a, ex.host_index(t, nt));
   } else {
-    k_per_pixel<P><<<uint32_t(tmin<uint64_t>(nt, uint64_t(ex.grid_blocks) * 8)), kPixThreads, 0, ex.stream>>>(a, nt);
+    const uint32_t parts = (p.grid.tile_w * p.grid.tile_h * p.f.n_samples + kPixBlock - 1) / kPixBlock;
+    const uint32_t tiles = uint32_t(tmin<uint64_t>(nt, uint64_t(ex.grid_blocks) * 8));
+    const uint32_t jobs = uint32_t(tmin<uint64_t>(nt * parts, uint64_t(ex.grid_blocks) * 8));
+    k_pp_small<P><<<tiles, kPixThreads, 0, ex.stream>>>(a, nt);
+    TV_CUDA(cudaGetLastError());
+    k_pp_big<P><<<jobs, kPixBlock, 0, ex.stream>>>(a, nt, parts);
+    TV_CUDA(cudaGetLastError());
+    k_pp_finish<P><<<jobs, kPixBlock, 0, ex.stream>>>(a, nt, parts);
+    ex.queued += 2;
     TV_CUDA(cudaGetLastError());
     ++ex.queued;
   }
