@@ -1,6 +1,8 @@
-// Hybrid mode on the GPU (model/visibility/hybrid_resolver.cpp): after the analytic stages,
-// every tile gets a verdict, and the tiles whose analytic answer can be wrong are redone per
-// pixel (the exact z-buffer over the tile's triangles):
+// Hybrid mode on the GPU (model/visibility/hybrid_resolver.cpp): every tile gets a verdict
+// (stage_verdicts, on side stream 3 beside the analytic stages, from binning's lists), and after
+// the analytic stages the tiles whose analytic answer can be wrong are redone per pixel (the
+// exact z-buffer over the tile's triangles), their rows set as golden's per_pixel resolver sets
+// them:
 //   1 interpenetration: two opaque triangles of the tile (other trace triangles) whose planes
 //     cross strictly inside their overlap within the tile;
 //   2 non-opaque content in the tile;
