@@ -774,6 +774,7 @@ __global__ void __launch_bounds__(kPixBlock) k_pp_finish(HybArgs<P> a, uint64_t 
     const uint32_t cause = a.cause[tile];
     if (cause == 0) continue;  // uniform over the block
     if (threadIdx.x == 0) sums[0] = sums[1] = 0;
+    __syncthreads();  // zeroed before any thread adds
     int64_t px = 0, py = 0;
     uint32_t k = 0;
     const bool mine = pp_sample(a, tile, uint32_t(job % parts), px, py, k);
