@@ -32,6 +32,7 @@ struct CullArgs {
   uint64_t* cands;
   uint64_t cand_cap;
   uint64_t n_items;
+  HybridBudget budget;
 };
 
 namespace {
@@ -48,6 +49,12 @@ TV_HD void cull_item(const CullArgs<P>& a, uint64_t i) {
   const uint32_t tile = uint32_t(a.item_key[j]);
   const TileTri<P>& tt = a.tris[a.item_tri[j]];
   if (lane == 0) a.cand_count[j] = a.cand_cursor[j] = 0;
+  // Hybrid: a tile over the budget goes per pixel, so its items make no piece (no candidate,
+  // nothing to clip, occlude or raster); the per-pixel pass sets its row.
+  if (a.budget.over(a.rows + uint64_t(tile) * kTileColumns)) {
+    if (lane == 0) a.piece_count[j] = 0;
+    return;
+  }
   // Binning put the triangle here because its interior meets the tile's, so the exact tile
   // polygon is never empty (golden's empty check cannot fire). Float arithmetic can make it
   // empty, and then the item does nothing, as golden would with an empty polygon.
@@ -149,6 +156,7 @@ void stage_cull(Pipeline<P>& p) {
   a.cands = p.cands.need(p.caps.candidates);
   a.cand_cap = p.caps.candidates;
   a.n_items = ni;
+  a.budget = hybrid_budget(p.cfg);
   ex.launch(k_cull_item<P>, cull_item<P>, p.N(kSzCullLanes, ni * kCullLanes), a);
   ex.launch_dyn(k_cull_exact<P>, cull_exact<P>, p.counters.get() + kDeepPairs, p.caps.deep_pairs, a);
 }

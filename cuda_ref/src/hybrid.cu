@@ -35,8 +35,8 @@ struct HybArgs {
   const uint32_t* item_tri;
   int64_t* rows;
   TileGrid grid;
-  uint64_t pair_budget;
-  uint32_t list_triangles, list_edges, detection_bin;
+  HybridBudget budget;
+  uint32_t detection_bin;
   uint32_t* cause;
   uint64_t* screens;
   uint64_t* tests;
@@ -325,12 +325,8 @@ TV_HD bool bin_sweep(const HybArgs<P>& a, const DetTile<P>& d, uint32_t bx, uint
 template <class P>
 TV_HD uint32_t cause_of(const HybArgs<P>& a, uint64_t tile) {
   const int64_t* row = a.rows + tile * kTileColumns;
-  const uint64_t tris = uint64_t(row[kColTriangles]), edges = uint64_t(row[kColEdges]);
-  if (tris > a.occ_count[tile]) return 2;  // a non-opaque triangle
-  if ((a.pair_budget && tris * edges > a.pair_budget) || (a.list_triangles && tris > a.list_triangles) ||
-      (a.list_edges && edges > a.list_edges))
-    return 3;
-  return 0;
+  if (uint64_t(row[kColTriangles]) > a.occ_count[tile]) return 2;  // a non-opaque triangle
+  return a.budget.over(row) ? 3 : 0;
 }
 
 template <class P>
@@ -937,9 +933,7 @@ HybArgs<P> hybrid_args(Pipeline<P>& p) {
   a.item_tri = p.item_tri_sorted.get();
   a.rows = p.tile_rows.get();
   a.grid = p.grid;
-  a.pair_budget = p.cfg.pair_budget;
-  a.list_triangles = p.cfg.list_triangles;
-  a.list_edges = p.cfg.list_edges;
+  a.budget = hybrid_budget(p.cfg);
   a.detection_bin = p.cfg.detection_bin;
   a.cause = p.hyb_cause.need(nt + 1);
   a.screens = p.hyb_screens.need(nt + 1);

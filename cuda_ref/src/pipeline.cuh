@@ -373,6 +373,25 @@ enum TileColumn : uint32_t {
   kColFragments
 };
 
+// Hybrid's budget (cause 3, hybrid_resolver.cpp): a tile whose triangles x edges pass the pair
+// budget, or that holds more triangles or edges than the unit's lists, goes per pixel. Decided
+// from binning's counts alone, so culling can skip such a tile's analytic work (cause 2, a
+// non-opaque triangle, takes precedence in the verdict, but the tile goes per pixel either way).
+struct HybridBudget {
+  bool on = false;  // hybrid mode
+  uint64_t pair_budget = 0;
+  uint32_t list_triangles = 0, list_edges = 0;
+  TV_HD bool over(const int64_t* row) const {
+    const uint64_t tris = uint64_t(row[kColTriangles]), edges = uint64_t(row[kColEdges]);
+    return on && ((pair_budget && tris * edges > pair_budget) || (list_triangles && tris > list_triangles) ||
+                  (list_edges && edges > list_edges));
+  }
+};
+
+inline HybridBudget hybrid_budget(const CudaConfig& c) {
+  return {c.hybrid, c.pair_budget, c.list_triangles, c.list_edges};
+}
+
 inline uint32_t bits_for(uint64_t v) {  // bits to hold values in [0, v]
   uint32_t b = 0;
   while (b < 64 && (v >> b) != 0) ++b;

@@ -38,13 +38,26 @@ inline std::vector<int32_t> truth_ids_of(const trace::Frame& f) {
 }
 
 inline vis::GoldenResult golden_of(const trace::Frame& f, uint32_t tile_w, uint32_t tile_h,
-                                   const std::string& mode = "analytic") {
+                                   const std::string& mode = "analytic", const cuda::CudaConfig* budget = nullptr) {
   vis::Setup s = vis::primitive_setup(f, {});
   vis::GoldenConfig gc;
   gc.tile_w = tile_w;
   gc.tile_h = tile_h;
   gc.mode = mode;
+  if (budget) {  // hybrid's budget and lists as the CUDA run's
+    gc.options.pair_budget = budget->pair_budget;
+    gc.options.list_triangles = budget->list_triangles;
+    gc.options.list_edges = budget->list_edges;
+  }
   return vis::golden_visibility(s, gc);
+}
+
+// Hybrid with lists small enough that the built-in scenes' busier tiles go per pixel for the
+// budget (cause 3), which culling then skips.
+inline void small_lists(cuda::CudaConfig& cfg) {
+  cfg.list_triangles = 6;
+  cfg.list_edges = 4;
+  cfg.pair_budget = 20;
 }
 
 inline Diff diff(const vis::GoldenResult& g, const cuda::CudaResult& c) {

@@ -195,6 +195,20 @@ TEST_P(HybridEmulation, BitIdenticalToGoldenHybrid) {
   ct::expect_bit_identical(d);
 }
 
+// The same over small lists and a pair budget: the tiles over them go per pixel, and culling
+// skips their items (no candidate, no piece), so only golden's per-pixel answer is left there.
+TEST_P(HybridEmulation, BitIdenticalToGoldenHybridOverSmallLists) {
+  const auto& [name, tile, samples] = GetParam();
+  const trace::Frame f = ct::scene(name, samples);
+  auto cfg = ct::config(cuda::Device::cpu, cuda::Precision::exact, tile, tile);
+  cfg.hybrid = true;
+  cfg.shuffle_cpu = true;
+  ct::small_lists(cfg);
+  const auto g = ct::golden_of(f, tile, tile, "hybrid", &cfg);
+  const auto r = cuda::run_cuda(f, cfg);
+  ct::expect_bit_identical(ct::diff(g, r));
+}
+
 INSTANTIATE_TEST_SUITE_P(Scenes, HybridEmulation,
                          ::testing::Combine(::testing::ValuesIn(ct::scene_names()), ::testing::Values(8u, 32u),
                                             ::testing::Values(1u, 4u)));
@@ -273,6 +287,18 @@ TEST(Emulation, HybridOnShippedFailureScenes) {
         EXPECT_GT(g.fallback_interpenetration, 0u) << tile;
       }
     }
+    // Over lists of 24 triangles and 8 edges, busy tiles go per pixel for the budget.
+    auto cfg = ct::config(cuda::Device::cpu, cuda::Precision::exact, 32, 32);
+    cfg.hybrid = true;
+    cfg.list_triangles = 24;
+    cfg.list_edges = 8;
+    const auto g = ct::golden_of(f, 32, 32, "hybrid", &cfg);
+    const auto d = ct::diff(g, cuda::run_cuda(f, cfg));
+    EXPECT_GT(g.fallback_budget, 0u) << name;
+    EXPECT_EQ(d.id_mismatches, 0u) << name << " (lists 24, 8)";
+    EXPECT_EQ(d.tile_cell_mismatches, 0u) << name << " (lists 24, 8): " << d.first_tile_mismatch;
+    EXPECT_EQ(d.area_bit_mismatches, 0u) << name << " (lists 24, 8)";
+    EXPECT_TRUE(d.totals_equal) << name << " (lists 24, 8): " << d.totals;
   }
 }
 

@@ -200,6 +200,22 @@ TEST_P(HybridGpu, BitIdenticalToGoldenHybrid) {
   EXPECT_EQ(rf.detection_tests, r.detection_tests);
 }
 
+// Over small lists and a pair budget (compare.h small_lists): culling skips the items of the
+// tiles over them, and the per-pixel kernels draw those tiles.
+TEST_P(HybridGpu, BitIdenticalToGoldenHybridOverSmallLists) {
+  REQUIRE_GPU();
+  const auto& [name, tile, samples] = GetParam();
+  const trace::Frame f = ct::scene(name, samples);
+  auto cfg = ct::config(cuda::Device::gpu, cuda::Precision::exact, tile, tile);
+  cfg.hybrid = true;
+  cfg.runs = 2;
+  ct::small_lists(cfg);
+  const auto r = cuda::run_cuda(f, cfg);
+  ct::expect_bit_identical(ct::diff(ct::golden_of(f, tile, tile, "hybrid", &cfg), r));
+  cfg.precision = cuda::Precision::floating;  // exact verdicts: the same tiles per pixel
+  EXPECT_EQ(cuda::run_cuda(f, cfg).per_pixel_cause, r.per_pixel_cause);
+}
+
 INSTANTIATE_TEST_SUITE_P(Scenes, HybridGpu,
                          ::testing::Combine(::testing::ValuesIn(ct::scene_names()), ::testing::Values(8u, 32u),
                                             ::testing::Values(1u, 4u)));
