@@ -180,40 +180,36 @@ INSTANTIATE_TEST_SUITE_P(Scenes, ZBufferGpu,
                          ::testing::Combine(::testing::ValuesIn(ct::scene_names()), ::testing::Values(1u, 4u)));
 
 // Hybrid on the GPU: golden --mode hybrid bit for bit (ids, areas, every per-tile counter, the
-// verdict columns), the detector's thread per tile and the per-pixel tiles' blocks included.
-class HybridGpu : public ::testing::TestWithParam<std::tuple<std::string, uint32_t, uint32_t>> {};
-
-TEST_P(HybridGpu, BitIdenticalToGoldenHybrid) {
-  REQUIRE_GPU();
-  const auto& [name, tile, samples] = GetParam();
+// verdict columns), the detector's thread per tile and the per-pixel tiles' blocks included;
+// then the same run in float: the verdicts are exact, so they and the per-pixel tiles agree.
+// With `small`, over small lists and a pair budget (compare.h small_lists): culling skips the
+// items of the tiles over them, and the per-pixel kernels draw those tiles.
+static void check_hybrid_gpu(const std::string& name, uint32_t tile, uint32_t samples, bool small) {
   const trace::Frame f = ct::scene(name, samples);
   auto cfg = ct::config(cuda::Device::gpu, cuda::Precision::exact, tile, tile);
   cfg.hybrid = true;
   cfg.runs = 2;
+  if (small) ct::small_lists(cfg);
   const auto r = cuda::run_cuda(f, cfg);
-  const auto d = ct::diff(ct::golden_of(f, tile, tile, "hybrid"), r);
-  ct::expect_bit_identical(d);
-  // The same run in float: the verdicts are exact, so they and the per-pixel tiles agree.
+  ct::expect_bit_identical(ct::diff(ct::golden_of(f, tile, tile, "hybrid", &cfg), r));
   cfg.precision = cuda::Precision::floating;
   const auto rf = cuda::run_cuda(f, cfg);
   EXPECT_EQ(rf.per_pixel_cause, r.per_pixel_cause);
   EXPECT_EQ(rf.detection_tests, r.detection_tests);
 }
 
-// Over small lists and a pair budget (compare.h small_lists): culling skips the items of the
-// tiles over them, and the per-pixel kernels draw those tiles.
+class HybridGpu : public ::testing::TestWithParam<std::tuple<std::string, uint32_t, uint32_t>> {};
+
+TEST_P(HybridGpu, BitIdenticalToGoldenHybrid) {
+  REQUIRE_GPU();
+  const auto& [name, tile, samples] = GetParam();
+  check_hybrid_gpu(name, tile, samples, false);
+}
+
 TEST_P(HybridGpu, BitIdenticalToGoldenHybridOverSmallLists) {
   REQUIRE_GPU();
   const auto& [name, tile, samples] = GetParam();
-  const trace::Frame f = ct::scene(name, samples);
-  auto cfg = ct::config(cuda::Device::gpu, cuda::Precision::exact, tile, tile);
-  cfg.hybrid = true;
-  cfg.runs = 2;
-  ct::small_lists(cfg);
-  const auto r = cuda::run_cuda(f, cfg);
-  ct::expect_bit_identical(ct::diff(ct::golden_of(f, tile, tile, "hybrid", &cfg), r));
-  cfg.precision = cuda::Precision::floating;  // exact verdicts: the same tiles per pixel
-  EXPECT_EQ(cuda::run_cuda(f, cfg).per_pixel_cause, r.per_pixel_cause);
+  check_hybrid_gpu(name, tile, samples, true);
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, HybridGpu,
