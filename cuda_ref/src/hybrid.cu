@@ -464,114 +464,6 @@ TV_HD inline PTri ptri_of(const HybArgs<P>& a, uint32_t item) {
   return t;
 }
 
-// Sample u of the tile (row-major pixels, samples within a pixel); false past its end.
-template <class P>
-TV_HD inline bool tile_sample(const HybArgs<P>& a, uint32_t tile, uint32_t u, int64_t& px, int64_t& py, uint32_t& k) {
-  const uint32_t tx = tile % a.grid.tiles_x, ty = tile / a.grid.tiles_x;
-  const uint32_t x0 = tx * a.grid.tile_w, y0 = ty * a.grid.tile_h;
-  const uint32_t x1 = tmin(x0 + a.grid.tile_w, a.width), y1 = tmin(y0 + a.grid.tile_h, a.height);
-  const uint32_t w = x1 - x0, S = a.n_samples;
-  if (u >= w * (y1 - y0) * S) return false;
-  k = u % S;
-  px = x0 + (u / S) % w;
-  py = y0 + (u / S) / w;
-  return true;
-}
-
-// sign(z_p(s) - z_q(s)) at a sample (zbuffer::passes): |N| < 2^(51+D), |N area| < 2^(100+D) (W192).
-TV_HD inline int sample_depth_order(const exact::Plane& p, const exact::Plane& q, Pt s) {
-  const I128 np = I128{p.alpha} * s.x + I128{p.beta} * s.y + p.gamma;
-  const I128 nq = I128{q.alpha} * s.x + I128{q.beta} * s.y + q.gamma;
-  return (wide<3>(np) * wide<3>(q.area) - wide<3>(nq) * wide<3>(p.area)).sign();
-}
-
-TV_HD inline void test(const PTri& t, Pt s, POwner& o, uint32_t& generated) {
-  if (!covers(t, s)) return;
-  ++generated;
-  if (!t.opaque) return;
-  if (o.item < 0 || sample_depth_order(t.plane, *o.plane, s) < 0) {
-    o.item = t.item;
-    o.plane = &t.plane;
-  }
-}
-
-
-template <class P>
-TV_HD void finish_sample(const HybArgs<P>& a, int64_t px, int64_t py, uint32_t k, const POwner& o) {
-  const uint64_t at = (uint64_t(py) * a.width + uint64_t(px)) * a.n_samples + k;
-  a.ids[at] = o.item < 0 ? -1 : int32_t(a.tris[a.item_tri[o.item]].id);
-  if (o.item >= 0) atomic_add(&a.owned[o.item], 1u);
-}
-
-// A per-pixel tile's row: the analytic stages ran beside the verdicts and counted in it too;
-// golden's per_pixel resolver leaves these counters 0.
-TV_HD inline void zero_analytic_columns(int64_t* r) {
-  for (int c : {kColPairTests, kColCandidates, kColClips, kColPieces, kColVisiblePieces, kColOcclusionTests}) r[c] = 0;
-}
-template <class P>
-TV_HD void finish_tile_row(const HybArgs<P>& a, uint64_t tile, uint64_t covered, uint64_t generated, uint64_t shaded) {
-  int64_t* r = a.rows + tile * kTileColumns;
-  zero_analytic_columns(r);
-  r[kColSamplesCovered] = int64_t(covered);
-  r[kColFragments] = int64_t(generated);
-  a.shaded[tile] = covered + shaded;
-}
-
-// Host emulation of a per-pixel tile.
-template <class P>
-TV_HD void per_pixel_tile(const HybArgs<P>& a, uint64_t tile) {
-  if (a.cause[tile] == 0) return;
-  int64_t* row = a.rows + tile * kTileColumns;
-  const uint32_t begin = a.item_begin[tile], n = uint32_t(row[kColTriangles]);
-  uint64_t covered = 0, generated = 0, shaded = 0;
-  int64_t px, py;
-  uint32_t k;
-  for (uint32_t u = 0; tile_sample(a, uint32_t(tile), u, px, py, k); ++u) {
-    const uint32_t sxy = a.sample_xy[k];
-    const Pt s{int32_t((px << a.grid.sb) + (sxy & 0xffffu)), int32_t((py << a.grid.sb) + (sxy >> 16))};
-    POwner o;
-    PTri held;  // the owner's record (o.plane points into it)
-    uint32_t g = 0;
-    for (uint32_t i = 0; i < n; ++i) {
-      const PTri t = ptri_of(a, begin + i);
-      const int64_t before = o.item;
-      test(t, s, o, g);
-      if (o.item != before) {
-        held = t;
-        o.plane = &held.plane;
-      }
-    }
-    generated += g;
-    covered += o.item >= 0 ? 1 : 0;
-    // Non-opaque triangles are shaded where they cover the sample in front of its owner
-    // (per_pixel_resolver.cpp; at 1 sample a pixel is a sample).
-    for (uint32_t i = 0; i < n && a.cause[tile] == 2; ++i) {
-      const PTri t = ptri_of(a, begin + i);
-      if (!t.opaque && covers(t, s) && (o.item < 0 || sample_depth_order(t.plane, *o.plane, s) < 0)) ++shaded;
-    }
-    finish_sample(a, px, py, k, o);
-  }
-  finish_tile_row(a, tile, covered, generated, shaded);
-}
-
-// ---- per-pixel tiles on the GPU ------------------------------------------------------------
-//
-// While a tile is drawn, its samples' entries of the id buffer hold the owning item (-1: none).
-// The owner of a sample is the first of the nearest opaque items that cover it in the tile's list
-// (golden's loop replaces only on strictly nearer): the order (depth, list position) is total, so
-// owners can be merged in any order, by compare-and-swap. Three kernels:
-//  1 a block per tile: the owner words cleared; each small item (a box of at most kPixBig
-//    samples: the sub-pixel triangles of an overloaded tile) drawn by a thread over its box; the
-//    big ones listed;
-//  2 a block per kPixBlock samples of a tile: a thread per sample runs through the tile's big
-//    items (staged kPixChunk at a time), keeps the nearest, and merges it into the owner word;
-//  3 a block per kPixBlock samples: non-opaque items' shaded samples (cause 2), each owner
-//    replaced by its id, the samples owned and covered counted.
-// (One kernel with a thread per sample that ran through the whole list: slivers float 0.90 ms
-// on the H200, Nsight Compute, for tiles of thousands of dust triangles; one block per tile
-// drawing every item by compare-and-swap: stack 5x slower, its tiles' thousands of big quads.)
-constexpr uint32_t kPixThreads = 256, kPixBig = 64, kPixBlock = 256, kPixChunk = 32;
-
 // The pixels of the tile whose samples may lie in a closed sub-pixel box: a sample of pixel p
 // lies in [p << sb, (p + 1) << sb).
 struct PixSpan {
@@ -611,6 +503,97 @@ TV_HD inline Pt sample_pt(const HybArgs<P>& a, int64_t px, int64_t py, uint32_t 
 }
 
 template <class P>
+TV_HD inline uint64_t sample_at(const HybArgs<P>& a, int64_t px, int64_t py, uint32_t k) {
+  return (uint64_t(py) * a.width + uint64_t(px)) * a.n_samples + k;
+}
+
+// sign(z_p(s) - z_q(s)) at a sample (zbuffer::passes): |N| < 2^(51+D), |N area| < 2^(100+D) (W192).
+TV_HD inline int sample_depth_order(const exact::Plane& p, const exact::Plane& q, Pt s) {
+  const I128 np = I128{p.alpha} * s.x + I128{p.beta} * s.y + p.gamma;
+  const I128 nq = I128{q.alpha} * s.x + I128{q.beta} * s.y + q.gamma;
+  return (wide<3>(np) * wide<3>(q.area) - wide<3>(nq) * wide<3>(p.area)).sign();
+}
+
+TV_HD inline void test(const PTri& t, Pt s, POwner& o, uint32_t& generated) {
+  if (!covers(t, s)) return;
+  ++generated;
+  if (!t.opaque) return;
+  if (o.item < 0 || sample_depth_order(t.plane, *o.plane, s) < 0) {
+    o.item = t.item;
+    o.plane = &t.plane;
+  }
+}
+
+// A per-pixel tile's row: the analytic stages ran beside the verdicts and counted in it too;
+// golden's per_pixel resolver leaves these counters 0.
+template <class P>
+TV_HD void finish_tile_row(const HybArgs<P>& a, uint64_t tile, uint64_t covered, uint64_t generated, uint64_t shaded) {
+  int64_t* r = a.rows + tile * kTileColumns;
+  for (int c : {kColPairTests, kColCandidates, kColClips, kColPieces, kColVisiblePieces, kColOcclusionTests}) r[c] = 0;
+  r[kColSamplesCovered] = int64_t(covered);
+  r[kColFragments] = int64_t(generated);
+  a.shaded[tile] = covered + shaded;
+}
+
+// Host emulation of a per-pixel tile.
+template <class P>
+TV_HD void per_pixel_tile(const HybArgs<P>& a, uint64_t tile) {
+  if (a.cause[tile] == 0) return;
+  int64_t* row = a.rows + tile * kTileColumns;
+  const uint32_t begin = a.item_begin[tile], n = uint32_t(row[kColTriangles]);
+  uint64_t covered = 0, generated = 0, shaded = 0;
+  const PixSpan tp = tile_pixels(a, tile);
+  for (uint64_t u = 0; u < tp.samples(a.n_samples); ++u) {
+    int64_t px, py;
+    uint32_t k;
+    span_sample(tp, a.n_samples, u, px, py, k);
+    const Pt s = sample_pt(a, px, py, k);
+    POwner o;
+    PTri held;  // the owner's record (o.plane points into it)
+    uint32_t g = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+      const PTri t = ptri_of(a, begin + i);
+      const int64_t before = o.item;
+      test(t, s, o, g);
+      if (o.item != before) {
+        held = t;
+        o.plane = &held.plane;
+      }
+    }
+    generated += g;
+    covered += o.item >= 0 ? 1 : 0;
+    // Non-opaque triangles are shaded where they cover the sample in front of its owner
+    // (per_pixel_resolver.cpp; at 1 sample a pixel is a sample).
+    for (uint32_t i = 0; i < n && a.cause[tile] == 2; ++i) {
+      const PTri t = ptri_of(a, begin + i);
+      if (!t.opaque && covers(t, s) && (o.item < 0 || sample_depth_order(t.plane, *o.plane, s) < 0)) ++shaded;
+    }
+    const uint64_t at = sample_at(a, px, py, k);
+    a.ids[at] = o.item < 0 ? -1 : int32_t(a.tris[a.item_tri[o.item]].id);
+    if (o.item >= 0) atomic_add(&a.owned[o.item], 1u);
+  }
+  finish_tile_row(a, tile, covered, generated, shaded);
+}
+
+// ---- per-pixel tiles on the GPU ------------------------------------------------------------
+//
+// While a tile is drawn, its samples' entries of the id buffer hold the owning item (-1: none).
+// The owner of a sample is the first of the nearest opaque items that cover it in the tile's list
+// (golden's loop replaces only on strictly nearer): the order (depth, list position) is total, so
+// owners can be merged in any order, by compare-and-swap. Three kernels:
+//  1 a block per tile: the owner words cleared; each small item (a box of at most kPixBig
+//    samples: the sub-pixel triangles of an overloaded tile) drawn by a thread over its box; the
+//    big ones listed;
+//  2 a block per kPixBlock samples of a tile: a thread per sample runs through the tile's big
+//    items (staged kPixChunk at a time), keeps the nearest, and merges it into the owner word;
+//  3 a block per kPixBlock samples: non-opaque items' shaded samples (cause 2), each owner
+//    replaced by its id, the samples owned and covered counted.
+// (One kernel with a thread per sample that ran through the whole list: slivers float 0.90 ms
+// on the H200, Nsight Compute, for tiles of thousands of dust triangles; one block per tile
+// drawing every item by compare-and-swap: stack 5x slower, its tiles' thousands of big quads.)
+constexpr uint32_t kPixThreads = 256, kPixBig = 64, kPixBlock = 256, kPixChunk = 32;
+
+template <class P>
 TV_HD inline exact::Plane exact_plane(const TileTri<P>& t) {
   if constexpr (P::kExact) return t.plane;
   else return exact::plane_of(t.v[0], t.v[1], t.v[2]);
@@ -632,11 +615,6 @@ __device__ inline void merge_owner(const HybArgs<P>& a, uint64_t at, uint32_t it
     if (seen == cur) return;
     cur = seen;
   }
-}
-
-template <class P>
-TV_HD inline uint64_t sample_at(const HybArgs<P>& a, int64_t px, int64_t py, uint32_t k) {
-  return (uint64_t(py) * a.width + uint64_t(px)) * a.n_samples + k;
 }
 
 // 1: a block per tile. Row: the analytic columns 0, the small items' fragments; big items go
@@ -685,11 +663,7 @@ __global__ void __launch_bounds__(kPixThreads) k_pp_small(HybArgs<P> a, uint64_t
     atomicAdd(&generated_sum, static_cast<unsigned long long>(generated));
     __syncthreads();
     if (threadIdx.x == 0) {
-      int64_t* r = a.rows + tile * kTileColumns;
-      zero_analytic_columns(r);
-      r[kColSamplesCovered] = 0;
-      r[kColFragments] = int64_t(generated_sum);
-      a.shaded[tile] = 0;
+      finish_tile_row(a, tile, 0, generated_sum, 0);  // kernel 3 adds the covered and shaded samples
       a.big_count[tile] = n_big;
     }
     __syncthreads();  // the shared words are reused by the next tile
