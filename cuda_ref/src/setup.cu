@@ -69,9 +69,19 @@ TV_HD void setup_count(const SetupArgs& a, uint64_t t) {
   a.fan_count[t] = all_inside(a, t) ? 1 : count_clipped(a, t);
 }
 
+// Where a setup triangle's record and its three edge uses go: straight to the lists.
+struct DirectOut {
+  TV_HD SetupTri& rec(const SetupArgs& a, uint64_t out) const { return a.setup[out]; }
+  TV_HD void use(const SetupArgs& a, uint64_t out, int e, uint64_t key, uint32_t forward) const {
+    a.use_key[3 * out + e] = key;
+    a.use_forward[3 * out + e] = forward;
+  }
+};
+
 // One setup triangle: facing after the snap, and its three edge keys for silhouettes.
+template <class Out>
 TV_HD inline void emit_one(const SetupArgs& a, uint64_t t, uint64_t out, const Vtx& v0, const Vtx& v1, const Vtx& v2,
-                           const uint32_t* idx, bool cut, int facing) {
+                           const uint32_t* idx, bool cut, int facing, const Out& o) {
   const uint32_t d = a.tri_draw[t];
   const DrawInfo& di = a.draws[d];
   SetupTri st;
@@ -89,7 +99,7 @@ TV_HD inline void emit_one(const SetupArgs& a, uint64_t t, uint64_t out, const V
   const bool turns_as_facing = facing > 0 ? area < 0 : area > 0;
   st.front = facing > 0 && turns_as_facing;
   count_add(&a.counters[!turns_as_facing ? kDegenerate : facing < 0 ? kBackFacing : kFrontFacing], 1);
-  a.setup[out] = st;
+  o.rec(a, out) = st;
   a.front_flag[out] = st.front;
   // Edges made by clipping have no neighbour: boundaries, sorted after the draw's keyed edges.
   const uint64_t boundary = (uint64_t(di.vertex_offset + di.vertex_count - 1) << 32) | 0xffffffffu;
@@ -109,12 +119,12 @@ TV_HD inline void emit_one(const SetupArgs& a, uint64_t t, uint64_t out, const V
       key = (uint64_t(i0 < i1 ? i0 : i1) << 32) | (i0 < i1 ? i1 : i0);
       forward = i0 < i1;
     }
-    a.use_key[3 * out + e] = key;
-    a.use_forward[3 * out + e] = forward;
+    o.use(a, out, e, key, forward);
   }
 }
 
-TV_HD __noinline__ void emit_clipped(const SetupArgs& a, uint64_t t) {
+template <class Out>
+TV_HD __noinline__ void emit_clipped(const SetupArgs& a, uint64_t t, const Out& o) {
   ClipV poly[kMaxClipVerts];
   bool cut = false;
   const uint32_t n = clip_triangle(a.vertices, a.indices, a.gx, a.gy, t, poly, cut);
@@ -125,22 +135,53 @@ TV_HD __noinline__ void emit_clipped(const SetupArgs& a, uint64_t t) {
   uint64_t out = a.fan_offset[t];
   for (uint32_t k = 1; k + 1 < n; ++k, ++out) {
     const uint32_t idx[3] = {poly[0].index, poly[k].index, poly[k + 1].index};
-    emit_one(a, t, out, sv[0], sv[k], sv[k + 1], idx, cut, facing);
+    emit_one(a, t, out, sv[0], sv[k], sv[k + 1], idx, cut, facing, o);
   }
 }
 
-TV_HD void setup_emit(const SetupArgs& a, uint64_t t) {
+template <class Out>
+TV_HD void emit_triangle(const SetupArgs& a, uint64_t t, const Out& o) {
   const int facing = clip_facing(a, t);
   if (facing == 0) return;  // edge-on: setup_count gave it no fan
   const uint32_t idx[3] = {a.indices[3 * t], a.indices[3 * t + 1], a.indices[3 * t + 2]};
   const int4 q0 = a.vtx[idx[0]], q1 = a.vtx[idx[1]], q2 = a.vtx[idx[2]];
   if (!(q0.w & q1.w & q2.w)) {
-    emit_clipped(a, t);
+    emit_clipped(a, t, o);
     return;
   }
   emit_one(a, t, a.fan_offset[t], Vtx{q0.x, q0.y, uint32_t(q0.z)}, Vtx{q1.x, q1.y, uint32_t(q1.z)},
-           Vtx{q2.x, q2.y, uint32_t(q2.z)}, idx, false, facing);
+           Vtx{q2.x, q2.y, uint32_t(q2.z)}, idx, false, facing, o);
 }
+
+TV_HD void setup_emit(const SetupArgs& a, uint64_t t) { emit_triangle(a, t, DirectOut{}); }
+
+// On the GPU the records come out through shared memory. A block takes kEmitBlock trace
+// triangles; their setup triangles are one run of the list (fan_offset scans the fans in trace
+// order), so the block stages the run's first kEmitStage records and their edge uses and writes
+// them out as consecutive words. Each thread writing its own 56-byte record made 14 stores,
+// each touching other sectors. Records past the stage (a block of many clipped fans) go
+// straight out.
+inline constexpr uint32_t kEmitBlock = 256, kEmitStage = 320;
+inline constexpr uint32_t kSetupWords = sizeof(SetupTri) / 4;
+static_assert(sizeof(SetupTri) % 4 == 0, "records of whole words");
+
+struct StagedOut {
+  uint64_t o0;
+  uint32_t* rec_words;  // kEmitStage records
+  uint64_t* key;        // 3 kEmitStage
+  uint32_t* forward;    // 3 kEmitStage
+  TV_HD SetupTri& rec(const SetupArgs& a, uint64_t out) const {
+    return out - o0 < kEmitStage ? reinterpret_cast<SetupTri*>(rec_words)[out - o0] : a.setup[out];
+  }
+  TV_HD void use(const SetupArgs& a, uint64_t out, int e, uint64_t k, uint32_t f) const {
+    if (out - o0 < kEmitStage) {
+      key[3 * (out - o0) + e] = k;
+      forward[3 * (out - o0) + e] = f;
+    } else {
+      DirectOut{}.use(a, out, e, k, f);
+    }
+  }
+};
 
 __global__ void k_setup_vertex(SetupArgs a, uint64_t n) {
   TV_KERNEL_WAIT();
@@ -150,9 +191,26 @@ __global__ void k_setup_count(SetupArgs a, uint64_t n) {
   TV_KERNEL_WAIT();
   TV_GRID_LOOP(i, n) setup_count(a, i);
 }
-__global__ void k_setup_emit(SetupArgs a, uint64_t n) {
+__global__ void __launch_bounds__(kEmitBlock) k_setup_emit(SetupArgs a, uint64_t n_tagged) {
   TV_KERNEL_WAIT();
-  TV_GRID_LOOP(i, n) setup_emit(a, i);
+  __shared__ alignas(16) uint32_t rec[kEmitStage * kSetupWords];
+  __shared__ alignas(16) uint64_t key[3 * kEmitStage];
+  __shared__ uint32_t forward[3 * kEmitStage];
+  const uint64_t n = count_of(n_tagged);
+  for (uint64_t base = uint64_t(blockIdx.x) * kEmitBlock; base < n; base += uint64_t(gridDim.x) * kEmitBlock) {
+    const uint32_t m = uint32_t(n - base < kEmitBlock ? n - base : kEmitBlock);
+    const uint64_t o0 = a.fan_offset[base], o1 = a.fan_offset[base + m];
+    if (threadIdx.x < m) emit_triangle(a, base + threadIdx.x, StagedOut{o0, rec, key, forward});
+    __syncthreads();
+    const uint32_t staged = uint32_t(o1 - o0 < kEmitStage ? o1 - o0 : kEmitStage);
+    uint32_t* dst = reinterpret_cast<uint32_t*>(a.setup + o0);
+    for (uint32_t k = threadIdx.x; k < staged * kSetupWords; k += kEmitBlock) dst[k] = rec[k];
+    for (uint32_t k = threadIdx.x; k < 3 * staged; k += kEmitBlock) {
+      a.use_key[3 * o0 + k] = key[k];
+      a.use_forward[3 * o0 + k] = forward[k];
+    }
+    __syncthreads();
+  }
 }
 
 // ---- welding of triangle-soup draws by position -------------------------------------------
@@ -319,7 +377,7 @@ void stage_setup(Pipeline<P>& p) {
   a.use_key = p.use_key.need(3 * p.n_setup + 1);
   a.use_forward = p.use_forward.need(3 * p.n_setup + 1);
   a.front_flag = p.front_flag.need(p.n_setup + 1);
-  ex.launch(k_setup_emit, setup_emit, p.N(kSzSetupEmit, n), a);
+  ex.launch(k_setup_emit, setup_emit, p.N(kSzSetupEmit, n), a, kEmitBlock);
 }
 
 template void stage_setup<ExactP>(Pipeline<ExactP>&);
