@@ -225,6 +225,7 @@ struct Pipeline {
   Buf<uint64_t> fan_offset;
   Buf<uint32_t> weld;           // per vertex: lowest index with the same position (soup draws)
   Buf<uint32_t> weld_table;
+  Buf<int8_t> tri_facing;       // per trace triangle: clip_facing (setup's count, read by its emit)
   Buf<SetupTri> setup;
   Buf<uint64_t> use_key;        // 3 per setup triangle: edge key, or kBoundary
   Buf<uint32_t> use_forward;    // 3 per setup triangle: 1 where the keyed edge runs from its lower index
@@ -338,6 +339,7 @@ struct Pipeline {
     obin_rec.bind(&e);
     draws.bind(&e);
     setup.bind(&e);
+    tri_facing.bind(&e);
     edges.bind(&e);
     tris.bind(&e);
     tile_rows.bind(&e);

@@ -29,10 +29,11 @@ struct SetupArgs {
   double gx, gy;  // guard band half-widths in NDC
   int4* vtx;             // per vertex: snapped x, y, z, 1 when inside every plane (k_setup_vertex)
   uint32_t* front_flag;  // per setup triangle: front-facing (silhouettes scans them into the front list)
+  int8_t* facing;        // per trace triangle: clip_facing, from setup_count (emit reads it back)
 };
 
 // The exact facing; the double filter settles nearly every triangle (the expansion took most
-// of setup's double arithmetic, twice per triangle: count and emit).
+// of setup's double arithmetic). Made once per triangle, by setup_count, and kept for the emit.
 TV_HD inline int clip_facing(const SetupArgs& a, uint64_t t) {
   return clip_facing_fast(a.vertices[a.indices[3 * t]], a.vertices[a.indices[3 * t + 1]],
                           a.vertices[a.indices[3 * t + 2]]);
@@ -61,7 +62,9 @@ TV_HD __noinline__ uint32_t count_clipped(const SetupArgs& a, uint64_t t) {
 }
 
 TV_HD void setup_count(const SetupArgs& a, uint64_t t) {
-  if (clip_facing(a, t) == 0) {
+  const int facing = clip_facing(a, t);
+  a.facing[t] = int8_t(facing);
+  if (facing == 0) {
     count_add(&a.counters[kEdgeOn], 1);
     a.fan_count[t] = 0;
     return;
@@ -129,7 +132,7 @@ TV_HD __noinline__ void emit_clipped(const SetupArgs& a, uint64_t t, const Out& 
   bool cut = false;
   const uint32_t n = clip_triangle(a.vertices, a.indices, a.gx, a.gy, t, poly, cut);
   if (n == 0) return;
-  const int facing = clip_facing(a, t);  // non-zero: setup_emit returned for edge-on triangles
+  const int facing = a.facing[t];  // non-zero: emit_triangle returned for edge-on triangles
   Vtx sv[kMaxClipVerts];
   for (uint32_t k = 0; k < n; ++k) sv[k] = snap(a.f, a.gx, a.gy, poly[k]);
   uint64_t out = a.fan_offset[t];
@@ -141,7 +144,7 @@ TV_HD __noinline__ void emit_clipped(const SetupArgs& a, uint64_t t, const Out& 
 
 template <class Out>
 TV_HD void emit_triangle(const SetupArgs& a, uint64_t t, const Out& o) {
-  const int facing = clip_facing(a, t);
+  const int facing = a.facing[t];
   if (facing == 0) return;  // edge-on: setup_count gave it no fan
   const uint32_t idx[3] = {a.indices[3 * t], a.indices[3 * t + 1], a.indices[3 * t + 2]};
   const int4 q0 = a.vtx[idx[0]], q1 = a.vtx[idx[1]], q2 = a.vtx[idx[2]];
@@ -359,7 +362,8 @@ void stage_setup(Pipeline<P>& p) {
   }
 
   SetupArgs a{f,       p.vertices.get(), p.indices.get(), p.tri_draw.get(), p.draws.get(), weld, p.fan_count.need(n + 1),
-              nullptr, nullptr,          nullptr,         nullptr,          p.counters.get(), gx, gy, nullptr, nullptr};
+              nullptr, nullptr,          nullptr,         nullptr,          p.counters.get(), gx, gy, nullptr, nullptr,
+              p.tri_facing.need(n + 1)};
   a.fan_offset = p.fan_offset.need(n + 1);
   a.vtx = p.setup_vtx.need(f.n_vertices + 1);
   ex.launch(k_setup_vertex, setup_vertex, f.n_vertices, a);
