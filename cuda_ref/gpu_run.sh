@@ -33,6 +33,8 @@
 # compare.json) and logs.tar.xz. Phases resume: results already in build-gpu/work are kept, so a run cut short by a time limit
 # continues where it stopped. Environment: OUT, TILEVIS_GPU_SCENES (names, default: all),
 # TILEVIS_GPU_TILES (default "16 32 64"), TILEVIS_GPU_RUNS (default 20), JOBS (default nproc),
+# TILEVIS_GPU_PAIR_BUDGET (default 250: the hybrid runs' and golden hybrid's --pair-budget, so that
+# a tile of more triangles x edges goes per pixel; 0: none; reports/cuda/hybrid_budget_h200.md),
 # TILEVIS_GPU_DEVICE=cpu (the host emulation: tries the script on a machine without a GPU),
 # TILEVIS_TEST_LABEL (ctest labels, default "gpu|cuda"; "gpu" leaves the host emulation to CI).
 set -euo pipefail
@@ -48,6 +50,8 @@ LOGS="$BUILD/logs"
 TILES="${TILEVIS_GPU_TILES:-16 32 64}"
 RUNS="${TILEVIS_GPU_RUNS:-20}"
 JOBS="${JOBS:-$(nproc)}"
+PAIR_BUDGET="${TILEVIS_GPU_PAIR_BUDGET:-250}"
+[[ "$PAIR_BUDGET" =~ ^[0-9]+$ ]] || { echo "gpu_run: TILEVIS_GPU_PAIR_BUDGET=$PAIR_BUDGET: a whole number" >&2; exit 2; }
 DEVICE="${TILEVIS_GPU_DEVICE:-gpu}"  # cpu: the host emulation, to try this script without a GPU
 BIN="$BUILD/model/app/tilevis"
 # The trace set the baselines and cross phases work on: 1080p (the traces as made, into $WORK) or
@@ -180,14 +184,14 @@ phase_cross() {
   for s in $(scenes); do
     for t in $tiles; do
       [ "$SET" = 1080p ] || continue  # no golden at 4K 4 spp (its CPU time): timings and ratios only
-      [ -f "$SET_WORK/$s/t$t/golden/stats.json" ] || jobs+=("$s $t analytic golden")
-      [ -f "$SET_WORK/$s/t$t/golden_hybrid/stats.json" ] || jobs+=("$s $t hybrid golden_hybrid")
+      [ -f "$SET_WORK/$s/t$t/golden/stats.json" ] || jobs+=("$s $t analytic golden 0")
+      [ -f "$SET_WORK/$s/t$t/golden_hybrid/stats.json" ] || jobs+=("$s $t hybrid golden_hybrid $PAIR_BUDGET")
     done
   done
   if [ ${#jobs[@]} -gt 0 ]; then
     say "golden: ${#jobs[@]} runs on $JOBS cores"
     printf '%s\n' "${jobs[@]}" | xargs -P "$JOBS" -L 1 bash -c \
-      '"$0" golden "$1/$4.tvt" --tile "$5" --mode "$6" -o "$2/$4/t$5/$7" >"$3/$7_$4_$5.log" 2>&1 || echo "golden $4 $5 $6 failed" >&2' \
+      '"$0" golden "$1/$4.tvt" --tile "$5" --mode "$6" --pair-budget "$8" -o "$2/$4/t$5/$7" >"$3/$7_$4_$5.log" 2>&1 || echo "golden $4 $5 $6 failed" >&2' \
       "$BIN" "$SET_TRACES" "$SET_WORK" "$LOGS" 2>&1 | tee -a "$LOGS/errors.log" >&2 || true
   fi
   say "golden done ($(elapsed))"
@@ -195,11 +199,11 @@ phase_cross() {
     for t in $tiles; do
       local d="$SET_WORK/$s/t$t"
       for p in exact float hybrid_exact hybrid_float; do
-        local mode=analytic prec="$p" ref=golden
-        case "$p" in hybrid_*) mode=hybrid prec="${p#hybrid_}" ref=golden_hybrid ;; esac
+        local mode=analytic prec="$p" ref=golden budget=()
+        case "$p" in hybrid_*) mode=hybrid prec="${p#hybrid_}" ref=golden_hybrid budget=(--pair-budget "$PAIR_BUDGET") ;; esac
         if [ ! -f "$d/$p/stats.json" ]; then
           local hw; hw="$(hw_ms "$s")"
-          "$BIN" cuda "$SET_TRACES/$s.tvt" --tile "$t" --mode "$mode" --precision "$prec" --runs "$runs" --device "$DEVICE" \
+          "$BIN" cuda "$SET_TRACES/$s.tvt" --tile "$t" --mode "$mode" --precision "$prec" "${budget[@]}" --runs "$runs" --device "$DEVICE" \
             -o "$d/$p" ${hw:+--hw-raster-ms "$hw"} --baselines "$base" \
             >"$LOGS/cuda_${tag}${s}_${t}_$p.log" 2>&1 || { say "cuda $s $t $p failed: $(tail -n 1 "$LOGS/cuda_${tag}${s}_${t}_$p.log")"; continue; }
         fi

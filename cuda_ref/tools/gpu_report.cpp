@@ -170,6 +170,8 @@ int main(int argc, char** argv) {
           if (std::string(prec).rfind("hybrid", 0) == 0) {
             const json tr = load(td / (std::string("cmp_truth_") + prec) / "compare.json");
             e["per_pixel_fallback"] = st["totals"].value("per_pixel_fallback", json(nullptr));
+            e["pair_budget"] = st["config"].value("pair_budget", json(nullptr));
+            e["samples_covered"] = st["totals"].value("samples_covered", json(nullptr));
             e["mismatched_samples_vs_truth"] = tr.is_null() ? json(nullptr) : tr["mismatched_samples"];
             e["area_mismatches_vs_golden_hybrid"] = cmp.is_null() ? json(nullptr) : cmp["area_mismatches"];
           }
@@ -322,16 +324,21 @@ int main(int argc, char** argv) {
   }
   md << "\n## Hybrid (golden --mode hybrid on the GPU)\n\n`vs golden hybrid`: ids, tile counters (the verdict "
         "columns per_pixel, per_pixel_cause, detection_screens, detection_tests included) and areas against golden's "
-        "hybrid; `vs truth`: mismatched samples against the exact z-buffer truth.\n\n"
-        "| scene | tile | precision | new frame ms | graph ms | agreement vs golden hybrid | tile-counter mismatches | "
-        "area mismatches | totals differing | vs truth | per-pixel tiles (interpenetration / non-opaque / budget) |\n"
-        "|---|---|---|---|---|---|---|---|---|---|---|\n";
+        "hybrid (run with the same `--pair-budget`: a tile of more triangles x edges goes per pixel, 0: none); "
+        "`vs truth`: mismatched samples against the exact z-buffer truth; `per-pixel samples`: covered samples of "
+        "the per-pixel tiles, and their share of all covered samples.\n\n"
+        "| scene | tile | precision | pair budget | new frame ms | graph ms | agreement vs golden hybrid | "
+        "tile-counter mismatches | area mismatches | totals differing | vs truth | per-pixel tiles (interpenetration "
+        "/ non-opaque / budget) | per-pixel samples |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& e : report["entries"]) {
     if (e.contains("error") || !e.contains("per_pixel_fallback")) continue;
     const json& fb = e["per_pixel_fallback"];
-    md << "| " << label(e) << " | " << e["tile"] << " | " << e["precision"].get<std::string>()
-       << " | " << fmt(num(e, "total_ms")) << " | " << fmt(num(e, "graph_total_ms")) << " | "
-       << fmt(100 * num(e, "sample_agreement_vs_golden"), 4) << " % | " << e["tile_counter_mismatches"].dump() << " | "
+    const double covered = num(e, "samples_covered", 0);
+    const bool fb_samples = fb.is_object() && fb.contains("samples") && covered > 0;
+    md << "| " << label(e) << " | " << e["tile"] << " | " << e["precision"].get<std::string>() << " | "
+       << e.value("pair_budget", json(nullptr)).dump() << " | " << fmt(num(e, "total_ms")) << " | "
+       << fmt(num(e, "graph_total_ms")) << " | " << fmt(100 * num(e, "sample_agreement_vs_golden"), 4) << " % | " << e["tile_counter_mismatches"].dump() << " | "
        << e["area_mismatches_vs_golden_hybrid"].dump() << " | "
        << (e.contains("totals_vs_reference")
                ? (e["totals_vs_reference"].empty() ? std::string("0") : e["totals_vs_reference"].dump())
@@ -340,6 +347,9 @@ int main(int argc, char** argv) {
        << (fb.is_object() ? fb["tiles"].dump() + " (" + fb["tiles_interpenetration"].dump() + " / " +
                                 fb["tiles_non_opaque"].dump() + " / " + fb["tiles_budget"].dump() + ")"
                           : std::string("n/a"))
+       << " | "
+       << (fb_samples ? fb["samples"].dump() + " (" + fmt(100 * fb["samples"].get<double>() / covered, 1) + " %)"
+                      : std::string("n/a"))
        << " |\n";
   }
   md << "\n## Z-buffer baselines on the same GPU (1080p 1 spp, hot_tile 4K 1 spp; and every scene at 4K 4 spp)\n\n"
@@ -371,6 +381,42 @@ int main(int argc, char** argv) {
        << " | " << fmt(num(b, "naive_zbuffer_ms")) << " | " << b["naive_zbuffer_vs_truth_mismatched"].dump() << " ("
        << b["naive_zbuffer_skipped"].dump() << ") | " << fmt(num(b, "cuda_zbuffer_ms") / num(b, "naive_zbuffer_ms"), 2)
        << " |\n";
+  }
+  // Issue 16's lines at 32x32 tiles, per scene and set: the faster of analytic and hybrid for each precision, new
+  // frame over the GPU's own rasteriser (float <= 1.0x at 1080p and 0.5x at 4K 4 spp, exact <= 2.0x).
+  {
+    std::map<std::string, std::map<std::string, std::pair<double, std::string>>> best;  // label -> float/exact -> ratio, mode
+    for (const auto& e : report["entries"]) {
+      if (e.contains("error") || e["tile"] != 32 || num(e, "hw_raster_ratio", 0) <= 0) continue;
+      const std::string prec = e["precision"].get<std::string>();
+      const bool hybrid = prec.rfind("hybrid_", 0) == 0;
+      const std::string kind = hybrid ? prec.substr(7) : prec;
+      auto& b = best[label(e)][kind];
+      const double r = num(e, "hw_raster_ratio");
+      if (b.second.empty() || r < b.first) b = {r, hybrid ? "hybrid" : "analytic"};
+    }
+    md << "\n## The GPU's rasteriser against the faster of analytic and hybrid (32x32 tiles, new frame)\n\n"
+          "Lines: float <= 1.0x (4K 4 spp: <= 0.5x), exact <= 2.0x; `met` counts the scenes within them.\n\n"
+          "| scene | float / GL (mode) | exact / GL (mode) |\n|---|---|---|\n";
+    int met[2][2] = {{0, 0}, {0, 0}}, seen[2] = {0, 0};
+    for (const auto& [scene, kinds] : best) {
+      const int k4 = scene.find("4K") != std::string::npos ? 1 : 0;
+      ++seen[k4];
+      md << "| " << scene;
+      for (const char* kind : {"float", "exact"}) {
+        const auto it = kinds.find(kind);
+        if (it == kinds.end()) { md << " | n/a"; continue; }
+        const bool is_float = std::string(kind) == "float";
+        const double line = is_float ? (k4 ? 0.5 : 1.0) : 2.0;
+        const bool ok = it->second.first <= line;
+        met[k4][is_float ? 0 : 1] += ok ? 1 : 0;
+        md << " | " << fmt(it->second.first, 2) << " (" << it->second.second << ")" << (ok ? "" : " over");
+      }
+      md << " |\n";
+    }
+    md << "\n1080p: float met on " << met[0][0] << " of " << seen[0] << ", exact on " << met[0][1] << " of " << seen[0]
+       << "; 4K 4 spp: float met on " << met[1][0] << " of " << seen[1] << ", exact on " << met[1][1] << " of " << seen[1]
+       << ".\n";
   }
   md << "\n## Ratios at 32x32 tiles (analytic time / baseline time; > 1: slower), 1080p 1 spp and 4K 4 spp\n\n"
         "`new frame` (the headline): the device-sized graph, no size read on the host; `stream`: the stages "
