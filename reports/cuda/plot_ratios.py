@@ -29,6 +29,7 @@ def main():
     except (OSError, ValueError, KeyError) as e:
         sys.exit(f"plot_ratios: {a.report}: not a cuda_ref report ({e})")
     ratio = {}
+    budgets = sorted({e["pair_budget"] for e in entries if isinstance(e.get("pair_budget"), int)})
     for e in entries:
         r = e.get("hw_raster_ratio")
         if isinstance(r, (int, float)) and r > 0:
@@ -51,6 +52,8 @@ def main():
         for i, (prec, label, color) in enumerate(PRECISIONS):
             xs = [j + (i - (len(PRECISIONS) - 1) / 2) * width for j in range(len(scenes))]
             ys = [ratio.get((set_name, s, prec), float("nan")) for s in scenes]
+            if prec.startswith("hybrid") and budgets:
+                label += f" (pair budget {', '.join(map(str, budgets))})"
             ax.bar(xs, ys, width, label=label, color=color)
         ax.axhline(float_line, color="#1f77b4", linestyle="--", linewidth=1, label=f"float's line ({float_line:g}x)")
         ax.axhline(2.0, color="#ff7f0e", linestyle="--", linewidth=1, label="exact's line (2x)")
