@@ -60,6 +60,13 @@ inline uint64_t dev_count_bound(uint64_t n) {  // 2^bits >= the bound the tag wa
                 i##_end = ::tilevis::cuda::count_of(uint64_t(n));                                \
        i < i##_end; i += uint64_t(gridDim.x) * blockDim.x)
 
+// A block's threads copy n elements, consecutive threads consecutive elements (the staged
+// records of setup's emit and the front triangles, in and out of shared memory).
+template <class T>
+__device__ inline void block_copy(T* dst, const T* src, uint32_t n) {
+  for (uint32_t k = threadIdx.x; k < n; k += blockDim.x) dst[k] = src[k];
+}
+
 // ---- atomics that also run single-threaded on the host -------------------------------------
 
 TV_HD inline uint32_t atomic_add(uint32_t* p, uint32_t v) {

@@ -968,9 +968,8 @@ void stage_hybrid(Pipeline<P>& p) {
     k_pp_big<P><<<jobs, kPixBlock, 0, ex.stream>>>(a, nt, parts);
     TV_CUDA(cudaGetLastError());
     k_pp_finish<P><<<jobs, kPixBlock, 0, ex.stream>>>(a, nt, parts);
-    ex.queued += 2;
     TV_CUDA(cudaGetLastError());
-    ++ex.queued;
+    ex.queued += 3;
   }
   HFoldArgs<P> f{};
   f.counters = p.counters.get();

@@ -206,12 +206,9 @@ __global__ void __launch_bounds__(kEmitBlock) k_setup_emit(SetupArgs a, uint64_t
     if (threadIdx.x < m) emit_triangle(a, base + threadIdx.x, StagedOut{o0, rec, key, forward});
     __syncthreads();
     const uint32_t staged = uint32_t(o1 - o0 < kEmitStage ? o1 - o0 : kEmitStage);
-    uint32_t* dst = reinterpret_cast<uint32_t*>(a.setup + o0);
-    for (uint32_t k = threadIdx.x; k < staged * kSetupWords; k += kEmitBlock) dst[k] = rec[k];
-    for (uint32_t k = threadIdx.x; k < 3 * staged; k += kEmitBlock) {
-      a.use_key[3 * o0 + k] = key[k];
-      a.use_forward[3 * o0 + k] = forward[k];
-    }
+    block_copy(reinterpret_cast<uint32_t*>(a.setup + o0), rec, staged * kSetupWords);
+    block_copy(a.use_key + 3 * o0, key, 3 * staged);
+    block_copy(a.use_forward + 3 * o0, forward, 3 * staged);
     __syncthreads();
   }
 }

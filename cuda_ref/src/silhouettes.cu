@@ -246,7 +246,7 @@ __global__ void __launch_bounds__(kFrontBlock<P>) k_front_build_block(FrontArgs<
     const uint32_t m = uint32_t(n - base < B ? n - base : B);
     const uint64_t o0 = a.offset[base], o1 = a.offset[base + m];
     const uint32_t* src = reinterpret_cast<const uint32_t*>(a.setup + base);
-    for (uint32_t k = threadIdx.x; k < m * kSetupWords; k += B) buf[k] = src[k];
+    block_copy(buf, src, m * kSetupWords);
     __syncthreads();
     SetupTri t;
     bool front = false;
@@ -259,9 +259,7 @@ __global__ void __launch_bounds__(kFrontBlock<P>) k_front_build_block(FrontArgs<
     __syncthreads();
     if (front) reinterpret_cast<TileTri<P>*>(buf)[at] = make_tile_tri<P>(t.v[0], t.v[1], t.v[2], t.id, t.opaque != 0);
     __syncthreads();
-    uint32_t* dst = reinterpret_cast<uint32_t*>(a.tris + o0);
-    const uint32_t words = uint32_t(o1 - o0) * kTriWords;
-    for (uint32_t k = threadIdx.x; k < words; k += B) dst[k] = buf[k];
+    block_copy(reinterpret_cast<uint32_t*>(a.tris + o0), buf, uint32_t(o1 - o0) * kTriWords);
     __syncthreads();
   }
 }
