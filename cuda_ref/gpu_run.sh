@@ -415,7 +415,7 @@ phase_profile() {
   args_of() {  # what -> tilevis cuda arguments
     case "$1" in
       zb_*) echo "--zbuffer ${1#zb_} --runs 1 --warmup 1" ;;
-      hybrid_*) echo "--tile 32 --mode hybrid --precision ${1#hybrid_} --runs 1 --warmup 1 --baselines off" ;;
+      hybrid_*) echo "--tile 32 --mode hybrid --pair-budget $PAIR_BUDGET --precision ${1#hybrid_} --runs 1 --warmup 1 --baselines off" ;;
       *) echo "--tile 32 --precision $1 --runs 1 --warmup 1 --baselines off" ;;
     esac
   }

@@ -54,8 +54,9 @@ struct HybArgs {
   int32_t* ids;
   uint32_t* owned;  // per item: samples it owns in a per-pixel tile
   uint64_t* shaded;  // per per-pixel tile at 1 sample: pixels shaded (owners, and non-opaque triangles in front)
-  uint32_t* big;        // GPU: per per-pixel tile, in its range of item positions, its big items (k_pp_small)
-  uint32_t* big_count;  // GPU: per tile, how many
+  uint32_t pp_fw, pp_fh, pp_lfw, pp_ls;  // a fine tile's pixels (64 samples), log2 of its width and of n_samples
+  bool pp_narrow;     // depth bits <= 26: depths compared in I128 (pp_order)
+  uint64_t* pp_sums;  // GPU: per tile, kPPSums words (k_per_pixel)
 };
 
 template <class P>
@@ -430,55 +431,96 @@ __global__ void __launch_bounds__(kDetWarps * 32) k_verdict(HybArgs<P> a, uint64
 
 // ---- per-pixel tiles ------------------------------------------------------------------------
 
-// One binned triangle at one sample: coverage (top-left), the depth test of zbuffer.h.
-struct PTri {
-  exact::Line e[3];
-  exact::Plane plane;
-  Rect bbox;  // closed: a sample outside it is not covered (three edge functions spared)
-  uint32_t opaque, item;
+// A tile's item as the per-pixel pass tests it at a sample: its edges (positive order, as
+// make_tile_tri orders them; the top-left rule's owned edges), exact::plane_of's integer part
+// (all 0: degenerate) and the closed sub-pixel box. 128 bytes: the GPU stages a block's worth
+// in shared memory.
+struct alignas(16) PPRec {
+  I128 gamma;
+  int64_t alpha, beta, area;
+  int64_t c[3];
+  int32_t ea[3], eb[3];
+  int32_t x0, y0, x1, y1;
+  uint32_t item, id;  // id: the original (trace) triangle
+  uint32_t flags;     // bit k < 3: edge k owns its boundary; kPPOpaque: opaque
 };
+constexpr uint32_t kPPOpaque = 8;
 
-struct POwner {
-  const exact::Plane* plane = nullptr;
-  int64_t item = -1;
-};
-
-TV_HD inline bool covers(const PTri& t, Pt s) {
-  if (s.x < t.bbox.x0 || s.x > t.bbox.x1 || s.y < t.bbox.y0 || s.y > t.bbox.y1) return false;
+template <class P>
+TV_HD inline PPRec pp_rec(const HybArgs<P>& a, uint32_t item) {
+  const TileTri<P>& t = a.tris[a.item_tri[item]];
+  const Vtx v0 = t.v[0], v1 = t.v[1], v2 = t.v[2];
+  const bool pos = orient2d(v0.xy(), v1.xy(), v2.xy()) > 0;
+  const exact::Line e[3] = {exact::Line::through(v0.xy(), pos ? v1.xy() : v2.xy()),
+                            exact::Line::through(pos ? v1.xy() : v2.xy(), pos ? v2.xy() : v1.xy()),
+                            exact::Line::through(pos ? v2.xy() : v1.xy(), v0.xy())};
+  PPRec r;
+  r.flags = t.opaque ? kPPOpaque : 0u;
   for (int k = 0; k < 3; ++k) {
-    const int64_t e = t.e[k].eval(s);
-    if (e < 0 || (e == 0 && !t.e[k].owns_boundary())) return false;
+    r.ea[k] = int32_t(e[k].a);  // |a|, |b| <= 2^24
+    r.eb[k] = int32_t(e[k].b);
+    r.c[k] = e[k].c;
+    r.flags |= e[k].owns_boundary() ? 1u << k : 0u;
+  }
+  const exact::IntPlane q = exact::int_plane_of(v0, v1, v2);
+  const bool live = q.area != 0;  // plane_of's degenerate plane is all 0
+  r.alpha = live ? q.alpha : 0;
+  r.beta = live ? q.beta : 0;
+  r.gamma = live ? q.gamma : I128{0};
+  r.area = q.area;
+  r.x0 = tmin(tmin(v0.x, v1.x), v2.x);
+  r.y0 = tmin(tmin(v0.y, v1.y), v2.y);
+  r.x1 = tmax(tmax(v0.x, v1.x), v2.x);
+  r.y1 = tmax(tmax(v0.y, v1.y), v2.y);
+  r.item = item;
+  r.id = t.id;
+  return r;
+}
+
+// Coverage at sample (x, y): the box (a sample outside it is not covered: three edge functions
+// spared), then the edge functions with the top-left rule.
+TV_HD inline bool pp_covers(const PPRec& r, int64_t x, int64_t y) {
+  if (x < r.x0 || x > r.x1 || y < r.y0 || y > r.y1) return false;
+  for (int k = 0; k < 3; ++k) {
+    const int64_t e = int64_t(r.ea[k]) * x + int64_t(r.eb[k]) * y + r.c[k];
+    if (e < 0 || (e == 0 && !((r.flags >> k) & 1u))) return false;
   }
   return true;
 }
 
-template <class P>
-TV_HD inline PTri ptri_of(const HybArgs<P>& a, uint32_t item) {
-  const XTri x = exact_of(a.tris[a.item_tri[item]]);
-  PTri t;
-  for (int k = 0; k < 3; ++k) t.e[k] = x.edge[k];
-  t.plane = x.plane;
-  t.bbox = x.bbox;
-  t.opaque = x.opaque;
-  t.item = item;
-  return t;
-}
+// The depth numerator at (x, y): z = n / area.
+TV_HD inline I128 pp_depth(const PPRec& r, int64_t x, int64_t y) { return I128{r.alpha} * x + I128{r.beta} * y + r.gamma; }
 
-// The pixels of the tile whose samples may lie in a closed sub-pixel box: a sample of pixel p
-// lies in [p << sb, (p + 1) << sb).
-struct PixSpan {
-  int64_t x0, y0, x1, y1;  // inclusive; empty where x0 > x1 or y0 > y1
-  TV_HD uint64_t samples(uint32_t n_samples) const {
-    return x0 > x1 || y0 > y1 ? 0 : uint64_t(x1 - x0 + 1) * uint64_t(y1 - y0 + 1) * n_samples;
-  }
+// A sample's owner so far: the first (smallest item) of the nearest opaque items that cover it.
+struct alignas(16) PPOwner {
+  I128 n;
+  int64_t area;
+  uint32_t item, id;
 };
 
-template <class P>
-TV_HD inline PixSpan pix_span(const HybArgs<P>& a, const Rect& box, const PixSpan& tile) {
-  const int sb = int(a.grid.sb);
-  return {tmax<int64_t>(tile.x0, int64_t(box.x0) >> sb), tmax<int64_t>(tile.y0, int64_t(box.y0) >> sb),
-          tmin<int64_t>(tile.x1, int64_t(box.x1) >> sb), tmin<int64_t>(tile.y1, int64_t(box.y1) >> sb)};
+// sign(z - z_o) (zbuffer::passes): |n| < 2^(51+D), |n area| < 2^(100+D): I128 where `narrow`
+// (depth bits D <= 26, as the tiled z-buffer's), else W192.
+TV_HD inline int pp_order(const I128& n, int64_t area, const PPOwner& o, bool narrow) {
+  if (narrow) {
+    const I128 l = n * I128{o.area}, r = o.n * I128{area};
+    return l < r ? -1 : l > r ? 1 : 0;
+  }
+  return (wide<3>(n) * wide<3>(o.area) - wide<3>(o.n) * wide<3>(area)).sign();
 }
+
+// Whether (n, area, item) takes the sample from o: nearer, or as near and earlier in the list.
+// Golden's loop replaces only on strictly nearer, so it keeps the first of the nearest; the order
+// is total, so the owners can be merged in any order.
+TV_HD inline bool pp_takes(const I128& n, int64_t area, uint32_t item, const PPOwner& o, bool narrow) {
+  if (o.item == kNone) return true;
+  const int d = pp_order(n, area, o, narrow);
+  return d < 0 || (d == 0 && item < o.item);
+}
+
+// The pixels of a tile (cut at the screen).
+struct PixSpan {
+  int64_t x0, y0, x1, y1;  // inclusive
+};
 
 template <class P>
 TV_HD inline PixSpan tile_pixels(const HybArgs<P>& a, uint64_t tile) {
@@ -487,41 +529,18 @@ TV_HD inline PixSpan tile_pixels(const HybArgs<P>& a, uint64_t tile) {
   return {x0, y0, tmin<int64_t>(x0 + a.grid.tile_w, a.width) - 1, tmin<int64_t>(y0 + a.grid.tile_h, a.height) - 1};
 }
 
-// Sample u of a span, row-major pixels, samples within a pixel.
-TV_HD inline void span_sample(const PixSpan& sp, uint32_t n_samples, uint64_t u, int64_t& px, int64_t& py,
-                              uint32_t& k) {
-  const uint64_t w = uint64_t(sp.x1 - sp.x0 + 1);
-  k = uint32_t(u % n_samples);
-  px = sp.x0 + int64_t((u / n_samples) % w);
-  py = sp.y0 + int64_t((u / n_samples) / w);
-}
-
 template <class P>
-TV_HD inline Pt sample_pt(const HybArgs<P>& a, int64_t px, int64_t py, uint32_t k) {
-  const uint32_t sxy = a.sample_xy[k];
-  return {int32_t((px << a.grid.sb) + (sxy & 0xffffu)), int32_t((py << a.grid.sb) + (sxy >> 16))};
+TV_HD inline int64_t sample_x(const HybArgs<P>& a, int64_t px, uint32_t k) {
+  return (px << a.grid.sb) + (a.sample_xy[k] & 0xffffu);
+}
+template <class P>
+TV_HD inline int64_t sample_y(const HybArgs<P>& a, int64_t py, uint32_t k) {
+  return (py << a.grid.sb) + (a.sample_xy[k] >> 16);
 }
 
 template <class P>
 TV_HD inline uint64_t sample_at(const HybArgs<P>& a, int64_t px, int64_t py, uint32_t k) {
   return (uint64_t(py) * a.width + uint64_t(px)) * a.n_samples + k;
-}
-
-// sign(z_p(s) - z_q(s)) at a sample (zbuffer::passes): |N| < 2^(51+D), |N area| < 2^(100+D) (W192).
-TV_HD inline int sample_depth_order(const exact::Plane& p, const exact::Plane& q, Pt s) {
-  const I128 np = I128{p.alpha} * s.x + I128{p.beta} * s.y + p.gamma;
-  const I128 nq = I128{q.alpha} * s.x + I128{q.beta} * s.y + q.gamma;
-  return (wide<3>(np) * wide<3>(q.area) - wide<3>(nq) * wide<3>(p.area)).sign();
-}
-
-TV_HD inline void test(const PTri& t, Pt s, POwner& o, uint32_t& generated) {
-  if (!covers(t, s)) return;
-  ++generated;
-  if (!t.opaque) return;
-  if (o.item < 0 || sample_depth_order(t.plane, *o.plane, s) < 0) {
-    o.item = t.item;
-    o.plane = &t.plane;
-  }
 }
 
 // A per-pixel tile's row: the analytic stages ran beside the verdicts and counted in it too;
@@ -535,246 +554,366 @@ TV_HD void finish_tile_row(const HybArgs<P>& a, uint64_t tile, uint64_t covered,
   a.shaded[tile] = covered + shaded;
 }
 
-// Host emulation of a per-pixel tile.
+// Host emulation of a per-pixel tile: golden's loop, sample by sample over the tile's list.
 template <class P>
 TV_HD void per_pixel_tile(const HybArgs<P>& a, uint64_t tile) {
   if (a.cause[tile] == 0) return;
-  int64_t* row = a.rows + tile * kTileColumns;
-  const uint32_t begin = a.item_begin[tile], n = uint32_t(row[kColTriangles]);
+  const uint32_t begin = a.item_begin[tile], n = uint32_t(a.rows[tile * kTileColumns + kColTriangles]);
   uint64_t covered = 0, generated = 0, shaded = 0;
   const PixSpan tp = tile_pixels(a, tile);
-  for (uint64_t u = 0; u < tp.samples(a.n_samples); ++u) {
-    int64_t px, py;
-    uint32_t k;
-    span_sample(tp, a.n_samples, u, px, py, k);
-    const Pt s = sample_pt(a, px, py, k);
-    POwner o;
-    PTri held;  // the owner's record (o.plane points into it)
-    uint32_t g = 0;
-    for (uint32_t i = 0; i < n; ++i) {
-      const PTri t = ptri_of(a, begin + i);
-      const int64_t before = o.item;
-      test(t, s, o, g);
-      if (o.item != before) {
-        held = t;
-        o.plane = &held.plane;
+  for (int64_t py = tp.y0; py <= tp.y1; ++py)
+    for (int64_t px = tp.x0; px <= tp.x1; ++px)
+      for (uint32_t k = 0; k < a.n_samples; ++k) {
+        const int64_t x = sample_x(a, px, k), y = sample_y(a, py, k);
+        PPOwner o{0, 0, kNone, 0};
+        for (uint32_t i = 0; i < n; ++i) {
+          const PPRec r = pp_rec(a, begin + i);
+          if (!pp_covers(r, x, y)) continue;
+          ++generated;
+          const I128 d = pp_depth(r, x, y);
+          if ((r.flags & kPPOpaque) && pp_takes(d, r.area, r.item, o, a.pp_narrow)) o = {d, r.area, r.item, r.id};
+        }
+        covered += o.item != kNone ? 1 : 0;
+        // Non-opaque triangles are shaded where they cover the sample in front of its owner
+        // (per_pixel_resolver.cpp; at 1 sample a pixel is a sample).
+        for (uint32_t i = 0; i < n && a.cause[tile] == 2; ++i) {
+          const PPRec r = pp_rec(a, begin + i);
+          if (!(r.flags & kPPOpaque) && pp_covers(r, x, y) &&
+              (o.item == kNone || pp_order(pp_depth(r, x, y), r.area, o, a.pp_narrow) < 0))
+            ++shaded;
+        }
+        a.ids[sample_at(a, px, py, k)] = o.item == kNone ? -1 : int32_t(o.id);
+        if (o.item != kNone) atomic_add(&a.owned[o.item], 1u);
       }
-    }
-    generated += g;
-    covered += o.item >= 0 ? 1 : 0;
-    // Non-opaque triangles are shaded where they cover the sample in front of its owner
-    // (per_pixel_resolver.cpp; at 1 sample a pixel is a sample).
-    for (uint32_t i = 0; i < n && a.cause[tile] == 2; ++i) {
-      const PTri t = ptri_of(a, begin + i);
-      if (!t.opaque && covers(t, s) && (o.item < 0 || sample_depth_order(t.plane, *o.plane, s) < 0)) ++shaded;
-    }
-    const uint64_t at = sample_at(a, px, py, k);
-    a.ids[at] = o.item < 0 ? -1 : int32_t(a.tris[a.item_tri[o.item]].id);
-    if (o.item >= 0) atomic_add(&a.owned[o.item], 1u);
-  }
   finish_tile_row(a, tile, covered, generated, shaded);
 }
 
 // ---- per-pixel tiles on the GPU ------------------------------------------------------------
 //
-// While a tile is drawn, its samples' entries of the id buffer hold the owning item (-1: none).
-// The owner of a sample is the first of the nearest opaque items that cover it in the tile's list
-// (golden's loop replaces only on strictly nearer): the order (depth, list position) is total, so
-// owners can be merged in any order, by compare-and-swap. Three kernels:
-//  1 a block per tile: the owner words cleared; each small item (a box of at most kPixBig
-//    samples: the sub-pixel triangles of an overloaded tile) drawn by a thread over its box; the
-//    big ones listed;
-//  2 a block per kPixBlock samples of a tile: a thread per sample runs through the tile's big
-//    items (staged kPixChunk at a time), keeps the nearest, and merges it into the owner word;
-//  3 a block per kPixBlock samples: non-opaque items' shaded samples (cause 2), each owner
-//    replaced by its id, the samples owned and covered counted.
-// (One kernel with a thread per sample that ran through the whole list: slivers float 0.90 ms
-// on the H200, Nsight Compute, for tiles of thousands of dust triangles; one block per tile
-// drawing every item by compare-and-swap: stack 5x slower, its tiles' thousands of big quads.)
-constexpr uint32_t kPixThreads = 256, kPixBig = 64, kPixBlock = 256, kPixChunk = 32;
+// In the manner of the tiled z-buffer's raster (zbuffer.cu): a warp per fine tile of 64 samples
+// (8x8 pixels at 1 sample, 8x4 at 2, 4x4 at 4, 4x2 at 8, 2x2 at 16), two samples a lane, and a
+// block of kPPWarps per region of 2x2 fine tiles (a 32x32 tile at 1 sample has 4 regions). The
+// block runs through the tile's list kPPThreads items at a time: the items whose box meets the
+// region are staged in shared memory (list order kept) and each warp takes those whose box meets
+// its fine tile, a lane per record: a small one (at most kPPFragMax samples of its box in the
+// fine tile) is drawn fragment-parallel, its coverage as bits, then rounds in which every lane
+// takes its next covered sample and lanes meeting at one sample take turns; the large ones wait
+// in a per-warp list and every lane tests its two samples against each. The owners live in
+// shared memory. Fragments count every covering item, opaque or not; at cause 2 a second pass
+// counts the non-opaque items in front of the final owners. A tile's counts are added up over
+// its regions, and the last region's block writes its row. (Before: three kernels, small items
+// drawn by a thread each into owner words by compare-and-swap, large ones by a thread per
+// sample, each comparison deriving the owner's plane again, 2.5 to 4x slower than the tiled
+// z-buffer; then a block of 16 warps per tile, whose warps waited at its barriers for the
+// busiest fine tile: million 0.59 ms on the H200, Nsight Compute.)
+constexpr uint32_t kPPWarps = 4, kPPThreads = kPPWarps * 32, kPPFragMax = 16;
+constexpr uint32_t kPPSums = 4;  // per tile: covered, generated, shaded, regions done
 
+// A tile's regions (2x2 fine tiles each), in rows of `x`.
+struct PPRegions {
+  uint32_t x, n;
+};
 template <class P>
-TV_HD inline exact::Plane exact_plane(const TileTri<P>& t) {
-  if constexpr (P::kExact) return t.plane;
-  else return exact::plane_of(t.v[0], t.v[1], t.v[2]);
+TV_HD inline PPRegions pp_regions(const HybArgs<P>& a, const PixSpan& tp) {
+  const uint32_t nfx = uint32_t(tp.x1 - tp.x0) / a.pp_fw + 1, nfy = uint32_t(tp.y1 - tp.y0) / a.pp_fh + 1;
+  return {(nfx + 1) / 2, ((nfx + 1) / 2) * ((nfy + 1) / 2)};
 }
 
-// Owner word at `at` for opaque item `item` (plane `pl`) at sample s: taken where the item is
-// nearer, or as near and earlier in the list.
+#if defined(__CUDACC__)
+// A fine tile: pixel origin, its last pixel inside the tile and the screen, log2 of its width.
+struct Fine {
+  int32_t x0, y0, x1, y1;
+  uint32_t lw;
+};
+
+// The lane's sample u of the fine tile.
+struct PPSample {
+  int64_t x, y;
+  uint64_t at;
+  bool inside;
+};
+
 template <class P>
-__device__ inline void merge_owner(const HybArgs<P>& a, uint64_t at, uint32_t item, const exact::Plane& pl, Pt s) {
-  int* const w = reinterpret_cast<int*>(a.ids) + at;
-  int cur = atomicAdd(w, 0);
-  for (;;) {
-    if (cur >= 0) {
-      if (uint32_t(cur) == item) return;
-      const int d = sample_depth_order(pl, exact_plane(a.tris[a.item_tri[cur]]), s);
-      if (d > 0 || (d == 0 && uint32_t(cur) < item)) return;  // the owner stays
-    }
-    const int seen = atomicCAS(w, cur, int(item));
-    if (seen == cur) return;
-    cur = seen;
-  }
+__device__ inline PPSample pp_sample(const HybArgs<P>& a, const Fine& f, uint32_t u) {
+  const uint32_t k = u & (a.n_samples - 1), p = u >> a.pp_ls;
+  const int32_t px = f.x0 + int32_t(p & ((1u << f.lw) - 1)), py = f.y0 + int32_t(p >> f.lw);
+  PPSample s;
+  s.inside = px <= f.x1 && py <= f.y1;
+  s.x = sample_x(a, px, k);
+  s.y = sample_y(a, py, k);
+  s.at = s.inside ? sample_at(a, px, py, k) : 0;
+  return s;
 }
 
-// 1: a block per tile. Row: the analytic columns 0, the small items' fragments; big items go
-// to the tile's list (a.big, in the tile's range of item positions; a.big_count per tile).
+// The record's box in the fine tile's pixels (empty: nx or ny <= 0).
+struct PPSpan {
+  int32_t px0, py0, nx, ny;
+};
 template <class P>
-__global__ void __launch_bounds__(kPixThreads) k_pp_small(HybArgs<P> a, uint64_t n_tiles) {
-  TV_KERNEL_WAIT();
-  __shared__ uint32_t n_big;
-  __shared__ unsigned long long generated_sum;
-  const uint32_t S = a.n_samples;
-  for (uint64_t tile = blockIdx.x; tile < n_tiles; tile += gridDim.x) {
-    if (a.cause[tile] == 0) continue;  // uniform over the block
-    const uint32_t begin = a.item_begin[tile], n = uint32_t(a.rows[tile * kTileColumns + kColTriangles]);
-    const PixSpan tp = tile_pixels(a, tile);
-    if (threadIdx.x == 0) {
-      n_big = 0;
-      generated_sum = 0;
-    }
-    for (uint64_t u = threadIdx.x; u < tp.samples(S); u += blockDim.x) {
-      int64_t px, py;
-      uint32_t k;
-      span_sample(tp, S, u, px, py, k);
-      a.ids[sample_at(a, px, py, k)] = -1;
-    }
-    __syncthreads();
-    uint32_t generated = 0;
-    for (uint32_t i = threadIdx.x; i < n; i += blockDim.x) {
-      const PixSpan sp = pix_span(a, a.tris[a.item_tri[begin + i]].bbox, tp);
-      const uint64_t m = sp.samples(S);
-      if (m > kPixBig) {
-        a.big[begin + atomicAdd(&n_big, 1u)] = begin + i;
-        continue;
+__device__ inline PPSpan pp_span(const HybArgs<P>& a, const PPRec& d, const Fine& f) {
+  const int sb = int(a.grid.sb);
+  const int32_t px0 = tmax(d.x0 >> sb, f.x0), py0 = tmax(d.y0 >> sb, f.y0);
+  return {px0, py0, tmin(d.x1 >> sb, f.x1) - px0 + 1, tmin(d.y1 >> sb, f.y1) - py0 + 1};
+}
+
+// Whether the fine tile's pixels (on the screen) lie strictly inside all three edges: every
+// sample of them is covered.
+template <class P>
+__device__ inline bool pp_inside(const HybArgs<P>& a, const PPRec& d, const Fine& f) {
+  const int sb = int(a.grid.sb);
+  const int64_t rx0 = int64_t(f.x0) << sb, ry0 = int64_t(f.y0) << sb;
+  const int64_t rx1 = int64_t(f.x1 + 1) << sb, ry1 = int64_t(f.y1 + 1) << sb;
+  bool inside = true;
+  for (int k = 0; k < 3; ++k)
+    inside &= int64_t(d.ea[k]) * (d.ea[k] > 0 ? rx0 : rx1) + int64_t(d.eb[k]) * (d.eb[k] > 0 ? ry0 : ry1) + d.c[k] > 0;
+  return inside;
+}
+
+// A small record's covered samples of the fine tile, as bits u.
+template <class P>
+__device__ inline uint64_t pp_coverage(const HybArgs<P>& a, const PPRec& d, const Fine& f, const PPSpan& sp) {
+  uint64_t m = 0;
+  for (int32_t py = sp.py0; py < sp.py0 + sp.ny; ++py)
+    for (int32_t px = sp.px0; px < sp.px0 + sp.nx; ++px)
+      for (uint32_t k = 0; k < a.n_samples; ++k)
+        if (pp_covers(d, sample_x(a, px, k), sample_y(a, py, k)))
+          m |= uint64_t{1} << ((((uint32_t(py - f.y0) << f.lw) + uint32_t(px - f.x0)) << a.pp_ls) + k);
+  return m;
+}
+
+// The warp's share of a staged chunk of m records: the fragments counted, the owners merged.
+template <class P>
+__device__ inline uint32_t pp_chunk(const HybArgs<P>& a, const PPRec* rec, uint32_t m, PPOwner* own, uint16_t* large,
+                                    const Fine& f, const PPSample& s0, const PPSample& s1) {
+  const uint32_t lane = threadIdx.x & 31u;
+  uint32_t generated = 0;
+  for (uint32_t j0 = 0; j0 < m; j0 += 32) {
+    const uint32_t j = j0 + lane;
+    uint64_t cov = 0;
+    bool big = false, full = false;
+    if (j < m) {
+      const PPRec& d = rec[j];
+      const PPSpan sp = pp_span(a, d, f);
+      if (sp.nx > 0 && sp.ny > 0) {
+        if ((uint32_t(sp.nx * sp.ny) << a.pp_ls) <= kPPFragMax) {
+          cov = pp_coverage(a, d, f, sp);
+          generated += uint32_t(__popcll(cov));
+          if (!(d.flags & kPPOpaque)) cov = 0;
+        } else {
+          big = true;
+          full = pp_inside(a, d, f);
+        }
       }
-      if (m == 0) continue;
-      const PTri t = ptri_of(a, begin + i);
-      for (uint64_t u = 0; u < m; ++u) {
-        int64_t px, py;
-        uint32_t k;
-        span_sample(sp, S, u, px, py, k);
-        const Pt s = sample_pt(a, px, py, k);
-        if (!covers(t, s)) continue;
-        ++generated;
-        if (t.opaque) merge_owner(a, sample_at(a, px, py, k), t.item, t.plane, s);
-      }
     }
-    atomicAdd(&generated_sum, static_cast<unsigned long long>(generated));
-    __syncthreads();
-    if (threadIdx.x == 0) {
-      finish_tile_row(a, tile, 0, generated_sum, 0);  // kernel 3 adds the covered and shaded samples
-      a.big_count[tile] = n_big;
-    }
-    __syncthreads();  // the shared words are reused by the next tile
-  }
-}
-
-// Sample (tile, part, thread) of a per-pixel tile; false past the tile's samples.
-template <class P>
-__device__ inline bool pp_sample(const HybArgs<P>& a, uint64_t tile, uint32_t part, int64_t& px, int64_t& py,
-                                 uint32_t& k) {
-  const PixSpan tp = tile_pixels(a, tile);
-  const uint64_t u = uint64_t(part) * kPixBlock + threadIdx.x;
-  if (u >= tp.samples(a.n_samples)) return false;
-  span_sample(tp, a.n_samples, u, px, py, k);
-  return true;
-}
-
-// Items item_at(0 .. n - 1), staged kPixChunk at a time in shared memory, each given to `each`
-// by every thread of the block.
-template <class P, class At, class Each>
-__device__ inline void staged_items(const HybArgs<P>& a, uint32_t n, PTri* staged, At item_at, Each each) {
-  for (uint32_t c = 0; c < n; c += kPixChunk) {
-    const uint32_t m = tmin(kPixChunk, n - c);
-    __syncthreads();
-    if (threadIdx.x < m) staged[threadIdx.x] = ptri_of(a, item_at(c + threadIdx.x));
-    __syncthreads();
-    for (uint32_t j = 0; j < m; ++j) each(staged[j]);
-  }
-}
-
-// 2: the big items, a thread per sample.
-template <class P>
-__global__ void __launch_bounds__(kPixBlock) k_pp_big(HybArgs<P> a, uint64_t n_tiles, uint32_t parts) {
-  TV_KERNEL_WAIT();
-  __shared__ PTri staged[kPixChunk];
-  __shared__ unsigned long long generated_sum;
-  for (uint64_t job = blockIdx.x; job < n_tiles * parts; job += gridDim.x) {
-    const uint64_t tile = job / parts;
-    if (a.cause[tile] == 0) continue;  // uniform over the block
-    const uint32_t nb = a.big_count[tile];
-    if (nb == 0) continue;
-    if (threadIdx.x == 0) generated_sum = 0;
-    int64_t px = 0, py = 0;
-    uint32_t k = 0;
-    const bool mine = pp_sample(a, tile, uint32_t(job % parts), px, py, k);
-    const Pt s = mine ? sample_pt(a, px, py, k) : Pt{0, 0};
-    uint32_t generated = 0, best = ~0u;
-    exact::Plane best_plane{};
-    const uint32_t* const big = a.big + a.item_begin[tile];
-    staged_items(a, nb, staged, [&](uint32_t x) { return big[x]; }, [&](const PTri& t) {
-      if (!mine || !covers(t, s)) return;
-      ++generated;
-      if (!t.opaque) return;
-      if (best != ~0u) {
-        const int d = sample_depth_order(t.plane, best_plane, s);
-        if (d > 0 || (d == 0 && best < t.item)) return;
+    const unsigned lm = __ballot_sync(0xffffffffu, big);
+    if (big) large[__popc(lm & ((1u << lane) - 1u))] = uint16_t(j | (full ? 0x8000u : 0u));
+    while (__any_sync(0xffffffffu, cov != 0)) {
+      int u = -1;
+      I128 n = 0;
+      if (cov) {
+        u = __ffsll(static_cast<long long>(cov)) - 1;
+        cov &= cov - 1;
+        const PPSample s = pp_sample(a, f, uint32_t(u));
+        n = pp_depth(rec[j], s.x, s.y);
       }
-      best = t.item;
-      best_plane = t.plane;
-    });
-    if (mine && best != ~0u) merge_owner(a, sample_at(a, px, py, k), best, best_plane, s);
-    atomicAdd(&generated_sum, static_cast<unsigned long long>(generated));
+      const unsigned act = __ballot_sync(0xffffffffu, u >= 0);
+      if (u >= 0) {
+        const unsigned peers = __match_any_sync(act, u);
+        for (unsigned pend = peers; pend; pend &= pend - 1) {
+          if (int(lane) == __ffs(pend) - 1) {
+            const PPRec& d = rec[j];
+            if (pp_takes(n, d.area, d.item, own[u], a.pp_narrow)) own[u] = {n, d.area, d.item, d.id};
+          }
+          __syncwarp(peers);
+        }
+      }
+      __syncwarp();  // a round's writes before the next round's reads
+    }
+    __syncwarp();  // the large list before it is read
+    if (lm) {
+      PPOwner o0 = own[lane], o1 = own[lane + 32];
+      for (uint32_t i = 0, nl = uint32_t(__popc(lm)); i < nl; ++i) {
+        const uint32_t e = large[i];
+        const PPRec& d = rec[e & 0x7fffu];
+        const bool whole = e & 0x8000u;
+        auto test = [&](const PPSample& s, PPOwner& o) {
+          if (!s.inside || !(whole || pp_covers(d, s.x, s.y))) return;
+          ++generated;
+          if (!(d.flags & kPPOpaque)) return;
+          const I128 n = pp_depth(d, s.x, s.y);
+          if (pp_takes(n, d.area, d.item, o, a.pp_narrow)) o = {n, d.area, d.item, d.id};
+        };
+        test(s0, o0);
+        test(s1, o1);
+      }
+      own[lane] = o0;
+      own[lane + 32] = o1;
+      __syncwarp();
+    }
+  }
+  return generated;
+}
+
+// The warp's share of a staged chunk at cause 2: its samples' non-opaque fragments in front of
+// their final owners.
+template <class P>
+__device__ inline uint32_t pp_shade_chunk(const HybArgs<P>& a, const PPRec* rec, uint32_t m, const PPOwner* own,
+                                          const Fine& f, const PPSample& s0, const PPSample& s1) {
+  const uint32_t lane = threadIdx.x & 31u;
+  uint32_t shaded = 0;
+  for (uint32_t j0 = 0; j0 < m; j0 += 32) {
+    bool cand = false;
+    if (j0 + lane < m) {
+      const PPRec& d = rec[j0 + lane];
+      const PPSpan sp = pp_span(a, d, f);
+      cand = !(d.flags & kPPOpaque) && sp.nx > 0 && sp.ny > 0;
+    }
+    for (unsigned cm = __ballot_sync(0xffffffffu, cand); cm; cm &= cm - 1) {
+      const PPRec& d = rec[j0 + uint32_t(__ffs(cm) - 1)];
+      auto shade = [&](const PPSample& s, const PPOwner& o) {
+        if (s.inside && pp_covers(d, s.x, s.y) && (o.item == kNone || pp_order(pp_depth(d, s.x, s.y), d.area, o, a.pp_narrow) < 0))
+          ++shaded;
+      };
+      shade(s0, own[lane]);
+      shade(s1, own[lane + 32]);
+    }
+  }
+  return shaded;
+}
+
+// Window by window over the tile's list: the block finds the items of the next kPPWindow whose
+// closed box meets the region's sub-pixel rectangle r (each thread kPPScan positions, their
+// loads in flight together; the kept positions appended in any order: the owners' order is
+// total and the counts are sums), then stages them kPPThreads at a time and calls `each` (the
+// warps' share) with the count staged. Every thread of the block calls it.
+constexpr uint32_t kPPScan = 8, kPPWindow = kPPThreads * kPPScan;
+template <class P, class Each>
+__device__ inline void pp_chunks(const HybArgs<P>& a, uint32_t begin, uint32_t n, const Rect& r, PPRec* rec,
+                                 uint32_t* kept, uint32_t* n_kept, Each each) {
+  const uint32_t lane = threadIdx.x & 31u;
+  for (uint32_t c = 0; c < n; c += kPPWindow) {
+    __syncthreads();  // the previous window's records read
+    if (threadIdx.x == 0) *n_kept = 0;
     __syncthreads();
-    if (threadIdx.x == 0)
-      atomicAdd(reinterpret_cast<unsigned long long*>(&a.rows[tile * kTileColumns + kColFragments]), generated_sum);
+    Rect b[kPPScan];
+#pragma unroll
+    for (uint32_t k = 0; k < kPPScan; ++k) {
+      const uint32_t i = c + k * kPPThreads + threadIdx.x;
+      b[k] = i < n ? a.tris[a.item_tri[begin + i]].bbox : Rect{1, 1, 0, 0};
+    }
+#pragma unroll
+    for (uint32_t k = 0; k < kPPScan; ++k) {
+      const bool keep = b[k].x1 >= r.x0 && b[k].x0 <= r.x1 && b[k].y1 >= r.y0 && b[k].y0 <= r.y1 && b[k].x0 <= b[k].x1;
+      const unsigned km = __ballot_sync(0xffffffffu, keep);
+      uint32_t at = 0;
+      if (lane == 0 && km) at = atomicAdd(n_kept, uint32_t(__popc(km)));
+      at = __shfl_sync(0xffffffffu, at, 0);
+      if (keep) kept[at + uint32_t(__popc(km & ((1u << lane) - 1u)))] = c + k * kPPThreads + threadIdx.x;
+    }
     __syncthreads();
+    const uint32_t total = *n_kept;
+    for (uint32_t s = 0; s < total; s += kPPThreads) {
+      const uint32_t m = tmin(kPPThreads, total - s);
+      if (s) __syncthreads();  // the previous chunk read
+      if (threadIdx.x < m) rec[threadIdx.x] = pp_rec(a, begin + kept[s + threadIdx.x]);
+      __syncthreads();
+      each(m);
+    }
   }
 }
 
-// 3: the owners final: non-opaque items' shading (cause 2), ids, owned and covered samples.
+// Each of the lane's two samples: its id, and its owner's count (one atomic per owner and warp).
 template <class P>
-__global__ void __launch_bounds__(kPixBlock) k_pp_finish(HybArgs<P> a, uint64_t n_tiles, uint32_t parts) {
+__device__ inline uint32_t pp_finish(const HybArgs<P>& a, const PPSample& s, const PPOwner& o) {
+  if (s.inside) a.ids[s.at] = o.item == kNone ? -1 : int32_t(o.id);
+  const bool counts = s.inside && o.item != kNone;
+  const unsigned cm = __ballot_sync(0xffffffffu, counts);
+  if (counts) {
+    const unsigned peers = __match_any_sync(cm, o.item);
+    if (int(threadIdx.x & 31u) == __ffs(peers) - 1) atomicAdd(&a.owned[o.item], uint32_t(__popc(peers)));
+  }
+  return counts ? 1u : 0u;
+}
+
+// A block per (tile, region); the tile's counts in a.pp_sums (zeroed before), its row written
+// by the block that finishes last.
+template <class P>
+__global__ void __launch_bounds__(kPPThreads, 4) k_per_pixel(HybArgs<P> a, uint64_t n_tiles, uint32_t regions) {
   TV_KERNEL_WAIT();
-  __shared__ PTri staged[kPixChunk];
-  __shared__ unsigned long long sums[2];
-  for (uint64_t job = blockIdx.x; job < n_tiles * parts; job += gridDim.x) {
-    const uint64_t tile = job / parts;
+  __shared__ PPRec rec[kPPThreads];
+  __shared__ PPOwner owners[kPPWarps][64];
+  __shared__ uint16_t large[kPPWarps][32];
+  __shared__ uint32_t kept[kPPWindow], n_kept;
+  __shared__ unsigned long long sums[3];
+  __shared__ bool last;
+  const uint32_t lane = threadIdx.x & 31u, w = threadIdx.x / 32;
+  PPOwner* const own = owners[w];
+  const uint32_t fw = a.pp_fw, fh = a.pp_fh;
+  const int sb = int(a.grid.sb);
+  for (uint64_t job = blockIdx.x; job < n_tiles * regions; job += gridDim.x) {
+    const uint64_t tile = job / regions;
+    const uint32_t region = uint32_t(job % regions);
     const uint32_t cause = a.cause[tile];
     if (cause == 0) continue;  // uniform over the block
-    if (threadIdx.x == 0) sums[0] = sums[1] = 0;
-    __syncthreads();  // zeroed before any thread adds
-    int64_t px = 0, py = 0;
-    uint32_t k = 0;
-    const bool mine = pp_sample(a, tile, uint32_t(job % parts), px, py, k);
-    const Pt s = mine ? sample_pt(a, px, py, k) : Pt{0, 0};
-    const uint64_t at = mine ? sample_at(a, px, py, k) : 0;
-    const int o = mine ? a.ids[at] : -1;
-    uint32_t shaded = 0;
-    if (cause == 2) {
-      // Non-opaque triangles are shaded where they cover the sample in front of its owner
-      // (per_pixel_resolver.cpp; at 1 sample a pixel is a sample).
-      const exact::Plane op = o >= 0 ? exact_plane(a.tris[a.item_tri[o]]) : exact::Plane{};
-      const uint32_t begin = a.item_begin[tile], n = uint32_t(a.rows[tile * kTileColumns + kColTriangles]);
-      staged_items(a, n, staged, [&](uint32_t x) { return begin + x; }, [&](const PTri& t) {
-        if (mine && !t.opaque && covers(t, s) && (o < 0 || sample_depth_order(t.plane, op, s) < 0)) ++shaded;
+    const PixSpan tp = tile_pixels(a, tile);
+    const PPRegions rg = pp_regions(a, tp);
+    if (region >= rg.n) continue;  // an edge tile's
+    const uint32_t begin = a.item_begin[tile], n = uint32_t(a.rows[tile * kTileColumns + kColTriangles]);
+    // Fine tile (2 rx + (w & 1), 2 ry + (w >> 1)) of the region; the region's pixels.
+    const uint32_t rx = region % rg.x, ry = region / rg.x;
+    Fine f;
+    f.x0 = int32_t(tp.x0) + int32_t((2 * rx + (w & 1)) * fw);
+    f.y0 = int32_t(tp.y0) + int32_t((2 * ry + (w >> 1)) * fh);
+    f.x1 = tmin(f.x0 + int32_t(fw) - 1, int32_t(tp.x1));
+    f.y1 = tmin(f.y0 + int32_t(fh) - 1, int32_t(tp.y1));
+    f.lw = a.pp_lfw;
+    const bool mine = f.x0 <= f.x1 && f.y0 <= f.y1;  // uniform over the warp
+    const int64_t rpx0 = tp.x0 + int64_t(2 * rx * fw), rpy0 = tp.y0 + int64_t(2 * ry * fh);
+    const Rect r{int32_t(rpx0 << sb), int32_t(rpy0 << sb),
+                 int32_t(((tmin<int64_t>(rpx0 + 2 * fw - 1, tp.x1) + 1) << sb) - 1),
+                 int32_t(((tmin<int64_t>(rpy0 + 2 * fh - 1, tp.y1) + 1) << sb) - 1)};
+    PPSample s0 = pp_sample(a, f, lane), s1 = pp_sample(a, f, lane + 32);
+    s0.inside &= mine;
+    s1.inside &= mine;
+    own[lane].item = own[lane + 32].item = kNone;
+    if (threadIdx.x < 3) sums[threadIdx.x] = 0;
+    __syncwarp();
+    uint32_t generated = 0, covered = 0, shaded = 0;
+    pp_chunks(a, begin, n, r, rec, kept, &n_kept, [&](uint32_t m) {
+      if (mine) generated += pp_chunk(a, rec, m, own, large[w], f, s0, s1);
+    });
+    if (cause == 2)
+      pp_chunks(a, begin, n, r, rec, kept, &n_kept, [&](uint32_t m) {
+        if (mine) shaded += pp_shade_chunk(a, rec, m, own, f, s0, s1);
       });
+    covered += pp_finish(a, s0, own[lane]);
+    covered += pp_finish(a, s1, own[lane + 32]);
+    for (int off = 16; off > 0; off >>= 1) {
+      generated += __shfl_down_sync(0xffffffffu, generated, off);
+      covered += __shfl_down_sync(0xffffffffu, covered, off);
+      shaded += __shfl_down_sync(0xffffffffu, shaded, off);
     }
-    if (o >= 0) {
-      a.ids[at] = int32_t(a.tris[a.item_tri[o]].id);
-      atomicAdd(&a.owned[o], 1u);
+    if (lane == 0) {
+      atomicAdd(&sums[0], static_cast<unsigned long long>(covered));
+      atomicAdd(&sums[1], static_cast<unsigned long long>(generated));
+      atomicAdd(&sums[2], static_cast<unsigned long long>(shaded));
     }
-    atomicAdd(&sums[0], static_cast<unsigned long long>(o >= 0 ? 1 : 0));
-    atomicAdd(&sums[1], static_cast<unsigned long long>(shaded));
     __syncthreads();
+    unsigned long long* const tile_sums = reinterpret_cast<unsigned long long*>(a.pp_sums + tile * kPPSums);
     if (threadIdx.x == 0) {
-      atomicAdd(reinterpret_cast<unsigned long long*>(&a.rows[tile * kTileColumns + kColSamplesCovered]), sums[0]);
-      atomicAdd(reinterpret_cast<unsigned long long*>(&a.shaded[tile]), sums[0] + sums[1]);
+      for (int c = 0; c < 3; ++c) atomicAdd(&tile_sums[c], sums[c]);
+      __threadfence();
+      last = atomicAdd(&tile_sums[3], 1ull) + 1 == rg.n;
+      if (last) {
+        __threadfence();
+        finish_tile_row(a, tile, atomicAdd(&tile_sums[0], 0ull), atomicAdd(&tile_sums[1], 0ull),
+                        atomicAdd(&tile_sums[2], 0ull));
+      }
     }
-    __syncthreads();
+    __syncthreads();  // the shared words are reused by the next job
   }
 }
+#endif
 
 // The visible areas again, per original id over its items in canonical order: an analytic
 // tile's item adds its visible pieces (fold_area), a per-pixel tile's item its owned samples,
@@ -930,8 +1069,14 @@ HybArgs<P> hybrid_args(Pipeline<P>& p) {
   a.ids = p.ids.get();
   a.owned = p.hyb_owned.need(ni + 1);
   a.shaded = p.hyb_shaded.need(nt + 1);
-  a.big = p.hyb_big.need(ni + 1);
-  a.big_count = p.hyb_big_count.need(nt + 1);
+  // Fine tiles of 64 samples, as the tiled z-buffer's: 8x8 pixels at 1 sample, 8x4 at 2, 4x4 at 4, ...
+  a.pp_fw = 8;
+  a.pp_fh = 8;
+  for (uint32_t s = a.n_samples; s > 1; s >>= 1) (a.pp_fw > a.pp_fh ? a.pp_fw : a.pp_fh) >>= 1;
+  a.pp_lfw = bits_for(a.pp_fw) - 1;
+  a.pp_ls = bits_for(a.n_samples) - 1;
+  a.pp_sums = p.hyb_pp_sums.need(nt * kPPSums + 1);
+  a.pp_narrow = p.f.depth_bits <= 26;
   return a;
 }
 
@@ -960,16 +1105,15 @@ void stage_hybrid(Pipeline<P>& p) {
   if (ex.where == Where::cpu) {
     for (uint64_t t = 0; t < nt; ++t) per_pixel_tile<P>(a, ex.host_index(t, nt));
   } else {
-    const uint32_t parts = (p.grid.tile_w * p.grid.tile_h * p.f.n_samples + kPixBlock - 1) / kPixBlock;
-    const uint32_t tiles = uint32_t(tmin<uint64_t>(nt, uint64_t(ex.grid_blocks) * 8));
-    const uint32_t jobs = uint32_t(tmin<uint64_t>(nt * parts, uint64_t(ex.grid_blocks) * 8));
-    k_pp_small<P><<<tiles, kPixThreads, 0, ex.stream>>>(a, nt);
+    const uint32_t S = p.f.n_samples;
+    if (S == 0 || S > 16 || (S & (S - 1)) != 0) throw std::runtime_error("cuda hybrid: samples must be 1, 2, 4, 8 or 16");
+    // Regions of 2x2 fine tiles: a whole tile's.
+    const PPRegions rg = pp_regions(a, PixSpan{0, 0, int64_t(p.grid.tile_w) - 1, int64_t(p.grid.tile_h) - 1});
+    ex.zero(a.pp_sums, nt * kPPSums * 8);
+    k_per_pixel<P><<<uint32_t(tmin<uint64_t>(nt * rg.n, uint64_t(ex.grid_blocks) * 16)), kPPThreads, 0, ex.stream>>>(
+        a, nt, rg.n);
     TV_CUDA(cudaGetLastError());
-    k_pp_big<P><<<jobs, kPixBlock, 0, ex.stream>>>(a, nt, parts);
-    TV_CUDA(cudaGetLastError());
-    k_pp_finish<P><<<jobs, kPixBlock, 0, ex.stream>>>(a, nt, parts);
-    TV_CUDA(cudaGetLastError());
-    ex.queued += 3;
+    ++ex.queued;
   }
   HFoldArgs<P> f{};
   f.counters = p.counters.get();

@@ -307,9 +307,9 @@ struct Pipeline {
   // Hybrid (hybrid.cu): per tile its verdict and detection work; per occluder position the
   // detector's scratch (and per tile its batch of pairs to test); per item its owned samples
   // in a per-pixel tile.
-  Buf<uint32_t> hyb_cause, hyb_crossing, hyb_range, hyb_owned, hyb_big, hyb_big_count;
+  Buf<uint32_t> hyb_cause, hyb_crossing, hyb_range, hyb_owned;
   Buf<uint4> hyb_active;
-  Buf<uint64_t> hyb_screens, hyb_tests, hyb_shaded, hyb_batch, hyb_bin_counts;
+  Buf<uint64_t> hyb_screens, hyb_tests, hyb_shaded, hyb_batch, hyb_bin_counts, hyb_pp_sums;
   Buf<uint32_t> hyb_long_folds;  // the hybrid fold's long runs (first entry of each)
   Buf<uint8_t> hyb_flag;
 
@@ -350,13 +350,14 @@ struct Pipeline {
     hyb_long_folds.bind(&e);
     ids.bind(&e);
     area.bind(&e);
-    for (auto* b : {&hyb_cause, &hyb_crossing, &hyb_range, &hyb_owned, &hyb_big, &hyb_big_count}) b->bind(&e);
+    for (auto* b : {&hyb_cause, &hyb_crossing, &hyb_range, &hyb_owned}) b->bind(&e);
     hyb_active.bind(&e);
     hyb_screens.bind(&e);
     hyb_tests.bind(&e);
     hyb_batch.bind(&e);
     hyb_bin_counts.bind(&e);
     hyb_shaded.bind(&e);
+    hyb_pp_sums.bind(&e);
     hyb_flag.bind(&e);
   }
 };
