@@ -67,6 +67,33 @@ __device__ inline void block_copy(T* dst, const T* src, uint32_t n) {
   for (uint32_t k = threadIdx.x; k < n; k += blockDim.x) dst[k] = src[k];
 }
 
+// Fragment-parallel drawing in rounds (CudaRaster's fine raster; the tiled z-buffer and the
+// hybrid's per-pixel tiles): in each round every lane takes the next set bit u of its coverage
+// `cov` and `value(u)` for it, and lanes meeting at one u take turns at `merge(u, value)`, in lane
+// order. Every lane of the warp calls it.
+template <class V, class Value, class Merge>
+__device__ inline void warp_fragment_rounds(uint64_t cov, Value value, Merge merge) {
+  const uint32_t lane = threadIdx.x & 31u;
+  while (__any_sync(0xffffffffu, cov != 0)) {
+    int u = -1;
+    V v{};
+    if (cov) {
+      u = __ffsll(static_cast<long long>(cov)) - 1;
+      cov &= cov - 1;
+      v = value(uint32_t(u));
+    }
+    const unsigned act = __ballot_sync(0xffffffffu, u >= 0);
+    if (u >= 0) {
+      const unsigned peers = __match_any_sync(act, u);
+      for (unsigned pend = peers; pend; pend &= pend - 1) {
+        if (int(lane) == __ffs(pend) - 1) merge(uint32_t(u), v);
+        __syncwarp(peers);
+      }
+    }
+    __syncwarp();  // a round's writes before the next round's reads (the votes order no memory)
+  }
+}
+
 // ---- atomics that also run single-threaded on the host -------------------------------------
 
 TV_HD inline uint32_t atomic_add(uint32_t* p, uint32_t v) {

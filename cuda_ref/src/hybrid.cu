@@ -708,28 +708,16 @@ __device__ inline uint32_t pp_chunk(const HybArgs<P>& a, const PPRec* rec, uint3
     }
     const unsigned lm = __ballot_sync(0xffffffffu, big);
     if (big) large[__popc(lm & ((1u << lane) - 1u))] = uint16_t(j | (full ? 0x8000u : 0u));
-    while (__any_sync(0xffffffffu, cov != 0)) {
-      int u = -1;
-      I128 n = 0;
-      if (cov) {
-        u = __ffsll(static_cast<long long>(cov)) - 1;
-        cov &= cov - 1;
-        const PPSample s = pp_sample(a, f, uint32_t(u));
-        n = pp_depth(rec[j], s.x, s.y);
-      }
-      const unsigned act = __ballot_sync(0xffffffffu, u >= 0);
-      if (u >= 0) {
-        const unsigned peers = __match_any_sync(act, u);
-        for (unsigned pend = peers; pend; pend &= pend - 1) {
-          if (int(lane) == __ffs(pend) - 1) {
-            const PPRec& d = rec[j];
-            if (pp_takes(n, d.area, d.item, own[u], a.pp_narrow)) own[u] = {n, d.area, d.item, d.id};
-          }
-          __syncwarp(peers);
-        }
-      }
-      __syncwarp();  // a round's writes before the next round's reads
-    }
+    warp_fragment_rounds<I128>(
+        cov,
+        [&](uint32_t u) {
+          const PPSample s = pp_sample(a, f, u);
+          return pp_depth(rec[j], s.x, s.y);
+        },
+        [&](uint32_t u, const I128& n) {
+          const PPRec& d = rec[j];
+          if (pp_takes(n, d.area, d.item, own[u], a.pp_narrow)) own[u] = {n, d.area, d.item, d.id};
+        });
     __syncwarp();  // the large list before it is read
     if (lm) {
       PPOwner o0 = own[lane], o1 = own[lane + 32];

@@ -633,37 +633,25 @@ __device__ inline void warp_part(const ZArgs& a, uint64_t tile, uint64_t begin, 
     }
     const unsigned lm = __ballot_sync(0xffffffffu, large);
     if (large) stage[__popc(lm & ((1u << lane) - 1u))] = d;
-    while (__any_sync(0xffffffffu, cov != 0)) {
-      int u = -1;
-      I128 n = 0;
-      if (cov) {
-        u = __ffsll(static_cast<long long>(cov)) - 1;
-        cov &= cov - 1;
-        const uint32_t k = uint32_t(u) & (a.samples - 1), p = uint32_t(u) >> a.ls;
-        const uint32_t sxy = a.sample_xy[k];
-        const int64_t x = (int64_t(x0 + int32_t(p & (a.tw - 1))) << a.sb) + (sxy & 0xffffu);
-        const int64_t y = (int64_t(y0 + int32_t(p >> a.ltw)) << a.sb) + (sxy >> 16);
-        n = I128{d.alpha} * x + I128{d.beta} * y + d.gamma;
-      }
-      const unsigned act = __ballot_sync(0xffffffffu, u >= 0);
-      if (u >= 0) {
-        const unsigned peers = __match_any_sync(act, u);
-        for (unsigned pend = peers; pend; pend &= pend - 1) {
-          if (int(lane) == __ffs(pend) - 1) {
-            OwnerS& o = sm[u];
-            const Owner cur{o.n, o.area, o.order, o.slot};
-            if (nearer(n, d.area, d.order, cur)) {
-              o.n = n;
-              o.area = d.area;
-              o.order = d.order;
-              o.slot = d.slot;
-            }
+    warp_fragment_rounds<I128>(
+        cov,
+        [&](uint32_t u) {
+          const uint32_t k = u & (a.samples - 1), p = u >> a.ls;
+          const uint32_t sxy = a.sample_xy[k];
+          const int64_t x = (int64_t(x0 + int32_t(p & (a.tw - 1))) << a.sb) + (sxy & 0xffffu);
+          const int64_t y = (int64_t(y0 + int32_t(p >> a.ltw)) << a.sb) + (sxy >> 16);
+          return I128{d.alpha} * x + I128{d.beta} * y + d.gamma;
+        },
+        [&](uint32_t u, const I128& n) {
+          OwnerS& o = sm[u];
+          const Owner cur{o.n, o.area, o.order, o.slot};
+          if (nearer(n, d.area, d.order, cur)) {
+            o.n = n;
+            o.area = d.area;
+            o.order = d.order;
+            o.slot = d.slot;
           }
-          __syncwarp(peers);
-        }
-      }
-      __syncwarp();  // a round's writes before the next round's reads (the votes order no memory)
-    }
+        });
     __syncwarp();  // the staged records before phase B reads them (also when there was no round)
     if (lm) {
       Owner o0{sm[lane].n, sm[lane].area, sm[lane].order, sm[lane].slot};
