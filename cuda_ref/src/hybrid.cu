@@ -432,8 +432,8 @@ __global__ void __launch_bounds__(kDetWarps * 32) k_verdict(HybArgs<P> a, uint64
 
 // ---- per-pixel tiles ------------------------------------------------------------------------
 
-// A tile's item as the per-pixel pass tests it at a sample: its edges (positive order, as
-// make_tile_tri orders them; the top-left rule's owned edges), exact::plane_of's integer part
+// A tile's item as the per-pixel pass tests it at a sample: its exact edges (positive_edges;
+// the top-left rule's owned edges), exact::plane_of's integer part
 // (all 0: degenerate) and the closed sub-pixel box. 128 bytes: the GPU stages a block's worth
 // in shared memory.
 struct alignas(16) PPRec {
@@ -451,10 +451,8 @@ template <class P>
 TV_HD inline PPRec pp_rec(const HybArgs<P>& a, uint32_t item) {
   const TileTri<P>& t = a.tris[a.item_tri[item]];
   const Vtx v0 = t.v[0], v1 = t.v[1], v2 = t.v[2];
-  const bool pos = orient2d(v0.xy(), v1.xy(), v2.xy()) > 0;
-  const exact::Line e[3] = {exact::Line::through(v0.xy(), pos ? v1.xy() : v2.xy()),
-                            exact::Line::through(pos ? v1.xy() : v2.xy(), pos ? v2.xy() : v1.xy()),
-                            exact::Line::through(pos ? v2.xy() : v1.xy(), v0.xy())};
+  exact::Line e[3];
+  positive_edges<ExactP>(v0, v1, v2, e);
   PPRec r;
   r.flags = t.opaque ? kPPOpaque : 0u;
   for (int k = 0; k < 3; ++k) {
@@ -469,10 +467,10 @@ TV_HD inline PPRec pp_rec(const HybArgs<P>& a, uint32_t item) {
   r.beta = live ? q.beta : 0;
   r.gamma = live ? q.gamma : I128{0};
   r.area = q.area;
-  r.x0 = tmin(tmin(v0.x, v1.x), v2.x);
-  r.y0 = tmin(tmin(v0.y, v1.y), v2.y);
-  r.x1 = tmax(tmax(v0.x, v1.x), v2.x);
-  r.y1 = tmax(tmax(v0.y, v1.y), v2.y);
+  r.x0 = t.bbox.x0;
+  r.y0 = t.bbox.y0;
+  r.x1 = t.bbox.x1;
+  r.y1 = t.bbox.y1;
   r.item = item;
   r.id = t.id;
   return r;
@@ -784,15 +782,16 @@ __device__ inline void pp_chunks(const HybArgs<P>& a, uint32_t begin, uint32_t n
     __syncthreads();  // the previous window's records read
     if (threadIdx.x == 0) *n_kept = 0;
     __syncthreads();
-    Rect b[kPPScan];
+    Rect b[kPPScan]{};
 #pragma unroll
     for (uint32_t k = 0; k < kPPScan; ++k) {
       const uint32_t i = c + k * kPPThreads + threadIdx.x;
-      b[k] = i < n ? a.tris[a.item_tri[begin + i]].bbox : Rect{1, 1, 0, 0};
+      if (i < n) b[k] = a.tris[a.item_tri[begin + i]].bbox;
     }
 #pragma unroll
     for (uint32_t k = 0; k < kPPScan; ++k) {
-      const bool keep = b[k].x1 >= r.x0 && b[k].x0 <= r.x1 && b[k].y1 >= r.y0 && b[k].y0 <= r.y1 && b[k].x0 <= b[k].x1;
+      const bool keep = c + k * kPPThreads + threadIdx.x < n && b[k].x1 >= r.x0 && b[k].x0 <= r.x1 &&
+                        b[k].y1 >= r.y0 && b[k].y0 <= r.y1;
       const unsigned km = __ballot_sync(0xffffffffu, keep);
       uint32_t at = 0;
       if (lane == 0 && km) at = atomicAdd(n_kept, uint32_t(__popc(km)));
@@ -834,7 +833,6 @@ __global__ void __launch_bounds__(kPPThreads, 4) k_per_pixel(HybArgs<P> a, uint6
   __shared__ uint16_t large[kPPWarps][32];
   __shared__ uint32_t kept[kPPWindow], n_kept;
   __shared__ unsigned long long sums[3];
-  __shared__ bool last;
   const uint32_t lane = threadIdx.x & 31u, w = threadIdx.x / 32;
   PPOwner* const own = owners[w];
   const uint32_t fw = a.pp_fw, fh = a.pp_fh;
@@ -892,8 +890,7 @@ __global__ void __launch_bounds__(kPPThreads, 4) k_per_pixel(HybArgs<P> a, uint6
     if (threadIdx.x == 0) {
       for (int c = 0; c < 3; ++c) atomicAdd(&tile_sums[c], sums[c]);
       __threadfence();
-      last = atomicAdd(&tile_sums[3], 1ull) + 1 == rg.n;
-      if (last) {
+      if (atomicAdd(&tile_sums[3], 1ull) + 1 == rg.n) {  // the tile's last region
         __threadfence();
         finish_tile_row(a, tile, atomicAdd(&tile_sums[0], 0ull), atomicAdd(&tile_sums[1], 0ull),
                         atomicAdd(&tile_sums[2], 0ull));

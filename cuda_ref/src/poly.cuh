@@ -141,22 +141,27 @@ struct SilEdge {
   uint32_t z_min, z_max;
 };
 
+// A triangle's edges in positive order, as its polygon's (a clockwise triangle taken backwards).
+template <class P>
+TV_HD inline void positive_edges(const Vtx& v0, const Vtx& v1, const Vtx& v2, typename P::Line* e) {
+  if (orient2d(v0.xy(), v1.xy(), v2.xy()) > 0) {
+    e[0] = P::line(v0.xy(), v1.xy());
+    e[1] = P::line(v1.xy(), v2.xy());
+    e[2] = P::line(v2.xy(), v0.xy());
+  } else {
+    e[0] = P::line(v0.xy(), v2.xy());
+    e[1] = P::line(v2.xy(), v1.xy());
+    e[2] = P::line(v1.xy(), v0.xy());
+  }
+}
+
 template <class P>
 TV_HD inline TileTri<P> make_tile_tri(const Vtx& v0, const Vtx& v1, const Vtx& v2, uint32_t id, bool opaque) {
   TileTri<P> t;
   t.v[0] = v0;
   t.v[1] = v1;
   t.v[2] = v2;
-  const int64_t area = orient2d(v0.xy(), v1.xy(), v2.xy());
-  if (area > 0) {
-    t.edge[0] = P::line(v0.xy(), v1.xy());
-    t.edge[1] = P::line(v1.xy(), v2.xy());
-    t.edge[2] = P::line(v2.xy(), v0.xy());
-  } else {
-    t.edge[0] = P::line(v0.xy(), v2.xy());
-    t.edge[1] = P::line(v2.xy(), v1.xy());
-    t.edge[2] = P::line(v1.xy(), v0.xy());
-  }
+  positive_edges<P>(v0, v1, v2, t.edge);
   t.plane = P::plane(v0, v1, v2);
   t.bbox = {tmin(tmin(v0.x, v1.x), v2.x), tmin(tmin(v0.y, v1.y), v2.y), tmax(tmax(v0.x, v1.x), v2.x),
             tmax(tmax(v0.y, v1.y), v2.y)};
