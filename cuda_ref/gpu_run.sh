@@ -33,7 +33,7 @@
 # compare.json) and logs.tar.xz. Phases resume: results already in build-gpu/work are kept, so a run cut short by a time limit
 # continues where it stopped. Environment: OUT, TILEVIS_GPU_SCENES (names, default: all),
 # TILEVIS_GPU_TILES (default "16 32 64"), TILEVIS_GPU_RUNS (default 20), JOBS (default nproc),
-# TILEVIS_GPU_PAIR_BUDGET (default 250: the hybrid runs' and golden hybrid's --pair-budget, so that
+# TILEVIS_GPU_PAIR_BUDGET (default 60: the hybrid runs' and golden hybrid's --pair-budget, so that
 # a tile of more triangles x edges goes per pixel; 0: none; reports/cuda/hybrid_budget_h200.md),
 # TILEVIS_GPU_DEVICE=cpu (the host emulation: tries the script on a machine without a GPU),
 # TILEVIS_TEST_LABEL (ctest labels, default "gpu|cuda"; "gpu" leaves the host emulation to CI).
@@ -50,7 +50,7 @@ LOGS="$BUILD/logs"
 TILES="${TILEVIS_GPU_TILES:-16 32 64}"
 RUNS="${TILEVIS_GPU_RUNS:-20}"
 JOBS="${JOBS:-$(nproc)}"
-PAIR_BUDGET="${TILEVIS_GPU_PAIR_BUDGET:-250}"
+PAIR_BUDGET="${TILEVIS_GPU_PAIR_BUDGET:-60}"
 [[ "$PAIR_BUDGET" =~ ^[0-9]+$ ]] || { echo "gpu_run: TILEVIS_GPU_PAIR_BUDGET=$PAIR_BUDGET: a whole number" >&2; exit 2; }
 DEVICE="${TILEVIS_GPU_DEVICE:-gpu}"  # cpu: the host emulation, to try this script without a GPU
 BIN="$BUILD/model/app/tilevis"
