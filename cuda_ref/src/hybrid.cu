@@ -13,7 +13,7 @@
 // range reaches the current one's nearest depth, a pair screened (may_cross, opposite mesh
 // neighbours) and tested (planes_cross) in the first bin it shares; the first crossing ends
 // the tile's search. A block per tile, its warps taking the bins (bins are independent
-// sweeps: see bin_sweep), a warp's lanes the pairs of a bin 32 at a time.
+// sweeps: see sweep_bins), a warp's lanes the pairs of its bins 32 at a time.
 //
 // Per-pixel tiles: ids and the tile's samples_covered / fragments_generated from the tile's
 // z-buffer (the other per-tile counters are 0, as golden's per_pixel resolver leaves them);
@@ -45,8 +45,8 @@ struct HybArgs {
   uint8_t* flag;     // per occluder position: in some crossing pair (count_all)
   uint4* active;     // per warp and occluder position: a detection bin's active members (scratch)
   uint64_t active_stride;  // positions per warp's share of `active`
-  uint64_t* batch;   // per tile and warp, 64 words: the pairs waiting for the exact test (scratch)
-  uint64_t* bin_counts;    // per tile and detection bin: screens and tests (GPU scratch)
+  uint64_t* batch;   // per tile and warp, kBatchWords x 32 words: the pairs waiting for the exact test
+  uint64_t* bin_counts;    // per tile and detection bin, kBinWords: screens and tests (sweep_bins)
   uint32_t bins_per_tile;
   // Per-pixel tiles.
   const uint32_t* sample_xy;
@@ -156,8 +156,10 @@ struct Bins {
 // decrease along the list); the first crossing ends the tile's search. A bin's sweep starts
 // from an empty active list, so bins are independent: the tile's counts are the whole counts
 // of the bins before the first that has a crossing, plus that bin's counts through it. On the
-// GPU a block takes a tile and its warps take the bins (bin_sweep, below); the host sweeps
-// them in order.
+// GPU a block takes a tile and its warps take the bins (sweep_bins, below); the host sweeps
+// them in order. Both test every pair of the tile: the crossing triangles are counted over
+// every bin, and the exact tests wait for a full round whatever bin they come from (one round
+// a bin took each warp about a round's latency, some 30 us, a bin on the H200).
 
 // Warps of a tile's block on the GPU (the bins shared out). 8 and 16 against 4 (H200, hybrid, 15
 // scenes, one build, new frame, the verdicts beside the analytic stages): bunny float 1.161 ms at
@@ -217,17 +219,23 @@ TV_HD void det_positions(const HybArgs<P>& a, const DetTile<P>& d, uint32_t i0, 
   }
 }
 
-// Bin (bx, by)'s sweep by a team, with its own active list `act` (the tile's n entries) and
-// batch `bpair` (2 kSize words). The team keeps golden's active list: the lanes take 32 of its
-// entries at a time, drop and compact them as golden does (an entry carries position, z_max, id
-// and bins in one 16-byte word). Pairs to test wait in the batch, so that a round of the exact
-// test takes up to kSize pairs in parallel, whatever member they belong to. Returns true at the
-// first crossing (not with count_all: then it marks the crossing triangles' flags), with
-// `screens` and `tests` counted through it; else the bin's whole counts.
+// A team's sweeps of the bins b0, b0 + bstep, ... of a tile, each with the team's active list
+// `act` (the tile's n entries) started empty. The team keeps golden's active list: the lanes
+// take 32 of its entries at a time, drop and compact them as golden does (an entry carries
+// position, z_max, id and bins in one 16-byte word). Pairs to test wait in the batch (kBatchWords
+// x kSize words: the pair, the bin's screens through it, its bin and the bin's tests through it)
+// across the team's bins, so that a round of the exact test takes up to kSize pairs in parallel,
+// whatever bin they belong to. Every pair is tested and every crossing pair's triangles flagged
+// (golden's second, count_all pass), and each bin's record in `counts` (kBinWords words) gets
+// the bin's whole screens and tests and, at its first crossing pair, the screens and tests
+// through it (tests through 0: no crossing): the tile's verdict and golden's counts, which stop
+// at the tile's first crossing (tile_verdict), follow from them.
+inline constexpr uint32_t kBatchWords = 3, kBinWords = 4;
+
 template <class P, class Team>
-TV_HD bool bin_sweep(const HybArgs<P>& a, const DetTile<P>& d, uint32_t bx, uint32_t by, bool count_all, uint4* act,
-                     uint64_t* bpair, uint64_t& screens, uint64_t& tests, Team team) {
-  const uint32_t n = d.n;
+TV_HD void sweep_bins(const HybArgs<P>& a, const DetTile<P>& d, uint32_t b0, uint32_t bstep, uint4* act,
+                      uint64_t* batch, uint64_t* counts, Team team) {
+  const uint32_t n = d.n, nbins = d.g.x * d.g.y;
   const OccRec* occ = d.occ;
   const Rect rect = d.rect;
   const uint32_t* range = a.range + d.base;
@@ -237,11 +245,12 @@ TV_HD bool bin_sweep(const HybArgs<P>& a, const DetTile<P>& d, uint32_t bx, uint
     return r != ~0u && bx >= (r & 0xff) && by >= (r >> 8 & 0xff) && bx <= (r >> 16 & 0xff) && by <= (r >> 24);
   };
   const uint32_t below = (1u << lane) - 1u;  // the lanes before this one
-  uint64_t* bscreens = bpair + Team::kSize;  // per batch entry: the screens counted through it
+  uint64_t* bpair = batch;                    // per batch entry: position k << 32 | position q
+  uint64_t* bscreens = batch + Team::kSize;   // the bin's screens counted through it
+  uint64_t* bbin = batch + 2 * Team::kSize;   // its bin << 32 | the bin's tests through it
   uint32_t nb = 0;
-  uint64_t s_cnt = 0, t_cnt = 0;
-  // The batch's tests; true at a crossing that ends the search (not with count_all).
-  auto flush = [&]() -> bool {
+  // A round of exact tests over the batch.
+  auto flush = [&]() {
     team.sync();  // the batch's entries, written by any lane
     bool cross = false;
     uint32_t k = 0, q = 0;
@@ -256,71 +265,77 @@ TV_HD bool bin_sweep(const HybArgs<P>& a, const DetTile<P>& d, uint32_t bx, uint
         cross = planes_cross(poly, np, xt, xu);
       }
     }
-    const uint32_t cm = team.ballot(cross);
-    if (count_all) {
-      if (cross) flag[q] = flag[k] = 1;
-    } else if (cm != 0) {
-      const uint32_t first = lowest_bit(cm);
-      s_cnt = bscreens[first];
-      t_cnt += first + 1;
-      return true;
+    if (cross) flag[q] = flag[k] = 1;
+    // Each bin's first crossing: the batch holds pairs in the bins' order.
+    uint32_t cm = team.ballot(cross);
+    if (lane == 0) {
+      for (; cm != 0; cm &= cm - 1) {
+        const uint32_t i = lowest_bit(cm), b = uint32_t(bbin[i] >> 32);
+        if (counts[kBinWords * b + 3] == 0) {
+          counts[kBinWords * b + 2] = bscreens[i];
+          counts[kBinWords * b + 3] = uint32_t(bbin[i]);
+        }
+      }
     }
-    t_cnt += nb;
     nb = 0;
     team.sync();  // every entry read before the next ones are written
-    return false;
   };
-  uint32_t na = 0;
-  for (uint32_t k0 = 0; k0 < n; k0 += Team::kSize) {
-    // The bin's members among the next kSize positions, then each in list order.
-    for (uint32_t mk = team.ballot(k0 + lane < n && in_bin(range[k0 + lane], bx, by)); mk != 0; mk &= mk - 1) {
-      const uint32_t k = k0 + lowest_bit(mk), rk = range[k];
-      const TileTri<P>& t = a.tris[occ[k].tri];
-      uint32_t kept = 0;
-      for (uint32_t j0 = 0; j0 < na; j0 += Team::kSize) {
-        const uint32_t j = j0 + lane;
-        uint4 e{0, 0, 0, 0};
-        if (j < na) e = act[j];
-        const uint32_t q = e.x;
-        const bool keep = j < na && e.y > t.z_min;
-        bool screen = false, test = false;
-        if (keep && e.z != t.id) {
-          screen = true;
-          const uint32_t rq = e.w;
-          const uint32_t x0 = tmax(rk & 0xff, rq & 0xff), y0 = tmax(rk >> 8 & 0xff, rq >> 8 & 0xff);
-          // Decided in the first bin the two share, and only if they may cross.
-          test = x0 == bx && y0 == by && may_cross(t, a.tris[occ[q].tri]) && !opposite_neighbours(t, a.tris[occ[q].tri]);
-        }
-        const uint32_t km = team.ballot(keep), sm = team.ballot(screen), tm = team.ballot(test);
-        // Golden's erase. Every lane has read its entry (the ballots order them), and no write
-        // goes past the entries already read.
-        if (keep) act[kept + popc(km & below)] = e;
-        kept += popc(km);
-        if (tm != 0) {
-          if (nb + popc(tm) > Team::kSize && flush()) {
-            screens = s_cnt;
-            tests = t_cnt;
-            return true;
+  if (lane == 0)
+    for (uint32_t b = b0; b < nbins; b += bstep) counts[kBinWords * b + 3] = 0;
+  for (uint32_t b = b0; b < nbins; b += bstep) {
+    const uint32_t bx = b % d.g.x, by = b / d.g.x;
+    uint64_t s_cnt = 0, t_cnt = 0;
+    uint32_t na = 0;
+    for (uint32_t k0 = 0; k0 < n; k0 += Team::kSize) {
+      // The bin's members among the next kSize positions, then each in list order.
+      for (uint32_t mk = team.ballot(k0 + lane < n && in_bin(range[k0 + lane], bx, by)); mk != 0; mk &= mk - 1) {
+        const uint32_t k = k0 + lowest_bit(mk), rk = range[k];
+        const TileTri<P>& t = a.tris[occ[k].tri];
+        uint32_t kept = 0;
+        for (uint32_t j0 = 0; j0 < na; j0 += Team::kSize) {
+          const uint32_t j = j0 + lane;
+          uint4 e{0, 0, 0, 0};
+          if (j < na) e = act[j];
+          const uint32_t q = e.x;
+          const bool keep = j < na && e.y > t.z_min;
+          bool screen = false, test = false;
+          if (keep && e.z != t.id) {
+            screen = true;
+            const uint32_t rq = e.w;
+            const uint32_t x0 = tmax(rk & 0xff, rq & 0xff), y0 = tmax(rk >> 8 & 0xff, rq >> 8 & 0xff);
+            // Decided in the first bin the two share, and only if they may cross.
+            test = x0 == bx && y0 == by && may_cross(t, a.tris[occ[q].tri]) && !opposite_neighbours(t, a.tris[occ[q].tri]);
           }
-          if (test) {
-            const uint32_t at = nb + popc(tm & below);
-            bpair[at] = uint64_t(k) << 32 | q;
-            bscreens[at] = s_cnt + popc(sm & (below << 1 | 1u));
+          const uint32_t km = team.ballot(keep), sm = team.ballot(screen), tm = team.ballot(test);
+          // Golden's erase. Every lane has read its entry (the ballots order them), and no write
+          // goes past the entries already read.
+          if (keep) act[kept + popc(km & below)] = e;
+          kept += popc(km);
+          if (tm != 0) {
+            if (nb + popc(tm) > Team::kSize) flush();
+            if (test) {
+              const uint32_t at = nb + popc(tm & below);
+              bpair[at] = uint64_t(k) << 32 | q;
+              bscreens[at] = s_cnt + popc(sm & (below << 1 | 1u));
+              bbin[at] = uint64_t(b) << 32 | (t_cnt + popc(tm & below) + 1);
+            }
+            nb += popc(tm);
+            t_cnt += popc(tm);
           }
-          nb += popc(tm);
+          s_cnt += popc(sm);
         }
-        s_cnt += popc(sm);
+        team.sync();
+        if (lane == 0) act[kept] = make_uint4(k, t.z_max, t.id, rk);
+        na = kept + 1;
+        team.sync();
       }
-      team.sync();
-      if (lane == 0) act[kept] = make_uint4(k, t.z_max, t.id, rk);
-      na = kept + 1;
-      team.sync();
+    }
+    if (lane == 0) {
+      counts[kBinWords * b] = s_cnt;
+      counts[kBinWords * b + 1] = t_cnt;
     }
   }
-  const bool crossed = nb != 0 && flush();
-  screens = s_cnt;
-  tests = t_cnt;
-  return crossed;
+  if (nb != 0) flush();
 }
 
 // The causes decided without the detector: 2 (non-opaque content), 3 (budget), else 0.
@@ -340,42 +355,48 @@ TV_HD void write_verdict(const HybArgs<P>& a, uint64_t tile, uint32_t cause, uin
   a.crossing[tile] = crossing;
 }
 
+// The tile's verdict from its bins' records (sweep_bins) and `crossing`, its flagged triangles:
+// golden stops at the first crossing pair in bin order, so its counts are the whole counts of
+// the bins before the first bin with a crossing and that bin's counts through it.
+template <class P>
+TV_HD void tile_verdict(const HybArgs<P>& a, uint64_t tile, uint32_t nbins, const uint64_t* counts, uint32_t crossing) {
+  uint64_t screens = 0, tests = 0;
+  for (uint32_t b = 0; b < nbins; ++b) {
+    const uint64_t* c = counts + kBinWords * b;
+    if (c[3] != 0) {
+      write_verdict(a, tile, 1, screens + c[2], tests + c[3], crossing);
+      return;
+    }
+    screens += c[0];
+    tests += c[1];
+  }
+  write_verdict(a, tile, 0, screens, tests, 0);
+}
+
 template <class P>
 TV_HD void verdict_host(const HybArgs<P>& a, uint64_t tile) {
-  uint32_t cause = cause_of(a, tile), crossing = 0;
-  uint64_t screens = 0, tests = 0;
-  if (cause == 0) {
-    const DetTile<P> d = det_tile(a, uint32_t(tile));
-    det_positions(a, d, 0, 1);
-    uint4* act = a.active + d.base;
-    uint64_t* bpair = a.batch + tile * kDetWarps * 2 * WarpTeam::kSize;
-    for (uint32_t b = 0; b < d.g.x * d.g.y && cause == 0; ++b) {
-      uint64_t s = 0, t = 0;
-      if (bin_sweep(a, d, b % d.g.x, b / d.g.x, false, act, bpair, s, t, HostTeam{})) cause = 1;
-      screens += s;
-      tests += t;
-    }
-    if (cause == 1) {
-      for (uint32_t b = 0; b < d.g.x * d.g.y; ++b) {
-        uint64_t s = 0, t = 0;
-        bin_sweep(a, d, b % d.g.x, b / d.g.x, true, act, bpair, s, t, HostTeam{});
-      }
-      for (uint32_t k = 0; k < d.n; ++k) crossing += a.flag[d.base + k];
-    }
+  const uint32_t cause = cause_of(a, tile);
+  if (cause != 0) {
+    write_verdict(a, tile, cause, 0, 0, 0);
+    return;
   }
-  write_verdict(a, tile, cause, screens, tests, crossing);
+  const DetTile<P> d = det_tile(a, uint32_t(tile));
+  det_positions(a, d, 0, 1);
+  uint64_t* counts = a.bin_counts + tile * a.bins_per_tile * kBinWords;
+  sweep_bins(a, d, 0, 1, a.active + d.base, a.batch + tile * kDetWarps * kBatchWords * WarpTeam::kSize, counts,
+             HostTeam{});
+  uint32_t crossing = 0;
+  for (uint32_t k = 0; k < d.n; ++k) crossing += a.flag[d.base + k];
+  tile_verdict(a, tile, d.g.x * d.g.y, counts, crossing);
 }
 
 // A block per tile; its warps take the tile's bins w, w + kDetWarps, ..., each with its own
-// active list and batch. A warp stops at its first crossing bin, or when another warp has
-// found one in an earlier bin (the bins after the first crossing one are not counted); the
-// bins' counts are summed up to the first crossing bin once every warp is done.
+// active list and batch; once every warp is done, the tile's verdict.
 template <class P>
 __global__ void __launch_bounds__(kDetWarps * 32) k_verdict(HybArgs<P> a, uint64_t n_tiles) {
   TV_KERNEL_WAIT();
-  __shared__ uint32_t first;  // the first bin (row-major) with a crossing; ~0: none
   __shared__ uint32_t found;
-  const uint32_t w = threadIdx.x / 32, lane = threadIdx.x & 31u;
+  const uint32_t w = threadIdx.x / 32;
   for (uint64_t tile = blockIdx.x; tile < n_tiles; tile += gridDim.x) {
     const uint32_t cause = cause_of(a, tile);
     if (cause != 0) {
@@ -383,49 +404,18 @@ __global__ void __launch_bounds__(kDetWarps * 32) k_verdict(HybArgs<P> a, uint64
       continue;  // uniform over the block
     }
     const DetTile<P> d = det_tile(a, uint32_t(tile));
-    const uint32_t nbins = d.g.x * d.g.y;
-    if (threadIdx.x == 0) {
-      first = ~0u;
-      found = 0;
-    }
+    if (threadIdx.x == 0) found = 0;
     det_positions(a, d, threadIdx.x, blockDim.x);
     __syncthreads();
-    uint4* act = a.active + uint64_t(w) * a.active_stride + d.base;
-    uint64_t* bpair = a.batch + (tile * kDetWarps + w) * 2 * WarpTeam::kSize;
-    uint64_t* counts = a.bin_counts + tile * a.bins_per_tile * 2;
-    for (uint32_t b = w; b < nbins; b += kDetWarps) {
-      const uint32_t seen = __shfl_sync(0xffffffffu, lane == 0 ? atomicAdd(&first, 0u) : 0u, 0);
-      if (b > seen) break;  // an earlier bin has a crossing (one value for the whole warp)
-      uint64_t s = 0, t = 0;
-      const bool crossed = bin_sweep(a, d, b % d.g.x, b / d.g.x, false, act, bpair, s, t, WarpTeam{});
-      if (lane == 0) {
-        counts[2 * b] = s;
-        counts[2 * b + 1] = t;
-        if (crossed) atomicMin(&first, b);
-      }
-      if (crossed) break;
-    }
+    uint64_t* counts = a.bin_counts + tile * a.bins_per_tile * kBinWords;
+    sweep_bins(a, d, w, kDetWarps, a.active + uint64_t(w) * a.active_stride + d.base,
+               a.batch + (tile * kDetWarps + w) * kBatchWords * WarpTeam::kSize, counts, WarpTeam{});
     __syncthreads();
-    const uint32_t f = first;
-    if (f != ~0u) {  // the crossing triangles, over every bin
-      for (uint32_t b = w; b < nbins; b += kDetWarps) {
-        uint64_t s = 0, t = 0;
-        bin_sweep(a, d, b % d.g.x, b / d.g.x, true, act, bpair, s, t, WarpTeam{});
-      }
-      __syncthreads();
-      uint32_t mine = 0;
-      for (uint32_t k = threadIdx.x; k < d.n; k += blockDim.x) mine += a.flag[d.base + k];
-      atomicAdd(&found, mine);
-    }
+    uint32_t mine = 0;
+    for (uint32_t k = threadIdx.x; k < d.n; k += blockDim.x) mine += a.flag[d.base + k];
+    atomicAdd(&found, mine);
     __syncthreads();
-    if (threadIdx.x == 0) {
-      uint64_t screens = 0, tests = 0;
-      for (uint32_t b = 0; b < nbins && b <= f; ++b) {
-        screens += counts[2 * b];
-        tests += counts[2 * b + 1];
-      }
-      write_verdict(a, tile, f != ~0u ? 1u : 0u, screens, tests, f != ~0u ? found : 0u);
-    }
+    if (threadIdx.x == 0) tile_verdict(a, tile, d.g.x * d.g.y, counts, found);
     __syncthreads();
   }
 }
@@ -1042,12 +1032,12 @@ HybArgs<P> hybrid_args(Pipeline<P>& p) {
   a.flag = p.hyb_flag.need(ni + 1);
   a.active_stride = ni + 1;
   a.active = p.hyb_active.need(kDetWarps * a.active_stride);
-  a.batch = p.hyb_batch.need(nt * kDetWarps * 2 * WarpTeam::kSize + 1);
+  a.batch = p.hyb_batch.need(nt * kDetWarps * kBatchWords * WarpTeam::kSize + 1);
   {
     const Bins g = bins_of(a, a.grid.rect(0));
     a.bins_per_tile = g.x * g.y;
   }
-  a.bin_counts = p.hyb_bin_counts.need(nt * a.bins_per_tile * 2 + 1);
+  a.bin_counts = p.hyb_bin_counts.need(nt * a.bins_per_tile * kBinWords + 1);
   a.sample_xy = p.sample_xy.get();
   a.n_samples = p.f.n_samples;
   a.width = p.f.width;
