@@ -42,7 +42,7 @@ struct HybArgs {
   uint64_t* tests;
   uint32_t* crossing;
   uint32_t* range;   // per occluder position: bins x0, y0, x1, y1 (8 bits each); ~0: empty in the tile
-  uint8_t* flag;     // per occluder position: in some crossing pair (count_all)
+  uint8_t* flag;     // per occluder position: in some crossing pair
   uint4* active;     // per warp and occluder position: a detection bin's active members (scratch)
   uint64_t active_stride;  // positions per warp's share of `active`
   uint64_t* batch;   // per tile and warp, kBatchWords x 32 words: the pairs waiting for the exact test
@@ -158,8 +158,9 @@ struct Bins {
 // of the bins before the first that has a crossing, plus that bin's counts through it. On the
 // GPU a block takes a tile and its warps take the bins (sweep_bins, below); the host sweeps
 // them in order. Both test every pair of the tile: the crossing triangles are counted over
-// every bin, and the exact tests wait for a full round whatever bin they come from (one round
-// a bin took each warp about a round's latency, some 30 us, a bin on the H200).
+// every bin, and the exact tests wait for a full round whatever bin they come from. A round at
+// the end of each bin, with a second pass for the crossing tiles, took slivers' k_verdict
+// 198 us against 138 (H200, reports/cuda/detector_one_pass_h200.md).
 
 // Warps of a tile's block on the GPU (the bins shared out). 8 and 16 against 4 (H200, hybrid, 15
 // scenes, one build, new frame, the verdicts beside the analytic stages): bunny float 1.161 ms at
