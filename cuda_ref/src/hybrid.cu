@@ -653,10 +653,7 @@ __device__ inline bool pp_inside(const HybArgs<P>& a, const PPRec& d, const Fine
   const int sb = int(a.grid.sb);
   const int64_t rx0 = int64_t(f.x0) << sb, ry0 = int64_t(f.y0) << sb;
   const int64_t rx1 = int64_t(f.x1 + 1) << sb, ry1 = int64_t(f.y1 + 1) << sb;
-  bool inside = true;
-  for (int k = 0; k < 3; ++k)
-    inside &= int64_t(d.ea[k]) * (d.ea[k] > 0 ? rx0 : rx1) + int64_t(d.eb[k]) * (d.eb[k] > 0 ? ry0 : ry1) + d.c[k] > 0;
-  return inside;
+  return rect_inside_edges(d.ea, d.eb, d.c, rx0, ry0, rx1, ry1);
 }
 
 // A small record's covered samples of the fine tile, as bits u.

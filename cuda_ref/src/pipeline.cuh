@@ -164,6 +164,9 @@ struct SetupTri {
   uint32_t opaque;  // opaque draw without shader depth/discard
   uint32_t cut;     // made by clip-space clipping: its edges are boundaries
 };
+static_assert(sizeof(SetupTri) % 4 == 0, "records of whole words");
+inline constexpr uint32_t kSetupWords = sizeof(SetupTri) / 4;  // a record's 32-bit words (staged copies)
+
 
 struct DrawInfo {
   uint32_t vertex_offset, vertex_count;

@@ -155,6 +155,16 @@ TV_HD inline void positive_edges(const Vtx& v0, const Vtx& v1, const Vtx& v2, ty
   }
 }
 
+// Whether the rectangle [rx0, rx1] x [ry0, ry1] (sub-pixel units) lies strictly inside the three
+// integer edges a x + b y + c > 0: each edge is tested at the corner where it is least.
+TV_HD inline bool rect_inside_edges(const int32_t* a, const int32_t* b, const int64_t* c, int64_t rx0, int64_t ry0,
+                                    int64_t rx1, int64_t ry1) {
+  bool inside = true;
+  for (int k = 0; k < 3; ++k)
+    inside &= int64_t(a[k]) * (a[k] > 0 ? rx0 : rx1) + int64_t(b[k]) * (b[k] > 0 ? ry0 : ry1) + c[k] > 0;
+  return inside;
+}
+
 template <class P>
 TV_HD inline TileTri<P> make_tile_tri(const Vtx& v0, const Vtx& v1, const Vtx& v2, uint32_t id, bool opaque) {
   TileTri<P> t;

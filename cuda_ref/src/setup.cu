@@ -165,8 +165,6 @@ TV_HD void setup_emit(const SetupArgs& a, uint64_t t) { emit_triangle(a, t, Dire
 // each touching other sectors. Records past the stage (a block of many clipped fans) go
 // straight out.
 inline constexpr uint32_t kEmitBlock = 256, kEmitStage = 320;
-inline constexpr uint32_t kSetupWords = sizeof(SetupTri) / 4;
-static_assert(sizeof(SetupTri) % 4 == 0, "records of whole words");
 
 struct StagedOut {
   uint64_t o0;

@@ -239,7 +239,7 @@ __global__ void __launch_bounds__(kFrontBlock<P>) k_front_build_block(FrontArgs<
   constexpr uint32_t B = kFrontBlock<P>;
   static_assert(sizeof(TileTri<P>) % 4 == 0 && sizeof(SetupTri) % 4 == 0, "records of whole words");
   static_assert(sizeof(SetupTri) <= sizeof(TileTri<P>), "the staging holds either");
-  constexpr uint32_t kTriWords = sizeof(TileTri<P>) / 4, kSetupWords = sizeof(SetupTri) / 4;
+  constexpr uint32_t kTriWords = sizeof(TileTri<P>) / 4;
   __shared__ alignas(16) uint32_t buf[B * kTriWords];
   const uint64_t n = count_of(n_tagged);
   for (uint64_t base = uint64_t(blockIdx.x) * B; base < n; base += uint64_t(gridDim.x) * B) {

@@ -569,10 +569,7 @@ __device__ inline bool tile_inside(const ZArgs& a, const ZDer& d, int32_t x0, in
   if (d.px0 > x0 || d.px1 < tx1 || d.py0 > y0 || d.py1 < ty1) return false;
   const int64_t rx0 = int64_t(x0) << a.sb, ry0 = int64_t(y0) << a.sb;
   const int64_t rx1 = int64_t(tx1 + 1) << a.sb, ry1 = int64_t(ty1 + 1) << a.sb;
-  bool inside = true;
-  for (int k = 0; k < 3; ++k)
-    inside &= int64_t(d.a[k]) * (d.a[k] > 0 ? rx0 : rx1) + int64_t(d.b[k]) * (d.b[k] > 0 ? ry0 : ry1) + d.c[k] > 0;
-  return inside;
+  return rect_inside_edges(d.a, d.b, d.c, rx0, ry0, rx1, ry1);
 }
 
 // The samples of a tile that a record covers, as bits u = pixel_in_tile * samples + k, by the
