@@ -1,5 +1,5 @@
 // Hybrid mode on the GPU (model/visibility/hybrid_resolver.cpp): every tile gets a verdict
-// (stage_verdicts, on side stream 3 beside the analytic stages, from binning's lists), and after
+// (stage_verdicts, on side streams 3 and 4 beside the analytic stages, from binning's lists), and after
 // the analytic stages the tiles whose analytic answer can be wrong are redone per pixel (the
 // exact z-buffer over the tile's triangles), their rows set as golden's per_pixel resolver sets
 // them:
@@ -391,26 +391,55 @@ TV_HD void verdict_host(const HybArgs<P>& a, uint64_t tile) {
   tile_verdict(a, tile, d.g.x * d.g.y, counts, crossing);
 }
 
-// A block per tile; its warps take the tile's bins w, w + kDetWarps, ..., each with its own
-// active list and batch; once every warp is done, the tile's verdict.
+// Heavy tiles: from kHeavyMin occluders a tile's sweeps are the verdict's longest chains (a warp
+// sweeps its bins one member after another), so its bins go to a block of kHeavyWarps warps, a
+// warp per bin at 16 bins, with their active lists and batches in shared memory (up to
+// kHeavyCap occluders; a tile with more stays with the kDetWarps blocks and global lists). The
+// heavy tiles' block runs beside the others' (side stream 4), one block a tile. The outputs do
+// not depend on which block takes a tile: each bin's sweep is the same.
+inline constexpr uint32_t kHeavyWarps = 16, kHeavyMin = 32, kHeavyCap = 768;
+inline constexpr size_t kHeavySmem = size_t(kHeavyWarps) * kHeavyCap * sizeof(uint4) +
+                                     size_t(kHeavyWarps) * kBatchWords * WarpTeam::kSize * sizeof(uint64_t);
+
 template <class P>
-__global__ void __launch_bounds__(kDetWarps * 32) k_verdict(HybArgs<P> a, uint64_t n_tiles) {
+TV_HD bool heavy_tile(const HybArgs<P>& a, uint64_t tile) {
+  const uint32_t n = a.occ_count[tile];
+  return a.bins_per_tile > kDetWarps && n >= kHeavyMin && n <= kHeavyCap;
+}
+
+// A block per tile (Heavy: only the heavy tiles, kHeavyWarps warps; else the others, grid-stride,
+// kDetWarps warps); its warps take the tile's bins w, w + W, ..., each with its own active list
+// and batch; once every warp is done, the tile's verdict.
+template <class P, bool Heavy>
+__global__ void __launch_bounds__((Heavy ? kHeavyWarps : kDetWarps) * 32)
+    k_verdict(HybArgs<P> a, uint64_t n_tiles) {
   TV_KERNEL_WAIT();
+  constexpr uint32_t W = Heavy ? kHeavyWarps : kDetWarps;
+  extern __shared__ uint4 heavy_smem[];  // Heavy: W x kHeavyCap list entries, then W batches
   __shared__ uint32_t found;
   const uint32_t w = threadIdx.x / 32;
   for (uint64_t tile = blockIdx.x; tile < n_tiles; tile += gridDim.x) {
     const uint32_t cause = cause_of(a, tile);
+    if (cause == 0 && heavy_tile(a, tile) != Heavy) continue;  // uniform over the block
     if (cause != 0) {
-      if (threadIdx.x == 0) write_verdict(a, tile, cause, 0, 0, 0);
-      continue;  // uniform over the block
+      if (!Heavy && threadIdx.x == 0) write_verdict(a, tile, cause, 0, 0, 0);
+      continue;
     }
     const DetTile<P> d = det_tile(a, uint32_t(tile));
     if (threadIdx.x == 0) found = 0;
     det_positions(a, d, threadIdx.x, blockDim.x);
     __syncthreads();
     uint64_t* counts = a.bin_counts + tile * a.bins_per_tile * kBinWords;
-    sweep_bins(a, d, w, kDetWarps, a.active + uint64_t(w) * a.active_stride + d.base,
-               a.batch + (tile * kDetWarps + w) * kBatchWords * WarpTeam::kSize, counts, WarpTeam{});
+    uint4* act;
+    uint64_t* batch;
+    if constexpr (Heavy) {
+      act = heavy_smem + w * kHeavyCap;
+      batch = reinterpret_cast<uint64_t*>(heavy_smem + W * kHeavyCap) + w * kBatchWords * WarpTeam::kSize;
+    } else {
+      act = a.active + uint64_t(w) * a.active_stride + d.base;
+      batch = a.batch + (tile * kDetWarps + w) * kBatchWords * WarpTeam::kSize;
+    }
+    sweep_bins(a, d, w, W, act, batch, counts, WarpTeam{});
     __syncthreads();
     uint32_t mine = 0;
     for (uint32_t k = threadIdx.x; k < d.n; k += blockDim.x) mine += a.flag[d.base + k];
@@ -1057,14 +1086,24 @@ HybArgs<P> hybrid_args(Pipeline<P>& p) {
 }  // namespace
 
 template <class P>
-void stage_verdicts(Pipeline<P>& p) {
+void stage_verdicts(Pipeline<P>& p, Detector which) {
   Exec& ex = p.ex;
   const uint64_t nt = p.n_tiles;
   const HybArgs<P> a = hybrid_args(p);
   if (ex.where == Where::cpu) {
-    for (uint64_t t = 0; t < nt; ++t) verdict_host<P>(a, ex.host_index(t, nt));
-  } else {
-    k_verdict<P><<<uint32_t(tmin<uint64_t>(nt, uint64_t(ex.grid_blocks) * 8)), kDetWarps * 32, 0, ex.stream>>>(a, nt);
+    if (which == Detector::light)  // the host takes every tile
+      for (uint64_t t = 0; t < nt; ++t) verdict_host<P>(a, ex.host_index(t, nt));
+  } else if (which == Detector::light) {
+    k_verdict<P, false><<<uint32_t(tmin<uint64_t>(nt, uint64_t(ex.grid_blocks) * 8)), kDetWarps * 32, 0, ex.stream>>>(a, nt);
+    TV_CUDA(cudaGetLastError());
+    ++ex.queued;
+  } else if (a.bins_per_tile > kDetWarps) {
+    static const bool smem_set = [] {
+      TV_CUDA(cudaFuncSetAttribute(k_verdict<P, true>, cudaFuncAttributeMaxDynamicSharedMemorySize, int(kHeavySmem)));
+      return true;
+    }();
+    (void)smem_set;
+    k_verdict<P, true><<<uint32_t(nt), kHeavyWarps * 32, kHeavySmem, ex.stream>>>(a, nt);
     TV_CUDA(cudaGetLastError());
     ++ex.queued;
   }
@@ -1115,8 +1154,8 @@ void stage_hybrid(Pipeline<P>& p) {
   ex.launch_dyn(k_hybrid_fold_long<P>, hybrid_fold_long_host<P>, f.long_count, ni, f, kFoldBlock, ex.grid_blocks);
 }
 
-template void stage_verdicts<ExactP>(Pipeline<ExactP>&);
-template void stage_verdicts<FloatP>(Pipeline<FloatP>&);
+template void stage_verdicts<ExactP>(Pipeline<ExactP>&, Detector);
+template void stage_verdicts<FloatP>(Pipeline<FloatP>&, Detector);
 template void stage_hybrid<ExactP>(Pipeline<ExactP>&);
 template void stage_hybrid<FloatP>(Pipeline<FloatP>&);
 
