@@ -48,6 +48,7 @@ struct HybArgs {
   uint64_t* batch;   // per tile and warp, kBatchWords x 32 words: the pairs waiting for the exact test
   uint64_t* bin_counts;    // per tile and detection bin, kBinWords: screens and tests (sweep_bins)
   uint32_t bins_per_tile;
+  uint32_t* heavy;   // the heavy tiles (k_heavy_list): their count, then the tiles in any order
   // Per-pixel tiles.
   const uint32_t* sample_xy;
   uint32_t n_samples, width, height;
@@ -395,8 +396,9 @@ TV_HD void verdict_host(const HybArgs<P>& a, uint64_t tile) {
 // sweeps its bins one member after another), so its bins go to a block of kHeavyWarps warps, a
 // warp per bin at 16 bins, with their active lists and batches in shared memory (up to
 // kHeavyCap occluders; a tile with more stays with the kDetWarps blocks and global lists). The
-// heavy tiles' block runs beside the others' (side stream 4), one block a tile. The outputs do
-// not depend on which block takes a tile: each bin's sweep is the same.
+// heavy tiles are listed first (k_heavy_list), and their blocks, one an SM, run beside the
+// others' (side stream 4). The outputs do not depend on which block takes a tile: each bin's
+// sweep is the same.
 inline constexpr uint32_t kHeavyWarps = 16, kHeavyMin = 32, kHeavyCap = 768;
 inline constexpr size_t kHeavySmem = size_t(kHeavyWarps) * kHeavyCap * sizeof(uint4) +
                                      size_t(kHeavyWarps) * kBatchWords * WarpTeam::kSize * sizeof(uint64_t);
@@ -407,9 +409,16 @@ TV_HD bool heavy_tile(const HybArgs<P>& a, uint64_t tile) {
   return a.bins_per_tile > kDetWarps && n >= kHeavyMin && n <= kHeavyCap;
 }
 
-// A block per tile (Heavy: only the heavy tiles, kHeavyWarps warps; else the others, grid-stride,
-// kDetWarps warps); its warps take the tile's bins w, w + W, ..., each with its own active list
-// and batch; once every warp is done, the tile's verdict.
+template <class P>
+__global__ void k_heavy_list(HybArgs<P> a, uint64_t n_tiles) {
+  TV_KERNEL_WAIT();
+  for (uint64_t t = blockIdx.x * uint64_t(blockDim.x) + threadIdx.x; t < n_tiles; t += gridDim.x * uint64_t(blockDim.x))
+    if (cause_of(a, t) == 0 && heavy_tile(a, t)) a.heavy[1 + atomicAdd(a.heavy, 1u)] = uint32_t(t);
+}
+
+// A block per tile (Heavy: the listed heavy tiles, kHeavyWarps warps; else the others, kDetWarps
+// warps); its warps take the tile's bins w, w + W, ..., each with its own active list and batch;
+// once every warp is done, the tile's verdict.
 template <class P, bool Heavy>
 __global__ void __launch_bounds__((Heavy ? kHeavyWarps : kDetWarps) * 32)
     k_verdict(HybArgs<P> a, uint64_t n_tiles) {
@@ -418,12 +427,16 @@ __global__ void __launch_bounds__((Heavy ? kHeavyWarps : kDetWarps) * 32)
   extern __shared__ uint4 heavy_smem[];  // Heavy: W x kHeavyCap list entries, then W batches
   __shared__ uint32_t found;
   const uint32_t w = threadIdx.x / 32;
-  for (uint64_t tile = blockIdx.x; tile < n_tiles; tile += gridDim.x) {
-    const uint32_t cause = cause_of(a, tile);
-    if (cause == 0 && heavy_tile(a, tile) != Heavy) continue;  // uniform over the block
-    if (cause != 0) {
-      if (!Heavy && threadIdx.x == 0) write_verdict(a, tile, cause, 0, 0, 0);
-      continue;
+  const uint64_t n = Heavy ? a.heavy[0] : n_tiles;
+  for (uint64_t i = blockIdx.x; i < n; i += gridDim.x) {
+    const uint64_t tile = Heavy ? a.heavy[1 + i] : i;
+    if (!Heavy) {
+      const uint32_t cause = cause_of(a, tile);
+      if (cause != 0) {
+        if (threadIdx.x == 0) write_verdict(a, tile, cause, 0, 0, 0);
+        continue;  // uniform over the block
+      }
+      if (heavy_tile(a, tile)) continue;
     }
     const DetTile<P> d = det_tile(a, uint32_t(tile));
     if (threadIdx.x == 0) found = 0;
@@ -1065,6 +1078,7 @@ HybArgs<P> hybrid_args(Pipeline<P>& p) {
     a.bins_per_tile = g.x * g.y;
   }
   a.bin_counts = p.hyb_bin_counts.need(nt * a.bins_per_tile * kBinWords + 1);
+  a.heavy = p.hyb_heavy.need(nt + 1);
   a.sample_xy = p.sample_xy.get();
   a.n_samples = p.f.n_samples;
   a.width = p.f.width;
@@ -1103,9 +1117,12 @@ void stage_verdicts(Pipeline<P>& p, Detector which) {
       return true;
     }();
     (void)smem_set;
-    k_verdict<P, true><<<uint32_t(nt), kHeavyWarps * 32, kHeavySmem, ex.stream>>>(a, nt);
+    ex.zero(a.heavy, 4);
+    k_heavy_list<P><<<uint32_t(tmin<uint64_t>((nt + 255) / 256, ex.grid_blocks)), 256, 0, ex.stream>>>(a, nt);
     TV_CUDA(cudaGetLastError());
-    ++ex.queued;
+    k_verdict<P, true><<<ex.grid_blocks / 2, kHeavyWarps * 32, kHeavySmem, ex.stream>>>(a, nt);
+    TV_CUDA(cudaGetLastError());
+    ex.queued += 2;
   }
 }
 

@@ -310,7 +310,7 @@ struct Pipeline {
   // Hybrid (hybrid.cu): per tile its verdict and detection work; per occluder position the
   // detector's scratch (and per tile its batch of pairs to test); per item its owned samples
   // in a per-pixel tile.
-  Buf<uint32_t> hyb_cause, hyb_crossing, hyb_range, hyb_owned;
+  Buf<uint32_t> hyb_cause, hyb_crossing, hyb_range, hyb_owned, hyb_heavy;
   Buf<uint4> hyb_active;
   Buf<uint64_t> hyb_screens, hyb_tests, hyb_shaded, hyb_batch, hyb_bin_counts, hyb_pp_sums;
   Buf<uint32_t> hyb_long_folds;  // the hybrid fold's long runs (first entry of each)
@@ -353,7 +353,7 @@ struct Pipeline {
     hyb_long_folds.bind(&e);
     ids.bind(&e);
     area.bind(&e);
-    for (auto* b : {&hyb_cause, &hyb_crossing, &hyb_range, &hyb_owned}) b->bind(&e);
+    for (auto* b : {&hyb_cause, &hyb_crossing, &hyb_range, &hyb_owned, &hyb_heavy}) b->bind(&e);
     hyb_active.bind(&e);
     hyb_screens.bind(&e);
     hyb_tests.bind(&e);
