@@ -234,6 +234,21 @@ TV_HD void det_positions(const HybArgs<P>& a, const DetTile<P>& d, uint32_t i0, 
 // at the tile's first crossing (tile_verdict), follow from them.
 inline constexpr uint32_t kBatchWords = 3, kBinWords = 4;
 
+// A pair's exact test (planes_cross over t clipped to the tile), out of line so that its wide
+// arithmetic's registers do not weigh on the sweep's loop.
+template <class P>
+#if defined(__CUDACC__)
+__noinline__
+#endif
+TV_HD bool pair_crosses(const TileTri<P>& t, const TileTri<P>& u, const Rect& rect) {
+  const XTri xt = exact_of(t), xu = exact_of(u);
+  if (!planes_may_cross(xt, xu)) return false;
+  PEdge<ExactP> poly[kTileCap];
+  bool overflow = false;
+  const uint32_t np = tile_polygon<ExactP>(xt, rect, poly, overflow);
+  return planes_cross(poly, np, xt, xu);
+}
+
 template <class P, class Team>
 TV_HD void sweep_bins(const HybArgs<P>& a, const DetTile<P>& d, uint32_t b0, uint32_t bstep, uint4* act,
                       uint64_t* batch, uint64_t* counts, Team team) {
@@ -259,13 +274,7 @@ TV_HD void sweep_bins(const HybArgs<P>& a, const DetTile<P>& d, uint32_t b0, uin
     if (lane < nb) {
       k = uint32_t(bpair[lane] >> 32);
       q = uint32_t(bpair[lane]);
-      const XTri xt = exact_of(a.tris[occ[k].tri]), xu = exact_of(a.tris[occ[q].tri]);
-      if (planes_may_cross(xt, xu)) {
-        PEdge<ExactP> poly[kTileCap];
-        bool overflow = false;
-        const uint32_t np = tile_polygon<ExactP>(xt, rect, poly, overflow);
-        cross = planes_cross(poly, np, xt, xu);
-      }
+      cross = pair_crosses(a.tris[occ[k].tri], a.tris[occ[q].tri], rect);
     }
     if (cross) flag[q] = flag[k] = 1;
     // Each bin's first crossing: the batch holds pairs in the bins' order.
