@@ -1,8 +1,8 @@
 // Hybrid mode on the GPU (model/visibility/hybrid_resolver.cpp): every tile gets a verdict
-// (stage_verdicts, on side streams 3 and 4 beside the analytic stages, from binning's lists), and after
-// the analytic stages the tiles whose analytic answer can be wrong are redone per pixel (the
-// exact z-buffer over the tile's triangles), their rows set as golden's per_pixel resolver sets
-// them:
+// (stage_verdicts, on side streams 3 and 4 beside the analytic stages, from binning's lists),
+// and after the analytic stages the tiles whose analytic answer can be wrong are redone per
+// pixel (the exact z-buffer over the tile's triangles), their rows set as golden's per_pixel
+// resolver sets them:
 //   1 interpenetration: two opaque triangles of the tile (other trace triangles) whose planes
 //     cross strictly inside their overlap within the tile;
 //   2 non-opaque content in the tile;
@@ -13,7 +13,8 @@
 // range reaches the current one's nearest depth, a pair screened (may_cross, opposite mesh
 // neighbours) and tested (planes_cross) in the first bin it shares; the first crossing ends
 // the tile's search. A block per tile, its warps taking the bins (bins are independent
-// sweeps: see sweep_bins), a warp's lanes the pairs of its bins 32 at a time.
+// sweeps: see sweep_bins), a warp's lanes the pairs of its bins 32 at a time; a heavy tile's
+// block has a warp per bin (k_verdict).
 //
 // Per-pixel tiles: ids and the tile's samples_covered / fragments_generated from the tile's
 // z-buffer (the other per-tile counters are 0, as golden's per_pixel resolver leaves them);
