@@ -1110,18 +1110,19 @@ HybArgs<P> hybrid_args(Pipeline<P>& p) {
 }  // namespace
 
 template <class P>
-void stage_verdicts(Pipeline<P>& p, Detector which) {
+void stage_verdicts(Pipeline<P>& p) {
   Exec& ex = p.ex;
   const uint64_t nt = p.n_tiles;
   const HybArgs<P> a = hybrid_args(p);
-  if (ex.where == Where::cpu) {
-    if (which == Detector::light)  // the host takes every tile
-      for (uint64_t t = 0; t < nt; ++t) verdict_host<P>(a, ex.host_index(t, nt));
-  } else if (which == Detector::light) {
-    k_verdict<P, false><<<uint32_t(tmin<uint64_t>(nt, uint64_t(ex.grid_blocks) * 8)), kDetWarps * 32, 0, ex.stream>>>(a, nt);
-    TV_CUDA(cudaGetLastError());
-    ++ex.queued;
-  } else if (a.bins_per_tile > kDetWarps) {
+  if (ex.where == Where::cpu) {  // the host takes every tile as the light blocks do
+    for (uint64_t t = 0; t < nt; ++t) verdict_host<P>(a, ex.host_index(t, nt));
+    return;
+  }
+  k_verdict<P, false><<<uint32_t(tmin<uint64_t>(nt, uint64_t(ex.grid_blocks) * 8)), kDetWarps * 32, 0, ex.stream>>>(a, nt);
+  TV_CUDA(cudaGetLastError());
+  ++ex.queued;
+  if (a.bins_per_tile > kDetWarps) {  // else no tile is heavy
+    ex.branch(4);  // forked where side 3 was, beside it
     static const bool smem_set = [] {
       TV_CUDA(cudaFuncSetAttribute(k_verdict<P, true>, cudaFuncAttributeMaxDynamicSharedMemorySize, int(kHeavySmem)));
       return true;
@@ -1181,8 +1182,8 @@ void stage_hybrid(Pipeline<P>& p) {
   ex.launch_dyn(k_hybrid_fold_long<P>, hybrid_fold_long_host<P>, f.long_count, ni, f, kFoldBlock, ex.grid_blocks);
 }
 
-template void stage_verdicts<ExactP>(Pipeline<ExactP>&, Detector);
-template void stage_verdicts<FloatP>(Pipeline<FloatP>&, Detector);
+template void stage_verdicts<ExactP>(Pipeline<ExactP>&);
+template void stage_verdicts<FloatP>(Pipeline<FloatP>&);
 template void stage_hybrid<ExactP>(Pipeline<ExactP>&);
 template void stage_hybrid<FloatP>(Pipeline<FloatP>&);
 

@@ -547,9 +547,7 @@ bool run_once(Pipeline<P>& p, Timer& t) {
     // The verdicts need the tiles' lists and counts only: they run beside the analytic stages,
     // which count into every tile's row (the per-pixel pass then sets its tiles' rows).
     p.ex.branch(3);
-    stage_verdicts(p, Detector::light);
-    p.ex.branch(4);
-    stage_verdicts(p, Detector::heavy);
+    stage_verdicts(p);
     p.ex.on_main();
   }
   p.ex.branch(0);

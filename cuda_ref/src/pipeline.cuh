@@ -439,11 +439,10 @@ template <class P>
 void stage_raster(Pipeline<P>& p, Pass pass);
 template <class P>
 void stage_fold(Pipeline<P>& p);
-// Hybrid mode: every tile's verdict, beside the analytic stages: `light` the tiles of few occluders
-// (side 3; on the host, every tile), `heavy` the others (side 4; hybrid.cu kHeavyMin).
-enum class Detector { light, heavy };
+// Hybrid mode: every tile's verdict, beside the analytic stages (queued on side 3, the heavy
+// tiles' blocks on side 4: hybrid.cu kHeavyMin).
 template <class P>
-void stage_verdicts(Pipeline<P>& p, Detector which);
+void stage_verdicts(Pipeline<P>& p);
 template <class P>
 void stage_hybrid(Pipeline<P>& p);  // hybrid mode, after every other stage: per-pixel tiles, areas
 
