@@ -43,6 +43,7 @@ struct HybArgs {
   uint64_t* tests;
   uint32_t* crossing;
   uint32_t* range;   // per occluder position: bins x0, y0, x1, y1 (8 bits each); ~0: empty in the tile
+  DetRec* rec;       // per occluder position: its depths, id, triangle and box
   uint8_t* flag;     // per occluder position: in some crossing pair
   uint4* active;     // per warp and occluder position: a detection bin's active members (scratch)
   uint64_t active_stride;  // positions per warp's share of `active`
@@ -75,8 +76,8 @@ TV_HD inline int depth_at(const exact::Plane& p, const exact::Plane& q, const ex
   return (mp * wide<4>(q.area) - mq * wide<4>(p.area)).sign();
 }
 
-template <class P>
-TV_HD inline bool may_cross(const TileTri<P>& t, const TileTri<P>& u) {
+template <class T, class U>  // TileTri or DetRec
+TV_HD inline bool may_cross(const T& t, const U& u) {
   return u.z_min < t.z_max && u.z_max > t.z_min && u.bbox.x1 > t.bbox.x0 && u.bbox.x0 < t.bbox.x1 &&
          u.bbox.y1 > t.bbox.y0 && u.bbox.y0 < t.bbox.y1;
 }
@@ -201,7 +202,8 @@ TV_HD DetTile<P> det_tile(const HybArgs<P>& a, uint32_t tile) {
   return d;
 }
 
-// Positions i0, i0 + stride, ...: their bins (~0: the triangle misses the tile), and the
+// Positions i0, i0 + stride, ...: their bins (~0: the triangle misses the tile), their records
+// (DetRec: what the sweep reads of a member and of an active entry in one load), and the
 // crossing flags cleared. Golden clips each triangle to the tile and skips an empty polygon;
 // clipping keeps only what is strictly inside each line, so the polygon is empty exactly when
 // the interiors of triangle and tile do not meet: binning's exact test (triangle_overlaps_rect),
@@ -219,6 +221,7 @@ TV_HD void det_positions(const HybArgs<P>& a, const DetTile<P>& d, uint32_t i0, 
                             g.of(t.bbox.x1, rect.x0, g.x) << 16 | g.of(t.bbox.y1, rect.y0, g.y) << 24;
     }
     a.flag[d.base + k] = 0;
+    a.rec[d.base + k] = DetRec{t.z_min, t.z_max, t.id, d.occ[k].tri, t.bbox};
   }
 }
 
@@ -254,9 +257,9 @@ template <class P, class Team>
 TV_HD void sweep_bins(const HybArgs<P>& a, const DetTile<P>& d, uint32_t b0, uint32_t bstep, uint4* act,
                       uint64_t* batch, uint64_t* counts, Team team) {
   const uint32_t n = d.n, nbins = d.g.x * d.g.y;
-  const OccRec* occ = d.occ;
   const Rect rect = d.rect;
   const uint32_t* range = a.range + d.base;
+  const DetRec* rec = a.rec + d.base;
   uint8_t* flag = a.flag + d.base;
   const uint32_t lane = team.lane();
   auto in_bin = [](uint32_t r, uint32_t bx, uint32_t by) {
@@ -275,7 +278,7 @@ TV_HD void sweep_bins(const HybArgs<P>& a, const DetTile<P>& d, uint32_t b0, uin
     if (lane < nb) {
       k = uint32_t(bpair[lane] >> 32);
       q = uint32_t(bpair[lane]);
-      cross = pair_crosses(a.tris[occ[k].tri], a.tris[occ[q].tri], rect);
+      cross = pair_crosses(a.tris[rec[k].tri], a.tris[rec[q].tri], rect);
     }
     if (cross) flag[q] = flag[k] = 1;
     // Each bin's first crossing: the batch holds pairs in the bins' order.
@@ -302,7 +305,7 @@ TV_HD void sweep_bins(const HybArgs<P>& a, const DetTile<P>& d, uint32_t b0, uin
       // The bin's members among the next kSize positions, then each in list order.
       for (uint32_t mk = team.ballot(k0 + lane < n && in_bin(range[k0 + lane], bx, by)); mk != 0; mk &= mk - 1) {
         const uint32_t k = k0 + lowest_bit(mk), rk = range[k];
-        const TileTri<P>& t = a.tris[occ[k].tri];
+        const DetRec t = rec[k];
         uint32_t kept = 0;
         for (uint32_t j0 = 0; j0 < na; j0 += Team::kSize) {
           const uint32_t j = j0 + lane;
@@ -316,7 +319,10 @@ TV_HD void sweep_bins(const HybArgs<P>& a, const DetTile<P>& d, uint32_t b0, uin
             const uint32_t rq = e.w;
             const uint32_t x0 = tmax(rk & 0xff, rq & 0xff), y0 = tmax(rk >> 8 & 0xff, rq >> 8 & 0xff);
             // Decided in the first bin the two share, and only if they may cross.
-            test = x0 == bx && y0 == by && may_cross(t, a.tris[occ[q].tri]) && !opposite_neighbours(t, a.tris[occ[q].tri]);
+            if (x0 == bx && y0 == by) {
+              const DetRec u = rec[q];
+              test = may_cross(t, u) && !opposite_neighbours(a.tris[t.tri], a.tris[u.tri]);
+            }
           }
           const uint32_t km = team.ballot(keep), sm = team.ballot(screen), tm = team.ballot(test);
           // Golden's erase. Every lane has read its entry (the ballots order them), and no write
@@ -1079,6 +1085,7 @@ HybArgs<P> hybrid_args(Pipeline<P>& p) {
   a.tests = p.hyb_tests.need(nt + 1);
   a.crossing = p.hyb_crossing.need(nt + 1);
   a.range = p.hyb_range.need(ni + 1);
+  a.rec = p.hyb_rec.need(ni + 1);
   a.flag = p.hyb_flag.need(ni + 1);
   a.active_stride = ni + 1;
   a.active = p.hyb_active.need(kDetWarps * a.active_stride);

@@ -312,6 +312,7 @@ struct Pipeline {
   // in a per-pixel tile.
   Buf<uint32_t> hyb_cause, hyb_crossing, hyb_range, hyb_owned, hyb_heavy;
   Buf<uint4> hyb_active;
+  Buf<DetRec> hyb_rec;
   Buf<uint64_t> hyb_screens, hyb_tests, hyb_shaded, hyb_batch, hyb_bin_counts, hyb_pp_sums;
   Buf<uint32_t> hyb_long_folds;  // the hybrid fold's long runs (first entry of each)
   Buf<uint8_t> hyb_flag;
@@ -355,6 +356,7 @@ struct Pipeline {
     area.bind(&e);
     for (auto* b : {&hyb_cause, &hyb_crossing, &hyb_range, &hyb_owned, &hyb_heavy}) b->bind(&e);
     hyb_active.bind(&e);
+    hyb_rec.bind(&e);
     hyb_screens.bind(&e);
     hyb_tests.bind(&e);
     hyb_batch.bind(&e);

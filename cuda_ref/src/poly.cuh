@@ -552,6 +552,13 @@ struct OccRec {
   uint32_t z_min, id, tri, pad;
 };
 
+// An occluder as the hybrid's detector sweeps it (hybrid.cu det_positions): what a member's step
+// and may_cross read, in one 32-byte load, and the triangle to read past them.
+struct alignas(16) DetRec {
+  uint32_t z_min, z_max, id, tri;
+  Rect bbox;
+};
+
 // SVGPU §3.3: the piece is hidden if an original opaque triangle nearer at its interior
 // point q (the centroid of its first three vertices; qx, qy its doubles) contains that point;
 // equal depth: the earlier-submitted triangle stays in front. Occluders come nearest first
