@@ -75,35 +75,6 @@ TV_HD inline double dadd(double a, double b) {
 #endif
 }
 
-// What m dadd(x, a) in a row give, in a few steps per binade crossed: a is a power of two (a
-// sample's share of a pixel), x >= 0. In x's binade [2^(e-1), 2^e) every double is a multiple
-// of the ulp u = 2^(e-53); a >= u is a multiple of u too, so the additions are exact until the
-// sum reaches 2^e, where one rounded addition crosses over. With a < u an addition gives x
-// again (stuck from then on), or once x + u (a = u / 2, ties to even).
-TV_HD inline double add_repeated(double x, double a, uint64_t m) {
-  while (m != 0) {
-    if (!(x > 0)) {  // 0 (a negative sum cannot occur: one addition at a time)
-      x = dadd(x, a);
-      --m;
-      continue;
-    }
-    int e = 0;
-    frexp(x, &e);
-    const double top = ldexp(1.0, e), u = ldexp(1.0, e - 53);
-    if (a < u) {
-      const double y = dadd(x, a);
-      --m;
-      if (y == x) return x;
-      x = y;
-      continue;
-    }
-    const uint64_t below = uint64_t(ceil((top - x) / a)) - 1;  // additions that stay under top
-    if (below >= m) return dadd(x, double(m) * a);
-    x = dadd(dadd(x, double(below) * a), a);  // exact, then the one that crosses top
-    m -= below + 1;
-  }
-  return x;
-}
 TV_HD inline double dsub(double a, double b) {
 #if defined(__CUDA_ARCH__)
   return __dsub_rn(a, b);
@@ -141,6 +112,44 @@ TV_HD inline double pow2(int e) {
   static_assert(sizeof(r) == sizeof(bits));
   __builtin_memcpy(&r, &bits, sizeof(r));
   return r;
+}
+
+// What m dadd(x, a) in a row give, in a few steps per binade crossed: a is a power of two (a
+// sample's share of a pixel), x >= 0. In x's binade [2^(e-1), 2^e) every double is a multiple
+// of the ulp u = 2^(e-53); a >= u is a multiple of u too, so the additions are exact until the
+// sum reaches 2^e, where one rounded addition crosses over. With a < u an addition gives x
+// again (stuck from then on), or once x + u (a = u / 2, ties to even). top, u and 1 / a are
+// powers of two taken from the exponents, and top - x is exact (top / 2 <= x < top), so
+// (top - x) / a is one exact product: no frexp, ldexp or division (the GPU's double division
+// is a sequence of dozens of instructions, and slivers' hybrid fold made 124 of these steps in a
+// run). Below 2^-968 or from 2^1022 a step is one addition.
+TV_HD inline double add_repeated(double x, double a, uint64_t m) {
+  uint64_t abits;
+  __builtin_memcpy(&abits, &a, 8);
+  const double inv_a = pow2(1023 - int(abits >> 52));  // a = 2^(exponent - 1023)
+  while (m != 0) {
+    uint64_t xbits;
+    __builtin_memcpy(&xbits, &x, 8);
+    const int ex = int(xbits >> 52) - 1023;  // x in [2^ex, 2^(ex+1)) (x > 0, sign 0)
+    if (!(x > 0) || ex < -968 || ex > 1021) {  // 0 (a negative sum cannot occur), or far out
+      x = dadd(x, a);
+      --m;
+      continue;
+    }
+    const double top = pow2(ex + 1), u = pow2(ex - 52);
+    if (a < u) {
+      const double y = dadd(x, a);
+      --m;
+      if (y == x) return x;
+      x = y;
+      continue;
+    }
+    const uint64_t below = uint64_t(ceil(dmul(dsub(top, x), inv_a))) - 1;  // additions that stay under top
+    if (below >= m) return dadd(x, dmul(double(m), a));
+    x = dadd(dadd(x, dmul(double(below), a)), a);  // exact, then the one that crosses top
+    m -= below + 1;
+  }
+  return x;
 }
 
 TV_HD inline int clz64(uint64_t v) {

@@ -372,11 +372,14 @@ TEST(CudaPredicates, ChordByLanesIsChordExact) { chord_by_lanes_is_chord<c::Exac
 
 // add_repeated (the hybrid fold's per-pixel areas) against the additions one at a time, bit for
 // bit: sums with low bits set, sums at and beyond 2^52 where a sample's share is below the ulp
-// (ties to even included), zero, and counts that cross several binades.
+// (ties to even included), zero, the ends of the double range, and counts that cross several
+// binades.
 TEST(CudaPredicates, RepeatedAdditionIsTheLoopsBitForBit) {
   std::mt19937_64 rng(7);
   std::vector<double> starts = {0.0, 0.5, 1.0, 3.0, 0x1p52 - 1.0, 0x1p52, 0x1p52 + 1.0, 0x1p53 - 1.0, 0x1p53,
-                                0x1p53 + 2.0, 0x1p54 + 2.0, 0x1p51 + 0.5, 0x1p50 + 0.25};
+                                0x1p53 + 2.0, 0x1p54 + 2.0, 0x1p51 + 0.5, 0x1p50 + 0.25,
+                                // one addition a step: subnormal, below 2^-968, from 2^1022
+                                0x1p-1070, 0x1p-1000, 0x1.8p-969, 0x1p1022, 0x1.fp1023};
   for (int k = 0; k < 200; ++k) {
     const double mant = std::uniform_real_distribution<double>(1.0, 2.0)(rng);
     starts.push_back(std::ldexp(mant, int(rng() % 70) - 8));
