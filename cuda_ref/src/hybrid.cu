@@ -59,7 +59,7 @@ struct HybArgs {
   uint64_t* shaded;  // per per-pixel tile at 1 sample: pixels shaded (owners, and non-opaque triangles in front)
   uint32_t pp_fw, pp_fh, pp_lfw, pp_ls;  // a fine tile's pixels (64 samples), log2 of its width and of n_samples
   bool pp_narrow;     // depth bits <= 26: depths compared in I128 (pp_order)
-  uint64_t* pp_sums;  // GPU: per tile, kPPSums words (k_per_pixel)
+  uint64_t* pp_sums;  // per tile, kPPSums words: covered, generated, shaded (zeroed, added to by its regions)
 };
 
 template <class P>
@@ -591,6 +591,8 @@ TV_HD inline uint64_t sample_at(const HybArgs<P>& a, int64_t px, int64_t py, uin
   return (uint64_t(py) * a.width + uint64_t(px)) * a.n_samples + k;
 }
 
+constexpr uint32_t kPPSums = 3;  // per tile: covered, generated, shaded (HybArgs::pp_sums)
+
 // A per-pixel tile's row: the analytic stages ran beside the verdicts and counted in it too;
 // golden's per_pixel resolver leaves these counters 0.
 template <class P>
@@ -633,7 +635,18 @@ TV_HD void per_pixel_tile(const HybArgs<P>& a, uint64_t tile) {
         a.ids[sample_at(a, px, py, k)] = o.item == kNone ? -1 : int32_t(o.id);
         if (o.item != kNone) atomic_add(&a.owned[o.item], 1u);
       }
-  finish_tile_row(a, tile, covered, generated, shaded);
+  uint64_t* const sums = a.pp_sums + tile * kPPSums;
+  sums[0] = covered;
+  sums[1] = generated;
+  sums[2] = shaded;
+}
+
+// Once the analytic stages are done: a per-pixel tile's row from its sums.
+template <class P>
+TV_HD void per_pixel_row(const HybArgs<P>& a, uint64_t tile) {
+  if (a.cause[tile] == 0) return;
+  const uint64_t* const sums = a.pp_sums + tile * kPPSums;
+  finish_tile_row(a, tile, sums[0], sums[1], sums[2]);
 }
 
 // ---- per-pixel tiles on the GPU ------------------------------------------------------------
@@ -655,7 +668,6 @@ TV_HD void per_pixel_tile(const HybArgs<P>& a, uint64_t tile) {
 // z-buffer; then a block of 16 warps per tile, whose warps waited at its barriers for the
 // busiest fine tile: million 0.59 ms on the H200, Nsight Compute.)
 constexpr uint32_t kPPWarps = 4, kPPThreads = kPPWarps * 32, kPPFragMax = 16;
-constexpr uint32_t kPPSums = 4;  // per tile: covered, generated, shaded, regions done
 
 // A tile's regions (2x2 fine tiles each), in rows of `x`.
 struct PPRegions {
@@ -869,8 +881,9 @@ __device__ inline uint32_t pp_finish(const HybArgs<P>& a, const PPSample& s, con
   return counts ? 1u : 0u;
 }
 
-// A block per (tile, region); the tile's counts in a.pp_sums (zeroed before), its row written
-// by the block that finishes last.
+// A block per (tile, region); the tile's counts added into a.pp_sums (zeroed before). It runs
+// beside the analytic stages, which count into every tile's row: per_pixel_row writes the
+// per-pixel tiles' rows after them.
 template <class P>
 __global__ void __launch_bounds__(kPPThreads, 4) k_per_pixel(HybArgs<P> a, uint64_t n_tiles, uint32_t regions) {
   TV_KERNEL_WAIT();
@@ -932,16 +945,8 @@ __global__ void __launch_bounds__(kPPThreads, 4) k_per_pixel(HybArgs<P> a, uint6
       atomicAdd(&sums[2], static_cast<unsigned long long>(shaded));
     }
     __syncthreads();
-    unsigned long long* const tile_sums = reinterpret_cast<unsigned long long*>(a.pp_sums + tile * kPPSums);
-    if (threadIdx.x == 0) {
-      for (int c = 0; c < 3; ++c) atomicAdd(&tile_sums[c], sums[c]);
-      __threadfence();
-      if (atomicAdd(&tile_sums[3], 1ull) + 1 == rg.n) {  // the tile's last region
-        __threadfence();
-        finish_tile_row(a, tile, atomicAdd(&tile_sums[0], 0ull), atomicAdd(&tile_sums[1], 0ull),
-                        atomicAdd(&tile_sums[2], 0ull));
-      }
-    }
+    if (threadIdx.x < kPPSums)
+      atomicAdd(reinterpret_cast<unsigned long long*>(a.pp_sums + tile * kPPSums) + threadIdx.x, sums[threadIdx.x]);
     __syncthreads();  // the shared words are reused by the next job
   }
 }
@@ -1068,6 +1073,12 @@ template <class P>
 void hybrid_fold_long_host(const HFoldArgs<P>&, uint64_t) {}  // the host's hybrid_fold folds every run
 
 template <class P>
+__global__ void k_per_pixel_rows(HybArgs<P> a, uint64_t n) {
+  TV_KERNEL_WAIT();
+  TV_GRID_LOOP(t, n) per_pixel_row<P>(a, t);
+}
+
+template <class P>
 HybArgs<P> hybrid_args(Pipeline<P>& p) {
   const uint64_t ni = p.n_items, nt = p.n_tiles;
   HybArgs<P> a{};
@@ -1141,7 +1152,30 @@ void stage_verdicts(Pipeline<P>& p) {
     k_verdict<P, true><<<ex.grid_blocks / 2, kHeavyWarps * 32, kHeavySmem, ex.stream>>>(a, nt);
     TV_CUDA(cudaGetLastError());
     ex.queued += 2;
+    ex.resume(3);
+    ex.wait_for(4);  // side 3 goes on with every verdict
   }
+}
+
+template <class P>
+void stage_per_pixel(Pipeline<P>& p) {
+  Exec& ex = p.ex;
+  const uint64_t ni = p.n_items, nt = p.n_tiles;
+  const HybArgs<P> a = hybrid_args(p);
+  ex.zero(a.owned, (ni + 1) * 4);
+  ex.zero(a.pp_sums, nt * kPPSums * 8);
+  if (ex.where == Where::cpu) {
+    for (uint64_t t = 0; t < nt; ++t) per_pixel_tile<P>(a, ex.host_index(t, nt));
+    return;
+  }
+  const uint32_t S = p.f.n_samples;
+  if (S == 0 || S > 16 || (S & (S - 1)) != 0) throw std::runtime_error("cuda hybrid: samples must be 1, 2, 4, 8 or 16");
+  // Regions of 2x2 fine tiles: a whole tile's.
+  const PPRegions rg = pp_regions(a, PixSpan{0, 0, int64_t(p.grid.tile_w) - 1, int64_t(p.grid.tile_h) - 1});
+  k_per_pixel<P><<<uint32_t(tmin<uint64_t>(nt * rg.n, uint64_t(ex.grid_blocks) * 16)), kPPThreads, 0, ex.stream>>>(
+      a, nt, rg.n);
+  TV_CUDA(cudaGetLastError());
+  ++ex.queued;
 }
 
 template <class P>
@@ -1149,20 +1183,8 @@ void stage_hybrid(Pipeline<P>& p) {
   Exec& ex = p.ex;
   const uint64_t ni = p.n_items, nt = p.n_tiles;
   const HybArgs<P> a = hybrid_args(p);
-  ex.zero(a.owned, (ni + 1) * 4);
-  if (ex.where == Where::cpu) {
-    for (uint64_t t = 0; t < nt; ++t) per_pixel_tile<P>(a, ex.host_index(t, nt));
-  } else {
-    const uint32_t S = p.f.n_samples;
-    if (S == 0 || S > 16 || (S & (S - 1)) != 0) throw std::runtime_error("cuda hybrid: samples must be 1, 2, 4, 8 or 16");
-    // Regions of 2x2 fine tiles: a whole tile's.
-    const PPRegions rg = pp_regions(a, PixSpan{0, 0, int64_t(p.grid.tile_w) - 1, int64_t(p.grid.tile_h) - 1});
-    ex.zero(a.pp_sums, nt * kPPSums * 8);
-    k_per_pixel<P><<<uint32_t(tmin<uint64_t>(nt * rg.n, uint64_t(ex.grid_blocks) * 16)), kPPThreads, 0, ex.stream>>>(
-        a, nt, rg.n);
-    TV_CUDA(cudaGetLastError());
-    ++ex.queued;
-  }
+  // The per-pixel tiles' rows: the analytic stages have counted (the rasters skip those tiles).
+  ex.launch(k_per_pixel_rows<P>, per_pixel_row<P>, nt, a);
   HFoldArgs<P> f{};
   f.counters = p.counters.get();
   // The two totals are counted again by the fold over the analytic tiles only.
@@ -1191,6 +1213,8 @@ void stage_hybrid(Pipeline<P>& p) {
 
 template void stage_verdicts<ExactP>(Pipeline<ExactP>&);
 template void stage_verdicts<FloatP>(Pipeline<FloatP>&);
+template void stage_per_pixel<ExactP>(Pipeline<ExactP>&);
+template void stage_per_pixel<FloatP>(Pipeline<FloatP>&);
 template void stage_hybrid<ExactP>(Pipeline<ExactP>&);
 template void stage_hybrid<FloatP>(Pipeline<FloatP>&);
 

@@ -543,11 +543,17 @@ bool run_once(Pipeline<P>& p, Timer& t) {
   stage_cull(p);
   t.mark(4);
   p.ex.merge(1);  // the occluder lists (binning)
+  cudaEvent_t verdicts = nullptr;
   if (p.cfg.hybrid) {
     // The verdicts need the tiles' lists and counts only: they run beside the analytic stages,
-    // which count into every tile's row (the per-pixel pass then sets its tiles' rows).
+    // which count into every tile's row (stage_hybrid then sets the per-pixel tiles' rows), and
+    // so do the per-pixel tiles, whose samples the rasters leave to them (they wait for the
+    // verdicts).
     p.ex.branch(3);
     stage_verdicts(p);
+    verdicts = p.ex.record();
+    p.ex.wait(cleared);
+    stage_per_pixel(p);
     p.ex.on_main();
   }
   p.ex.branch(0);
@@ -555,6 +561,7 @@ bool run_once(Pipeline<P>& p, Timer& t) {
   stage_occlusion(p, Pass::unclipped);
   const cudaEvent_t unclipped_visible = p.ex.record();  // the fold needs this pass's verdicts, not its raster
   p.ex.wait(cleared);
+  p.ex.wait(verdicts);
   stage_raster(p, Pass::unclipped);
   t.mark(kStageCount + 2);
   p.ex.on_main();
@@ -567,16 +574,22 @@ bool run_once(Pipeline<P>& p, Timer& t) {
   stage_occlusion(p, Pass::clipped);
   t.mark(6);
   // The visible areas beside the clipped pieces' raster, once the unclipped pieces' occlusion
-  // and the area order (binning, side 2) are done (beside the unclipped pieces' raster too).
+  // and the area order (binning, side 2) are done (beside the unclipped pieces' raster too);
+  // in hybrid mode once the per-pixel tiles are done too (side 3), with their rows.
   p.ex.branch(1);
   p.ex.wait(unclipped_visible);
   p.ex.wait_for(2);
-  stage_fold(p);
+  if (p.cfg.hybrid) {
+    p.ex.wait_for(3);
+    stage_hybrid(p);
+  } else {
+    stage_fold(p);
+  }
   p.ex.on_main();
   p.ex.wait(cleared);
+  p.ex.wait(verdicts);
   stage_raster(p, Pass::clipped);
   p.ex.merge_all();
-  if (p.cfg.hybrid) stage_hybrid(p);
   t.mark(7);
   p.ex.queue_checks();
   p.ex.sync();

@@ -442,10 +442,15 @@ void stage_raster(Pipeline<P>& p, Pass pass);
 template <class P>
 void stage_fold(Pipeline<P>& p);
 // Hybrid mode: every tile's verdict, beside the analytic stages (queued on side 3, the heavy
-// tiles' blocks on side 4: hybrid.cu kHeavyMin).
+// tiles' blocks on side 4: hybrid.cu kHeavyMin; side 3 goes on once both are done), then the
+// per-pixel tiles' samples (side 3, once the id buffer is cleared; the rasters skip those tiles);
+// once the occlusion passes are done, the per-pixel tiles' rows and the visible areas (side 1,
+// instead of stage_fold).
 template <class P>
 void stage_verdicts(Pipeline<P>& p);
 template <class P>
-void stage_hybrid(Pipeline<P>& p);  // hybrid mode, after every other stage: per-pixel tiles, areas
+void stage_per_pixel(Pipeline<P>& p);
+template <class P>
+void stage_hybrid(Pipeline<P>& p);
 
 }  // namespace tilevis::cuda
