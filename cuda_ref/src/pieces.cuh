@@ -124,6 +124,7 @@ __device__ double block_fold_run(const uint64_t* area_key, uint64_t q0, uint64_t
   using Entry = typename Src::Entry;
   __shared__ double term[kFoldWindow];
   __shared__ uint32_t repeat[Src::kRepeats ? kFoldWindow : 1];
+  __shared__ uint32_t repeated[Src::kRepeats ? kFoldWindow / 32 : 1];  // bit k % 32 of word k / 32: repeat[k] != 1
   __shared__ Entry entry[kFoldBlock];
   __shared__ uint32_t first[kFoldBlock + 1];  // entry i's terms: [first[i], first[i + 1])
   __shared__ uint32_t warp_total[kFoldBlock / 32];
@@ -149,24 +150,44 @@ __device__ double block_fold_run(const uint64_t* area_key, uint64_t q0, uint64_t
     const uint32_t total = first[entries];
     for (uint32_t w0 = 0; w0 < total; w0 += kFoldWindow) {
       const uint32_t end = tmin(total - w0, kFoldWindow);
-      for (uint32_t k = tid; k < end; k += kFoldBlock) {
-        const uint32_t t = w0 + k;
-        uint32_t lo = 0, hi = entries;  // the last entry whose first term is at most t
-        while (hi - lo > 1) {
-          const uint32_t mid = (lo + hi) / 2;
-          if (first[mid] <= t) lo = mid;
-          else hi = mid;
-        }
+      // Whole warps (a warp's k are 32 consecutive, a word of `repeated`).
+      for (uint32_t k = tid; k < (end + 31u) / 32u * 32u; k += kFoldBlock) {
         uint32_t m = 1;
-        term[k] = src.term(entry[lo], t - first[lo], m);
-        if constexpr (Src::kRepeats) repeat[k] = m;
+        if (k < end) {
+          const uint32_t t = w0 + k;
+          uint32_t lo = 0, hi = entries;  // the last entry whose first term is at most t
+          while (hi - lo > 1) {
+            const uint32_t mid = (lo + hi) / 2;
+            if (first[mid] <= t) lo = mid;
+            else hi = mid;
+          }
+          term[k] = src.term(entry[lo], t - first[lo], m);
+        }
+        if constexpr (Src::kRepeats) {
+          repeat[k] = m;
+          const unsigned bits = __ballot_sync(0xffffffffu, m != 1);
+          if (lane == 0) repeated[k / 32u] = bits;
+        }
       }
       __syncthreads();
       if (tid == 0) {
+        if constexpr (Src::kRepeats) {
+          // The plain terms up to the next repeated one (the word's next set bit) in a loop with
+          // no branch on the term, so their loads run ahead of the chain of additions.
+          for (uint32_t k = 0; k < end;) {
+            const uint32_t bits = repeated[k / 32u] >> (k % 32u);
+            const uint32_t stop = bits ? k + uint32_t(__ffs(bits)) - 1u : tmin(end, (k | 31u) + 1u);
 #pragma unroll 8
-        for (uint32_t k = 0; k < end; ++k) {
-          if constexpr (Src::kRepeats) sum = repeat[k] == 1 ? dadd(sum, term[k]) : add_repeated(sum, term[k], repeat[k]);
-          else sum = dadd(sum, term[k]);
+            for (uint32_t j = k; j < stop; ++j) sum = dadd(sum, term[j]);
+            k = stop;
+            if (bits) {
+              sum = add_repeated(sum, term[k], repeat[k]);
+              ++k;
+            }
+          }
+        } else {
+#pragma unroll 8
+          for (uint32_t k = 0; k < end; ++k) sum = dadd(sum, term[k]);
         }
       }
       __syncthreads();
