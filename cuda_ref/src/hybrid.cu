@@ -60,6 +60,7 @@ struct HybArgs {
   uint32_t pp_fw, pp_fh, pp_lfw, pp_ls;  // a fine tile's pixels (64 samples), log2 of its width and of n_samples
   bool pp_narrow;     // depth bits <= 26: depths compared in I128 (pp_order)
   uint64_t* pp_sums;  // per tile, kPPSums words: covered, generated, shaded (zeroed, added to by its regions)
+  int32_t* pp_ids;    // per sample, as ids: the per-pixel tiles' owners (per_pixel_out copies them)
 };
 
 template <class P>
@@ -632,7 +633,7 @@ TV_HD void per_pixel_tile(const HybArgs<P>& a, uint64_t tile) {
               (o.item == kNone || pp_order(pp_depth(r, x, y), r.area, o, a.pp_narrow) < 0))
             ++shaded;
         }
-        a.ids[sample_at(a, px, py, k)] = o.item == kNone ? -1 : int32_t(o.id);
+        a.pp_ids[sample_at(a, px, py, k)] = o.item == kNone ? -1 : int32_t(o.id);
         if (o.item != kNone) atomic_add(&a.owned[o.item], 1u);
       }
   uint64_t* const sums = a.pp_sums + tile * kPPSums;
@@ -641,10 +642,27 @@ TV_HD void per_pixel_tile(const HybArgs<P>& a, uint64_t tile) {
   sums[2] = shaded;
 }
 
-// Once the analytic stages are done: a per-pixel tile's row from its sums.
+// Once the rasters are done: a per-pixel tile's ids over theirs, the samples [k0, k1) of its
+// rows of pixels, each row's samples consecutive in the id buffer.
 template <class P>
-TV_HD void per_pixel_row(const HybArgs<P>& a, uint64_t tile) {
+TV_HD void per_pixel_ids(const HybArgs<P>& a, const PixSpan& tp, uint32_t k0, uint32_t k1, uint32_t step) {
+  const uint32_t row = uint32_t(tp.x1 - tp.x0 + 1) * a.n_samples;
+  for (uint32_t k = k0; k < k1; k += step) {
+    const uint64_t at = sample_at(a, tp.x0, tp.y0 + k / row, 0) + k % row;
+    a.ids[at] = a.pp_ids[at];
+  }
+}
+template <class P>
+TV_HD uint32_t tile_samples(const HybArgs<P>& a, const PixSpan& tp) {
+  return uint32_t(tp.x1 - tp.x0 + 1) * uint32_t(tp.y1 - tp.y0 + 1) * a.n_samples;
+}
+
+// Host emulation: a per-pixel tile's ids and its row.
+template <class P>
+void per_pixel_out(const HybArgs<P>& a, uint64_t tile) {
   if (a.cause[tile] == 0) return;
+  const PixSpan tp = tile_pixels(a, tile);
+  per_pixel_ids(a, tp, 0, tile_samples(a, tp), 1);
   const uint64_t* const sums = a.pp_sums + tile * kPPSums;
   finish_tile_row(a, tile, sums[0], sums[1], sums[2]);
 }
@@ -871,7 +889,7 @@ __device__ inline void pp_chunks(const HybArgs<P>& a, uint32_t begin, uint32_t n
 // Each of the lane's two samples: its id, and its owner's count (one atomic per owner and warp).
 template <class P>
 __device__ inline uint32_t pp_finish(const HybArgs<P>& a, const PPSample& s, const PPOwner& o) {
-  if (s.inside) a.ids[s.at] = o.item == kNone ? -1 : int32_t(o.id);
+  if (s.inside) a.pp_ids[s.at] = o.item == kNone ? -1 : int32_t(o.id);
   const bool counts = s.inside && o.item != kNone;
   const unsigned cm = __ballot_sync(0xffffffffu, counts);
   if (counts) {
@@ -881,9 +899,9 @@ __device__ inline uint32_t pp_finish(const HybArgs<P>& a, const PPSample& s, con
   return counts ? 1u : 0u;
 }
 
-// A block per (tile, region); the tile's counts added into a.pp_sums (zeroed before). It runs
-// beside the analytic stages, which count into every tile's row: per_pixel_row writes the
-// per-pixel tiles' rows after them.
+// A block per (tile, region); the tile's counts added into a.pp_sums (zeroed before), its ids
+// into a.pp_ids. It runs beside the analytic stages, which write every tile's ids and row:
+// k_per_pixel_out writes the per-pixel tiles' after them.
 template <class P>
 __global__ void __launch_bounds__(kPPThreads, 4) k_per_pixel(HybArgs<P> a, uint64_t n_tiles, uint32_t regions) {
   TV_KERNEL_WAIT();
@@ -1072,10 +1090,19 @@ __global__ void __launch_bounds__(kFoldBlock) k_hybrid_fold_long(HFoldArgs<P> a,
 template <class P>
 void hybrid_fold_long_host(const HFoldArgs<P>&, uint64_t) {}  // the host's hybrid_fold folds every run
 
+// A block per per-pixel tile: its ids and row (per_pixel_out).
 template <class P>
-__global__ void k_per_pixel_rows(HybArgs<P> a, uint64_t n) {
+__global__ void k_per_pixel_out(HybArgs<P> a, uint64_t n_tiles) {
   TV_KERNEL_WAIT();
-  TV_GRID_LOOP(t, n) per_pixel_row<P>(a, t);
+  for (uint64_t tile = blockIdx.x; tile < n_tiles; tile += gridDim.x) {
+    if (a.cause[tile] == 0) continue;  // uniform over the block
+    const PixSpan tp = tile_pixels(a, tile);
+    per_pixel_ids(a, tp, threadIdx.x, tile_samples(a, tp), blockDim.x);
+    if (threadIdx.x == 0) {
+      const uint64_t* const sums = a.pp_sums + tile * kPPSums;
+      finish_tile_row(a, tile, sums[0], sums[1], sums[2]);
+    }
+  }
 }
 
 template <class P>
@@ -1121,6 +1148,7 @@ HybArgs<P> hybrid_args(Pipeline<P>& p) {
   a.pp_lfw = bits_for(a.pp_fw) - 1;
   a.pp_ls = bits_for(a.n_samples) - 1;
   a.pp_sums = p.hyb_pp_sums.need(nt * kPPSums + 1);
+  a.pp_ids = p.hyb_pp_ids.need(uint64_t(p.f.width) * p.f.height * p.f.n_samples + 1);
   a.pp_narrow = p.f.depth_bits <= 26;
   return a;
 }
@@ -1181,10 +1209,8 @@ void stage_per_pixel(Pipeline<P>& p) {
 template <class P>
 void stage_hybrid(Pipeline<P>& p) {
   Exec& ex = p.ex;
-  const uint64_t ni = p.n_items, nt = p.n_tiles;
+  const uint64_t ni = p.n_items;
   const HybArgs<P> a = hybrid_args(p);
-  // The per-pixel tiles' rows: the analytic stages have counted (the rasters skip those tiles).
-  ex.launch(k_per_pixel_rows<P>, per_pixel_row<P>, nt, a);
   HFoldArgs<P> f{};
   f.counters = p.counters.get();
   // The two totals are counted again by the fold over the analytic tiles only.
@@ -1211,10 +1237,27 @@ void stage_hybrid(Pipeline<P>& p) {
   ex.launch_dyn(k_hybrid_fold_long<P>, hybrid_fold_long_host<P>, f.long_count, ni, f, kFoldBlock, ex.grid_blocks);
 }
 
+// Over the rasters' ids and counts (after every other stage): the per-pixel tiles' ids and rows.
+template <class P>
+void stage_per_pixel_out(Pipeline<P>& p) {
+  Exec& ex = p.ex;
+  const uint64_t nt = p.n_tiles;
+  const HybArgs<P> a = hybrid_args(p);
+  if (ex.where == Where::cpu) {
+    for (uint64_t t = 0; t < nt; ++t) per_pixel_out<P>(a, ex.host_index(t, nt));
+    return;
+  }
+  k_per_pixel_out<P><<<uint32_t(tmin<uint64_t>(nt, uint64_t(ex.grid_blocks) * 8)), 256, 0, ex.stream>>>(a, nt);
+  TV_CUDA(cudaGetLastError());
+  ++ex.queued;
+}
+
 template void stage_verdicts<ExactP>(Pipeline<ExactP>&);
 template void stage_verdicts<FloatP>(Pipeline<FloatP>&);
 template void stage_per_pixel<ExactP>(Pipeline<ExactP>&);
 template void stage_per_pixel<FloatP>(Pipeline<FloatP>&);
+template void stage_per_pixel_out<ExactP>(Pipeline<ExactP>&);
+template void stage_per_pixel_out<FloatP>(Pipeline<FloatP>&);
 template void stage_hybrid<ExactP>(Pipeline<ExactP>&);
 template void stage_hybrid<FloatP>(Pipeline<FloatP>&);
 

@@ -543,16 +543,12 @@ bool run_once(Pipeline<P>& p, Timer& t) {
   stage_cull(p);
   t.mark(4);
   p.ex.merge(1);  // the occluder lists (binning)
-  cudaEvent_t verdicts = nullptr;
   if (p.cfg.hybrid) {
     // The verdicts need the tiles' lists and counts only: they run beside the analytic stages,
-    // which count into every tile's row (stage_hybrid then sets the per-pixel tiles' rows), and
-    // so do the per-pixel tiles, whose samples the rasters leave to them (they wait for the
-    // verdicts).
+    // and so do the per-pixel tiles. Both rasters and the analytic stages write every tile's
+    // ids and row, and stage_per_pixel_out writes the per-pixel tiles' over them at the end.
     p.ex.branch(3);
     stage_verdicts(p);
-    verdicts = p.ex.record();
-    p.ex.wait(cleared);
     stage_per_pixel(p);
     p.ex.on_main();
   }
@@ -561,7 +557,6 @@ bool run_once(Pipeline<P>& p, Timer& t) {
   stage_occlusion(p, Pass::unclipped);
   const cudaEvent_t unclipped_visible = p.ex.record();  // the fold needs this pass's verdicts, not its raster
   p.ex.wait(cleared);
-  p.ex.wait(verdicts);
   stage_raster(p, Pass::unclipped);
   t.mark(kStageCount + 2);
   p.ex.on_main();
@@ -575,7 +570,7 @@ bool run_once(Pipeline<P>& p, Timer& t) {
   t.mark(6);
   // The visible areas beside the clipped pieces' raster, once the unclipped pieces' occlusion
   // and the area order (binning, side 2) are done (beside the unclipped pieces' raster too);
-  // in hybrid mode once the per-pixel tiles are done too (side 3), with their rows.
+  // in hybrid mode once the per-pixel tiles are done too (side 3).
   p.ex.branch(1);
   p.ex.wait(unclipped_visible);
   p.ex.wait_for(2);
@@ -587,9 +582,9 @@ bool run_once(Pipeline<P>& p, Timer& t) {
   }
   p.ex.on_main();
   p.ex.wait(cleared);
-  p.ex.wait(verdicts);
   stage_raster(p, Pass::clipped);
   p.ex.merge_all();
+  if (p.cfg.hybrid) stage_per_pixel_out(p);
   t.mark(7);
   p.ex.queue_checks();
   p.ex.sync();

@@ -319,6 +319,7 @@ struct Pipeline {
 
   // Outputs.
   Buf<int32_t> ids;
+  Buf<int32_t> hyb_pp_ids;          // hybrid: the per-pixel tiles' ids, until stage_per_pixel_out
   Buf<double> area;                // per trace triangle
 
   explicit Pipeline(Exec& e) : ex(e) {
@@ -353,6 +354,7 @@ struct Pipeline {
     piece_edges.bind(&e);
     hyb_long_folds.bind(&e);
     ids.bind(&e);
+    hyb_pp_ids.bind(&e);
     area.bind(&e);
     for (auto* b : {&hyb_cause, &hyb_crossing, &hyb_range, &hyb_owned, &hyb_heavy}) b->bind(&e);
     hyb_active.bind(&e);
@@ -443,14 +445,16 @@ template <class P>
 void stage_fold(Pipeline<P>& p);
 // Hybrid mode: every tile's verdict, beside the analytic stages (queued on side 3, the heavy
 // tiles' blocks on side 4: hybrid.cu kHeavyMin; side 3 goes on once both are done), then the
-// per-pixel tiles' samples (side 3, once the id buffer is cleared; the rasters skip those tiles);
-// once the occlusion passes are done, the per-pixel tiles' rows and the visible areas (side 1,
-// instead of stage_fold).
+// per-pixel tiles' samples (side 3, their ids in a buffer of their own); once the occlusion
+// passes are done, the visible areas (side 1, instead of stage_fold); last, over the rasters' ids
+// and counts, the per-pixel tiles' ids and rows.
 template <class P>
 void stage_verdicts(Pipeline<P>& p);
 template <class P>
 void stage_per_pixel(Pipeline<P>& p);
 template <class P>
 void stage_hybrid(Pipeline<P>& p);
+template <class P>
+void stage_per_pixel_out(Pipeline<P>& p);
 
 }  // namespace tilevis::cuda

@@ -21,7 +21,6 @@ struct RasterArgs {
   int64_t* rows;
   int32_t* ids;  // per sample, -1 before any visible piece covers it
   uint64_t base;              // the pass's first piece id (pieces.cuh)
-  const uint32_t* cause;      // hybrid: per tile, its per-pixel cause (its samples are k_per_pixel's); else null
 };
 
 // The pixels [px0, px0 + w) x [py0, py0 + h) of a piece's bounding box inside the tile and
@@ -190,7 +189,7 @@ TV_HD void raster_group(const RasterArgs<P>& a, uint64_t first, uint64_t count, 
     const uint64_t p = a.base + first + lane;
     PEdge<P> local[kTileCap];
     const PieceView<P> v = piece_at<P>(a.src, p, local);
-    if ((!a.cause || a.cause[v.tile] == 0) && pixel_box<P>(a, v, mine.box)) {
+    if (pixel_box<P>(a, v, mine.box)) {
       mine.poly = v.e;
       mine.n = v.n;
       mine.tri = a.src.tris[v.tri].id;
@@ -378,7 +377,6 @@ void stage_raster(Pipeline<P>& p, Pass pass) {
   a.ids = p.ids.get();
   const PassRange r = pass_range(p, pass);
   a.base = r.base;
-  a.cause = p.cfg.hybrid ? p.hyb_cause.get() : nullptr;
   // The unclipped pieces' pass runs beside the clipping; in exact, whose clipping is the longer
   // branch, it takes half the grid (2 blocks of 4 warps per SM), leaving the clipping kernels
   // room (new frame, H200: dragon exact 0.782 -> 0.692 ms, bunny 1.070 -> 0.995; float
