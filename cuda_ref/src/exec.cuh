@@ -284,7 +284,7 @@ class Exec {
   // branch and runs beside what the main stream does next; merge(k) makes the main stream wait
   // for side k (each branch is merged before the run ends: merge_all). The host emulation runs
   // everything in order. Host reads happen on the main stream, after the merges they need.
-  static constexpr int kSides = 5;  // 3 and 4: the hybrid verdicts, beside the analytic stages
+  static constexpr int kSides = 6;  // 3 and 4: the hybrid verdicts, 5: the per-pixel tiles the counts decide
   cudaStream_t stream = nullptr;
   cudaStream_t main_stream = nullptr;
   void branch(int k);

@@ -605,10 +605,19 @@ TV_HD void finish_tile_row(const HybArgs<P>& a, uint64_t tile, uint64_t covered,
   a.shaded[tile] = covered + shaded;
 }
 
+// A tile's cause in a per-pixel pass (0: not the pass's): the counted tiles' pass takes those
+// that binning's counts send per pixel (cause_of), the found tiles' those the detector sent.
+template <class P>
+TV_HD uint32_t pp_pass_cause(const HybArgs<P>& a, uint64_t tile, PerPixelTiles which) {
+  if (which == PerPixelTiles::counted) return cause_of(a, tile);
+  return a.cause[tile] == 1 ? 1u : 0u;
+}
+
 // Host emulation of a per-pixel tile: golden's loop, sample by sample over the tile's list.
 template <class P>
-TV_HD void per_pixel_tile(const HybArgs<P>& a, uint64_t tile) {
-  if (a.cause[tile] == 0) return;
+TV_HD void per_pixel_tile(const HybArgs<P>& a, uint64_t tile, PerPixelTiles which) {
+  const uint32_t cause = pp_pass_cause(a, tile, which);
+  if (cause == 0) return;
   const uint32_t begin = a.item_begin[tile], n = uint32_t(a.rows[tile * kTileColumns + kColTriangles]);
   uint64_t covered = 0, generated = 0, shaded = 0;
   const PixSpan tp = tile_pixels(a, tile);
@@ -627,7 +636,7 @@ TV_HD void per_pixel_tile(const HybArgs<P>& a, uint64_t tile) {
         covered += o.item != kNone ? 1 : 0;
         // Non-opaque triangles are shaded where they cover the sample in front of its owner
         // (per_pixel_resolver.cpp; at 1 sample a pixel is a sample).
-        for (uint32_t i = 0; i < n && a.cause[tile] == 2; ++i) {
+        for (uint32_t i = 0; i < n && cause == 2; ++i) {
           const PPRec r = pp_rec(a, begin + i);
           if (!(r.flags & kPPOpaque) && pp_covers(r, x, y) &&
               (o.item == kNone || pp_order(pp_depth(r, x, y), r.area, o, a.pp_narrow) < 0))
@@ -903,7 +912,8 @@ __device__ inline uint32_t pp_finish(const HybArgs<P>& a, const PPSample& s, con
 // into a.pp_ids. It runs beside the analytic stages, which write every tile's ids and row:
 // k_per_pixel_out writes the per-pixel tiles' after them.
 template <class P>
-__global__ void __launch_bounds__(kPPThreads, 4) k_per_pixel(HybArgs<P> a, uint64_t n_tiles, uint32_t regions) {
+__global__ void __launch_bounds__(kPPThreads, 4)
+    k_per_pixel(HybArgs<P> a, uint64_t n_tiles, uint32_t regions, PerPixelTiles which) {
   TV_KERNEL_WAIT();
   __shared__ PPRec rec[kPPThreads];
   __shared__ PPOwner owners[kPPWarps][64];
@@ -917,7 +927,7 @@ __global__ void __launch_bounds__(kPPThreads, 4) k_per_pixel(HybArgs<P> a, uint6
   for (uint64_t job = blockIdx.x; job < n_tiles * regions; job += gridDim.x) {
     const uint64_t tile = job / regions;
     const uint32_t region = uint32_t(job % regions);
-    const uint32_t cause = a.cause[tile];
+    const uint32_t cause = pp_pass_cause(a, tile, which);
     if (cause == 0) continue;  // uniform over the block
     const PixSpan tp = tile_pixels(a, tile);
     const PPRegions rg = pp_regions(a, tp);
@@ -1186,14 +1196,19 @@ void stage_verdicts(Pipeline<P>& p) {
 }
 
 template <class P>
-void stage_per_pixel(Pipeline<P>& p) {
+void stage_per_pixel(Pipeline<P>& p, PerPixelTiles which) {
   Exec& ex = p.ex;
   const uint64_t ni = p.n_items, nt = p.n_tiles;
   const HybArgs<P> a = hybrid_args(p);
-  ex.zero(a.owned, (ni + 1) * 4);
-  ex.zero(a.pp_sums, nt * kPPSums * 8);
+  if (which == PerPixelTiles::counted) {  // the first pass zeroes the counts of both
+    ex.zero(a.owned, (ni + 1) * 4);
+    ex.zero(a.pp_sums, nt * kPPSums * 8);
+    p.hyb_pp_zeroed = ex.record();
+  } else {
+    ex.wait(p.hyb_pp_zeroed);
+  }
   if (ex.where == Where::cpu) {
-    for (uint64_t t = 0; t < nt; ++t) per_pixel_tile<P>(a, ex.host_index(t, nt));
+    for (uint64_t t = 0; t < nt; ++t) per_pixel_tile<P>(a, ex.host_index(t, nt), which);
     return;
   }
   const uint32_t S = p.f.n_samples;
@@ -1201,7 +1216,7 @@ void stage_per_pixel(Pipeline<P>& p) {
   // Regions of 2x2 fine tiles: a whole tile's.
   const PPRegions rg = pp_regions(a, PixSpan{0, 0, int64_t(p.grid.tile_w) - 1, int64_t(p.grid.tile_h) - 1});
   k_per_pixel<P><<<uint32_t(tmin<uint64_t>(nt * rg.n, uint64_t(ex.grid_blocks) * 16)), kPPThreads, 0, ex.stream>>>(
-      a, nt, rg.n);
+      a, nt, rg.n, which);
   TV_CUDA(cudaGetLastError());
   ++ex.queued;
 }
@@ -1254,8 +1269,8 @@ void stage_per_pixel_out(Pipeline<P>& p) {
 
 template void stage_verdicts<ExactP>(Pipeline<ExactP>&);
 template void stage_verdicts<FloatP>(Pipeline<FloatP>&);
-template void stage_per_pixel<ExactP>(Pipeline<ExactP>&);
-template void stage_per_pixel<FloatP>(Pipeline<FloatP>&);
+template void stage_per_pixel<ExactP>(Pipeline<ExactP>&, PerPixelTiles);
+template void stage_per_pixel<FloatP>(Pipeline<FloatP>&, PerPixelTiles);
 template void stage_per_pixel_out<ExactP>(Pipeline<ExactP>&);
 template void stage_per_pixel_out<FloatP>(Pipeline<FloatP>&);
 template void stage_hybrid<ExactP>(Pipeline<ExactP>&);

@@ -547,9 +547,11 @@ bool run_once(Pipeline<P>& p, Timer& t) {
     // The verdicts need the tiles' lists and counts only: they run beside the analytic stages,
     // and so do the per-pixel tiles. Both rasters and the analytic stages write every tile's
     // ids and row, and stage_per_pixel_out writes the per-pixel tiles' over them at the end.
+    p.ex.branch(5);
+    stage_per_pixel(p, PerPixelTiles::counted);
     p.ex.branch(3);
     stage_verdicts(p);
-    stage_per_pixel(p);
+    stage_per_pixel(p, PerPixelTiles::found);
     p.ex.on_main();
   }
   p.ex.branch(0);
@@ -570,12 +572,13 @@ bool run_once(Pipeline<P>& p, Timer& t) {
   t.mark(6);
   // The visible areas beside the clipped pieces' raster, once the unclipped pieces' occlusion
   // and the area order (binning, side 2) are done (beside the unclipped pieces' raster too);
-  // in hybrid mode once the per-pixel tiles are done too (side 3).
+  // in hybrid mode once the per-pixel tiles are done too (sides 3 and 5).
   p.ex.branch(1);
   p.ex.wait(unclipped_visible);
   p.ex.wait_for(2);
   if (p.cfg.hybrid) {
     p.ex.wait_for(3);
+    p.ex.wait_for(5);
     stage_hybrid(p);
   } else {
     stage_fold(p);

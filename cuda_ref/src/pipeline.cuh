@@ -320,6 +320,7 @@ struct Pipeline {
   // Outputs.
   Buf<int32_t> ids;
   Buf<int32_t> hyb_pp_ids;          // hybrid: the per-pixel tiles' ids, until stage_per_pixel_out
+  cudaEvent_t hyb_pp_zeroed = nullptr;  // hybrid: the per-pixel counts zeroed (side 5), for the found tiles' pass
   Buf<double> area;                // per trace triangle
 
   explicit Pipeline(Exec& e) : ex(e) {
@@ -443,15 +444,17 @@ template <class P>
 void stage_raster(Pipeline<P>& p, Pass pass);
 template <class P>
 void stage_fold(Pipeline<P>& p);
-// Hybrid mode: every tile's verdict, beside the analytic stages (queued on side 3, the heavy
-// tiles' blocks on side 4: hybrid.cu kHeavyMin; side 3 goes on once both are done), then the
-// per-pixel tiles' samples (side 3, their ids in a buffer of their own); once the occlusion
+// Hybrid mode, beside the analytic stages: the per-pixel tiles that binning's counts decide
+// (budget, non-opaque content: cause_of) from the start (side 5), every tile's verdict (side 3,
+// the heavy tiles' blocks on side 4; side 3 goes on once both are done), then the per-pixel
+// tiles the detector found (side 3), their ids in a buffer of their own; once the occlusion
 // passes are done, the visible areas (side 1, instead of stage_fold); last, over the rasters' ids
 // and counts, the per-pixel tiles' ids and rows.
+enum class PerPixelTiles { counted, found };
 template <class P>
 void stage_verdicts(Pipeline<P>& p);
 template <class P>
-void stage_per_pixel(Pipeline<P>& p);
+void stage_per_pixel(Pipeline<P>& p, PerPixelTiles which);  // counted first: it zeroes the counts
 template <class P>
 void stage_hybrid(Pipeline<P>& p);
 template <class P>
