@@ -117,7 +117,7 @@ TV_HD inline int fold_run_start(const uint64_t* area_key, uint64_t q, uint64_t n
 // window's terms in order. A piece that is not visible is the term -0.0: x + -0.0 == x for every
 // double x under round to nearest, so it changes no bit of the sum. A term repeated m times is
 // add_repeated's (m dadd in a row). Blocks of kFoldBlock threads; returns the sum on thread 0.
-inline constexpr uint32_t kFoldBlock = 256, kFoldWindow = 2048;
+inline constexpr uint32_t kFoldBlock = 512, kFoldWindow = 2048;
 
 template <class Src>
 __device__ double block_fold_run(const uint64_t* area_key, uint64_t q0, uint64_t n_items, Src& src) {
