@@ -1,8 +1,10 @@
 // Hybrid mode on the GPU (model/visibility/hybrid_resolver.cpp): every tile gets a verdict
 // (stage_verdicts, on side streams 3 and 4 beside the analytic stages, from binning's lists),
-// and after the analytic stages the tiles whose analytic answer can be wrong are redone per
-// pixel (the exact z-buffer over the tile's triangles), their rows set as golden's per_pixel
-// resolver sets them:
+// and the tiles whose analytic answer can be wrong are redone per pixel (the exact z-buffer over
+// the tile's triangles; stage_per_pixel, beside the analytic stages too: from the start on side
+// 5 for causes 2 and 3, which binning's counts decide, after the verdicts on side 3 for cause 1),
+// their ids and rows written over the analytic stages' at the end (stage_per_pixel_out) as
+// golden's per_pixel resolver sets them:
 //   1 interpenetration: two opaque triangles of the tile (other trace triangles) whose planes
 //     cross strictly inside their overlap within the tile;
 //   2 non-opaque content in the tile;
