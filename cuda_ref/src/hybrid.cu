@@ -431,8 +431,9 @@ TV_HD bool heavy_tile(const HybArgs<P>& a, uint64_t tile) {
 template <class P>
 __global__ void k_heavy_list(HybArgs<P> a, uint64_t n_tiles) {
   TV_KERNEL_WAIT();
-  for (uint64_t t = blockIdx.x * uint64_t(blockDim.x) + threadIdx.x; t < n_tiles; t += gridDim.x * uint64_t(blockDim.x))
+  TV_GRID_LOOP(t, n_tiles) {
     if (cause_of(a, t) == 0 && heavy_tile(a, t)) a.heavy[1 + atomicAdd(a.heavy, 1u)] = uint32_t(t);
+  }
 }
 
 // A block per tile (Heavy: the listed heavy tiles, kHeavyWarps warps; else the others, kDetWarps
@@ -596,10 +597,12 @@ TV_HD inline uint64_t sample_at(const HybArgs<P>& a, int64_t px, int64_t py, uin
 
 constexpr uint32_t kPPSums = 3;  // per tile: covered, generated, shaded (HybArgs::pp_sums)
 
-// A per-pixel tile's row: the analytic stages ran beside the verdicts and counted in it too;
-// golden's per_pixel resolver leaves these counters 0.
+// A per-pixel tile's row from its sums (pp_sums): the analytic stages ran beside the verdicts
+// and counted in it too; golden's per_pixel resolver leaves these counters 0.
 template <class P>
-TV_HD void finish_tile_row(const HybArgs<P>& a, uint64_t tile, uint64_t covered, uint64_t generated, uint64_t shaded) {
+TV_HD void finish_tile_row(const HybArgs<P>& a, uint64_t tile) {
+  const uint64_t* const sums = a.pp_sums + tile * kPPSums;
+  const uint64_t covered = sums[0], generated = sums[1], shaded = sums[2];
   int64_t* r = a.rows + tile * kTileColumns;
   for (int c : {kColPairTests, kColCandidates, kColClips, kColPieces, kColVisiblePieces, kColOcclusionTests}) r[c] = 0;
   r[kColSamplesCovered] = int64_t(covered);
@@ -674,8 +677,7 @@ void per_pixel_out(const HybArgs<P>& a, uint64_t tile) {
   if (a.cause[tile] == 0) return;
   const PixSpan tp = tile_pixels(a, tile);
   per_pixel_ids(a, tp, 0, tile_samples(a, tp), 1);
-  const uint64_t* const sums = a.pp_sums + tile * kPPSums;
-  finish_tile_row(a, tile, sums[0], sums[1], sums[2]);
+  finish_tile_row(a, tile);
 }
 
 // ---- per-pixel tiles on the GPU ------------------------------------------------------------
@@ -1110,10 +1112,7 @@ __global__ void k_per_pixel_out(HybArgs<P> a, uint64_t n_tiles) {
     if (a.cause[tile] == 0) continue;  // uniform over the block
     const PixSpan tp = tile_pixels(a, tile);
     per_pixel_ids(a, tp, threadIdx.x, tile_samples(a, tp), blockDim.x);
-    if (threadIdx.x == 0) {
-      const uint64_t* const sums = a.pp_sums + tile * kPPSums;
-      finish_tile_row(a, tile, sums[0], sums[1], sums[2]);
-    }
+    if (threadIdx.x == 0) finish_tile_row(a, tile);
   }
 }
 
